@@ -1,0 +1,160 @@
+"""Command line: a thin layer over the Python API (andyc.pipeline, andyc.simulate).
+
+Exit codes: 0 success, 1 an invalid model or a run that stopped, 2 usage.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+import andyc
+from andyc.errors import SimulationError, SpecError
+
+
+def _fail_spec(exc: SpecError) -> None:
+    for d in exc.diagnostics:
+        click.echo(str(d), err=True)
+    n = len(exc.diagnostics)
+    click.echo(f"{n} problem{'s' if n != 1 else ''} found", err=True)
+    sys.exit(1)
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(andyc.__version__, prog_name="andyc")
+def main():
+    """andyc: compile multibody models (YAML) into fast simulation code.
+
+    \b
+    andyc check model.yaml      validate, print a summary
+    andyc build model.yaml      write build/<name>/<name>.py
+    andyc sim model.yaml        build if needed, simulate, write run files
+    andyc plot run.h5           plot states and energy
+    """
+
+
+@main.command()
+@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
+def check(files):
+    """Validate model FILES; print every problem as FILE:LINE: PATH: what; fix."""
+    failed = False
+    for file in files:
+        try:
+            spec = andyc.load(file)
+            model = andyc.derive(spec)
+        except SpecError as exc:
+            for d in exc.diagnostics:
+                click.echo(str(d), err=True)
+            failed = True
+            continue
+        for w in spec.warnings:
+            click.echo(f"{w} (warning)", err=True)
+        user_frames = [f for f in spec.frames if not f.internal]
+        n_elements = len(spec.loads) + len(spec.dampers) + len(spec.springs) + len(spec.potentials)
+        click.echo(
+            f"{file}: model '{spec.name}' is valid: {_plural(model.dof, 'degree')} of freedom "
+            f"({', '.join(c.name for c in spec.coordinates)}), {_plural(2 * model.dof, 'state')}, "
+            f"{_plural(len(spec.bodies), 'body').replace('bodys', 'bodies')}, {_plural(len(user_frames), 'frame')} "
+            f"besides world, {_plural(len(spec.parameters), 'parameter')}, {_plural(len(spec.inputs), 'input')}, "
+            f"{_plural(n_elements, 'force element')}; {len(model.assignments)} intermediate expressions.")
+    sys.exit(1 if failed else 0)
+
+
+@main.command()
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("-o", "--out-dir", default="build", show_default=True, help="Build folder; writes DIR/<name>/<name>.py.")
+@click.option("--force", is_flag=True, help="Rebuild even if the spec is unchanged.")
+def build(file, out_dir, force):
+    """Derive the equations of motion of FILE and generate its module."""
+    try:
+        model, result = andyc.compile_model(file, out_dir, force)
+    except SpecError as exc:
+        _fail_spec(exc)
+    t = result.timings
+    if result.skipped:
+        click.echo(f"{result.module_path}: up to date (spec and andyc unchanged); compile {t['compile']:.2f} s")
+    else:
+        ops = sum(result.operations.values())
+        click.echo(f"{result.module_path}: built; derive {t['derive']:.2f} s, generate {t['generate']:.2f} s, "
+                   f"compile {t['compile']:.2f} s; {ops} operations "
+                   f"({', '.join(f'{k} {v}' for k, v in result.operations.items())})")
+
+
+def _parse_sets(values) -> dict:
+    out = {}
+    for item in values:
+        name, sep, value = item.partition("=")
+        try:
+            if not sep:
+                raise ValueError
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise click.BadParameter(f"'{item}' is not NAME=NUMBER", param_hint="--set")
+    return out
+
+
+@main.command()
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("--t-end", default=10.0, show_default=True, help="End time, s.")
+@click.option("--dt", default=1e-3, show_default=True, help="Step (rk4) or output spacing (adaptive methods), s.")
+@click.option("--method", default="rk4", show_default=True,
+              type=click.Choice(list(__import__("andyc.runtime.simulate", fromlist=["METHODS"]).METHODS)))
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
+@click.option("--out", "outs", multiple=True, metavar="RUN.h5|RUN.csv",
+              help="Run file(s) to write; default runs/<name>.h5.")
+@click.option("--every", default=1, show_default=True, help="Log one sample every N steps.")
+@click.option("--frames", default=None, metavar="all|F1,F2", help="Log the world positions of these frames.")
+@click.option("--rtol", default=1e-8, show_default=True, help="Relative tolerance (adaptive methods).")
+@click.option("--atol", default=1e-10, show_default=True, help="Absolute tolerance (adaptive methods).")
+@click.option("-o", "--out-dir", default="build", show_default=True, help="Build folder.")
+def sim(file, t_end, dt, method, sets, outs, every, frames, rtol, atol, out_dir):
+    """Build FILE if needed, simulate it and write run files."""
+    overrides = _parse_sets(sets)
+    try:
+        model, _ = andyc.compile_model(file, out_dir)
+    except SpecError as exc:
+        _fail_spec(exc)
+    params = {k: v for k, v in overrides.items() if k not in model.input_names}
+    inputs = {k: v for k, v in overrides.items() if k in model.input_names}
+    try:
+        run = andyc.simulate(model, t_end, dt=dt, method=method, parameters=params, inputs=inputs,
+                             every=every, frames=frames, rtol=rtol, atol=atol)
+    except SimulationError as exc:
+        raise click.UsageError(str(exc))
+    outs = outs or (f"runs/{model.name}.h5",)
+    for out in outs:
+        try:
+            run.save(out)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc), param_hint="--out")
+    s = run.stats
+    click.echo(f"{model.name}: {method}, t = 0 .. {run.time[-1]:.6g} s, {s['steps']} steps, "
+               f"{s['rhs_evaluations']} rhs evaluations, {s['wall_seconds']:.3f} s wall; "
+               f"energy {run.energy[0]:.10g} -> {run.energy[-1]:.10g} J (change {run.energy[-1] - run.energy[0]:.3g} J); "
+               f"wrote {', '.join(outs)}")
+    if not run.finished:
+        click.echo(run.status, err=True)
+        sys.exit(1)
+
+
+@main.command()
+@click.argument("run_file", type=click.Path(exists=True, dir_okay=False))
+@click.option("-o", "--out", default=None, help="PNG file; default RUN.png beside the run.")
+def plot(run_file, out):
+    """Plot the states and the energy of a run against time."""
+    from andyc.plot import plot_run
+    from andyc.runtime.run import read_h5
+
+    out = out or str(Path(run_file).with_suffix(".png"))
+    plot_run(read_h5(run_file), out)
+    click.echo(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()

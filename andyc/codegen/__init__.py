@@ -1,0 +1,1 @@
+"""Code generation: SymbolicModel -> standalone Python/Numba module."""

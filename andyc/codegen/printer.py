@@ -1,0 +1,84 @@
+"""One generated function body: needed assignments -> cse -> ordered lines.
+
+Given the outputs of a function (`target = expression`) and the pool of
+intermediate assignments of the SymbolicModel, keep only the assignments the
+outputs reach, run SymPy's cse over all of them together, and order the cse
+replacements and the assignments so that each line uses only earlier ones.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+from sympy.printing.pycode import PythonCodePrinter
+
+
+class _Printer(PythonCodePrinter):
+    """Python printer for Numba: math.* calls, floats for rationals."""
+
+    def _print_Rational(self, expr):
+        return repr(float(expr))
+
+    def _print_Half(self, expr):
+        return "0.5"
+
+
+_PRINTER = _Printer({"fully_qualified_modules": True, "standard": "python3"})
+
+
+def to_code(expr) -> str:
+    return _PRINTER.doprint(expr)
+
+
+@dataclass
+class FunctionBody:
+    inputs: set           # free symbols read (q, v, t, parameters, inputs)
+    lines: list           # [(name, code)] local assignments, in order
+    outputs: list         # [(target, code)]
+    operations: int       # sympy count_ops of every line
+
+
+def function_body(outputs: list[tuple[str, sp.Expr]], pool: dict[sp.Symbol, sp.Expr]) -> FunctionBody:
+    """cse and order the computation of `outputs` from the assignment `pool`."""
+    needed: list[sp.Symbol] = []
+    seen: set = set()
+    stack = [s for _, e in outputs for s in sp.sympify(e).free_symbols]
+    while stack:
+        s = stack.pop()
+        if s in seen or s not in pool:
+            continue
+        seen.add(s)
+        needed.append(s)
+        stack.extend(pool[s].free_symbols)
+    exprs = [pool[s] for s in needed] + [sp.sympify(e) for _, e in outputs]
+    replacements, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("c", real=True), order="none")
+    defs = dict(replacements)
+    defs.update(zip(needed, reduced[:len(needed)]))
+    out_exprs = reduced[len(needed):]
+
+    # Depth-first post-order from the outputs: each definition lands right
+    # before its first use, and unreachable ones are dropped.
+    order, state = [], {}
+    for root in [s for e in out_exprs for s in _ordered_symbols(e)]:
+        stack = [(root, False)]
+        while stack:
+            sym, done = stack.pop()
+            if done:
+                order.append(sym)
+                continue
+            if sym in state or sym not in defs:
+                continue
+            state[sym] = True
+            stack.append((sym, True))
+            stack.extend((d, False) for d in reversed(_ordered_symbols(defs[sym])) if d not in state)
+    inputs = set()
+    for e in [defs[s] for s in order] + out_exprs:
+        inputs |= {s for s in e.free_symbols if s not in defs}
+    lines = [(str(s), to_code(defs[s])) for s in order]
+    ops = sum(sp.count_ops(defs[s]) for s in order) + sum(sp.count_ops(e) for e in out_exprs)
+    return FunctionBody(inputs, lines, [(t, to_code(e)) for (t, _), e in zip(outputs, out_exprs)], int(ops))
+
+
+def _ordered_symbols(expr) -> list:
+    return sorted(expr.free_symbols, key=str)

@@ -1,0 +1,50 @@
+"""The stages, chained: load -> derive -> generate -> compile.
+
+`build` skips derive and generate when the module on disk carries the same
+build key (same spec bytes, same andyc); `compile_model` imports the module
+and lets Numba compile (or load its cache).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from andyc.codegen.generate import BuildResult, build_key, existing_build_key, module_path
+from andyc.codegen.generate import generate as _generate
+from andyc.spec.load import load as _load
+from andyc.symbolic import derive as _derive
+
+load = _load
+derive = _derive
+generate = _generate
+
+
+def build(path, out_dir="build", force: bool = False) -> BuildResult:
+    """Load, derive and generate `path` into out_dir/<name>/, unless up to date."""
+    t0 = time.perf_counter()
+    spec = load(path)
+    t_load = time.perf_counter() - t0
+    key = build_key(spec.sha256)
+    target = module_path(out_dir, spec.name)
+    if not force and existing_build_key(target) == key:
+        return BuildResult(spec.name, target, True, key, {"load": t_load})
+    model = derive(spec)
+    result = generate(model, out_dir)
+    result.timings = {"load": t_load, "derive": model.derive_seconds, **result.timings}
+    return result
+
+
+def compile_model(path, out_dir="build", force: bool = False):
+    """Build (if needed) and import a model; returns (CompiledModel, BuildResult)."""
+    from andyc.runtime.compiled import load_compiled
+
+    result = build(path, out_dir, force)
+    t0 = time.perf_counter()
+    compiled = load_compiled(result.module_path)
+    result.timings["compile"] = time.perf_counter() - t0
+    return compiled, result
+
+
+def is_model_file(path) -> bool:
+    return Path(path).suffix.lower() in (".yaml", ".yml")

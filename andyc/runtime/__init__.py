@@ -1,0 +1,1 @@
+"""Runtime: compiled model + workspace, integrators, run files."""

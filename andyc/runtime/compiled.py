@@ -1,0 +1,93 @@
+"""A generated module, imported: the compiled model (immutable) and its workspace.
+
+As in Pinocchio and MuJoCo, the model holds sizes, names, defaults and the
+compiled functions; a Workspace holds the arrays an algorithm writes into, so
+nothing is allocated inside the integration loop.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+
+from andyc.errors import SimulationError
+
+
+@dataclass(frozen=True)
+class CompiledModel:
+    module: ModuleType
+    path: Path
+    name: str
+    spec_sha256: str
+    nq: int
+    nv: int
+    nx: int
+    state_names: tuple
+    parameter_names: tuple
+    parameter_defaults: np.ndarray
+    input_names: tuple
+    input_defaults: np.ndarray
+    frame_names: tuple
+
+    def parameters(self, overrides: dict | None = None) -> np.ndarray:
+        return _with_overrides(self.parameter_names, self.parameter_defaults, overrides, "parameter")
+
+    def inputs(self, overrides: dict | None = None) -> np.ndarray:
+        return _with_overrides(self.input_names, self.input_defaults, overrides, "input")
+
+    def initial_state(self, p: np.ndarray) -> np.ndarray:
+        return self.module.initial_state(p)
+
+
+def _with_overrides(names, defaults, overrides, kind) -> np.ndarray:
+    values = np.array(defaults, dtype=np.float64)
+    for name, value in (overrides or {}).items():
+        if name not in names:
+            raise SimulationError(f"unknown {kind} '{name}'; {kind}s of this model: {', '.join(names) or 'none'}")
+        values[list(names).index(name)] = float(value)
+    return values
+
+
+@dataclass
+class Workspace:
+    """Arrays the integrators write into: M, G, stage derivatives, a scratch state."""
+    M: np.ndarray
+    G: np.ndarray
+    k: np.ndarray      # (4, nx) RK stages
+    x_tmp: np.ndarray  # (nx,)
+
+    @classmethod
+    def for_model(cls, model: CompiledModel) -> "Workspace":
+        return cls(np.zeros((model.nv, model.nv)), np.zeros(model.nv), np.zeros((4, model.nx)), np.zeros(model.nx))
+
+
+def load_compiled(path) -> CompiledModel:
+    """Import a generated module and compile its functions (or load Numba's cache)."""
+    path = Path(path).resolve()
+    # A stable, importable name: Numba's cache re-imports the module by it.
+    mod_name = f"andyc_build_{path.stem}_{hashlib.sha1(str(path).encode()).hexdigest()[:10]}"
+    spec = importlib.util.spec_from_file_location(mod_name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[mod_name] = module
+    spec.loader.exec_module(module)
+    model = CompiledModel(
+        module=module, path=path, name=module.NAME, spec_sha256=module.SPEC_SHA256,
+        nq=module.NQ, nv=module.NV, nx=module.NX, state_names=tuple(module.STATES),
+        parameter_names=tuple(module.PARAMETERS), parameter_defaults=module.PARAMETER_DEFAULTS,
+        input_names=tuple(module.INPUTS), input_defaults=module.INPUT_DEFAULTS,
+        frame_names=tuple(module.FRAMES))
+    # Call each function once so Numba compiles now, not inside a timed run.
+    p, u = model.parameter_defaults, model.input_defaults
+    x = model.initial_state(p)
+    ws = Workspace.for_model(model)
+    module.rhs_into(0.0, x, u, p, ws.k[0], ws.M, ws.G)
+    module.energy(0.0, x, u, p)
+    module.power(0.0, x, u, p)
+    module.frame_positions(0.0, x, u, p, np.zeros((len(model.frame_names), 3)))
+    return model

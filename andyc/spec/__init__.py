@@ -1,0 +1,1 @@
+"""Spec stage: YAML -> validated Spec (schema, then meaning)."""

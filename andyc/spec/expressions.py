@@ -1,0 +1,134 @@
+"""Safe expression parsing: text -> SymPy, through a whitelist.
+
+The text is parsed by Python's `ast` (which only parses, never runs) and the
+tree is walked node by node: numbers, declared names, `t`, `pi`, the
+arithmetic operators and the functions in FUNCTIONS. Anything else is an
+error that says what is allowed. Nothing the user writes is evaluated.
+"""
+
+from __future__ import annotations
+
+import ast
+import difflib
+
+import sympy as sp
+
+FUNCTIONS = {
+    "sin": sp.sin, "cos": sp.cos, "tan": sp.tan,
+    "asin": sp.asin, "acos": sp.acos, "atan": sp.atan, "atan2": sp.atan2,
+    "sinh": sp.sinh, "cosh": sp.cosh, "tanh": sp.tanh,
+    "exp": sp.exp, "log": sp.log, "sqrt": sp.sqrt,
+    "abs": sp.Abs, "sign": sp.sign, "min": sp.Min, "max": sp.Max,
+}
+CONSTANTS = {"pi": sp.pi}
+TIME = sp.Symbol("t", real=True)
+RESERVED = set(FUNCTIONS) | set(CONSTANTS) | {"t", "world"}
+
+_BINOPS = {
+    ast.Add: lambda a, b: a + b,
+    ast.Sub: lambda a, b: a - b,
+    ast.Mult: lambda a, b: a * b,
+    ast.Div: lambda a, b: a / b,
+    ast.Pow: lambda a, b: a ** b,
+}
+
+
+class ExpressionError(ValueError):
+    """An expression that is not allowed; `hint` says what to do."""
+
+    def __init__(self, message: str, hint: str):
+        super().__init__(message)
+        self.hint = hint
+
+
+def number(value) -> sp.Expr:
+    """A YAML number as an exact SymPy number (0.5 -> 1/2, so cos(pi/2) = 0)."""
+    if isinstance(value, bool):
+        raise ExpressionError(f"expected a number, got {value!r}", "write a number or an expression in quotes")
+    if isinstance(value, int):
+        return sp.Integer(value)
+    if value != value or value in (float("inf"), float("-inf")):
+        raise ExpressionError(f"{value!r} is not a finite number", "write a finite number")
+    return sp.Rational(repr(float(value)))
+
+
+def parse(text, names: dict[str, sp.Symbol], allow_time: bool = True) -> sp.Expr:
+    """Parse a number or an expression string into SymPy.
+
+    `names` maps every name the expression may use to its symbol.
+    Raises ExpressionError with a hint naming the allowed names.
+    """
+    if isinstance(text, (int, float)) and not isinstance(text, bool):
+        return number(text)
+    if not isinstance(text, str):
+        raise ExpressionError(f"expected a number or an expression string, got {type(text).__name__}",
+                              "write a number, or an expression in quotes such as \"L/2\"")
+    source = text.strip()
+    if not source:
+        raise ExpressionError("empty expression", "write a number or an expression")
+    if "^" in source:
+        raise ExpressionError(f"cannot parse {text!r}: '^' is not a power", "write powers as '**', e.g. x**2")
+    try:
+        tree = ast.parse(source, mode="eval")
+    except SyntaxError as exc:
+        raise ExpressionError(f"cannot parse {text!r}: {exc.msg} at column {exc.offset}",
+                              "check the brackets and operators; allowed: + - * / ** and functions "
+                              + ", ".join(sorted(FUNCTIONS)))
+    return _Builder(text, names, allow_time).visit(tree.body)
+
+
+class _Builder:
+    def __init__(self, text, names, allow_time):
+        self.text = text
+        self.names = names
+        self.allow_time = allow_time
+
+    def fail(self, what: str, hint: str):
+        raise ExpressionError(f"in {self.text!r}: {what}", hint)
+
+    def visit(self, node) -> sp.Expr:
+        if isinstance(node, ast.Constant):
+            if isinstance(node.value, (int, float)) and not isinstance(node.value, bool):
+                return number(node.value)
+            self.fail(f"{node.value!r} is not a number", "only numbers, names and arithmetic are allowed")
+        if isinstance(node, ast.Name):
+            return self.name(node.id)
+        if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
+            return _BINOPS[type(node.op)](self.visit(node.left), self.visit(node.right))
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+            value = self.visit(node.operand)
+            return -value if isinstance(node.op, ast.USub) else value
+        if isinstance(node, ast.Call):
+            return self.call(node)
+        self.fail(f"'{ast.unparse(node)}' is not allowed",
+                  "use numbers, declared names, t, pi, + - * / ** and functions " + ", ".join(sorted(FUNCTIONS)))
+
+    def name(self, ident: str) -> sp.Expr:
+        if ident in self.names:
+            return self.names[ident]
+        if ident in CONSTANTS:
+            return CONSTANTS[ident]
+        if ident == "t" and self.allow_time:
+            return TIME
+        known = sorted(set(self.names) | set(CONSTANTS) | ({"t"} if self.allow_time else set()))
+        close = difflib.get_close_matches(ident, known, n=1)
+        hint = (f"did you mean '{close[0]}'? " if close else "") + "known names: " + ", ".join(known)
+        if ident in FUNCTIONS:
+            self.fail(f"function '{ident}' used as a value", f"call it, e.g. {ident}(x)")
+        self.fail(f"unknown name '{ident}'", hint)
+
+    def call(self, node: ast.Call) -> sp.Expr:
+        if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
+            called = ast.unparse(node.func)
+            close = difflib.get_close_matches(called, list(FUNCTIONS), n=1)
+            self.fail(f"unknown function '{called}'",
+                      (f"did you mean '{close[0]}'? " if close else "")
+                      + "allowed functions: " + ", ".join(sorted(FUNCTIONS)))
+        if node.keywords:
+            self.fail("keyword arguments are not allowed", "pass arguments by position")
+        args = [self.visit(a) for a in node.args]
+        want = 2 if node.func.id == "atan2" else (None if node.func.id in ("min", "max") else 1)
+        if (want is not None and len(args) != want) or (want is None and len(args) < 2):
+            self.fail(f"{node.func.id} takes {want or 'two or more'} argument(s), got {len(args)}",
+                      f"write {node.func.id}({', '.join(['x', 'y'][:want or 2])})")
+        return FUNCTIONS[node.func.id](*args)

@@ -1,0 +1,127 @@
+"""The Spec: a validated model, every name resolved, every expression SymPy.
+
+The loader (`andyc.spec.load`) produces it from YAML; later stages read it and
+never look at the YAML again. Document paths (`where`) are kept so later
+stages can still point at the line a problem comes from.
+
+A frame's link is a sequence of elementary transforms, applied left to
+right (each in the frame produced by the previous one):
+
+    Translate(p)          origin moves by p(q, t)
+    Rotate(axis, angle)   rotation by angle(q, t) about a fixed unit axis
+
+Every link kind of the spec (fixed translation, axis-angle, roll-pitch-yaw,
+quaternion, Denavit-Hartenberg, revolute, prismatic) lowers to these two.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+from andyc.spec.yamlpos import SourceMap
+
+
+@dataclass(frozen=True)
+class Translate:
+    vector: sp.Matrix           # 3x1, expression of q, t, parameters
+
+
+@dataclass(frozen=True)
+class Rotate:
+    axis: sp.Matrix             # 3x1 unit vector, constant
+    angle: sp.Expr              # expression of q, t, parameters
+
+
+@dataclass(frozen=True)
+class Coordinate:
+    name: str
+    q: sp.Symbol                # position symbol
+    v: sp.Symbol                # speed symbol (dq/dt)
+    initial: sp.Expr            # expression of parameters
+    velocity: sp.Expr
+    where: tuple
+
+
+@dataclass(frozen=True)
+class Frame:
+    name: str
+    parent: str
+    transforms: tuple           # of Translate / Rotate
+    where: tuple
+    internal: bool = False      # made by andyc (a COM or point offset), not by the user
+
+
+@dataclass(frozen=True)
+class Body:
+    name: str
+    frame: str                  # frame whose origin is the COM
+    mass: sp.Expr
+    inertia: sp.Matrix          # 3x3 about the COM, in `frame` axes
+    where: tuple
+
+
+@dataclass(frozen=True)
+class Load:
+    """A force (acting at the origin of `frame`) or a torque (on `frame`)."""
+    name: str
+    kind: str                   # "force" | "torque"
+    frame: str
+    vector: sp.Matrix           # 3x1 in the axes of `in_frame`
+    in_frame: str
+    where: tuple
+
+
+@dataclass(frozen=True)
+class Damper:
+    name: str
+    coefficient: sp.Expr
+    law: str                    # "linear" | "quadratic"
+    speed: str | None           # coordinate name, or
+    frame: str | None           # frame whose velocity is damped
+    angular: bool
+    where: tuple
+
+
+@dataclass(frozen=True)
+class Spring:
+    name: str
+    stiffness: sp.Expr
+    rest_length: sp.Expr
+    length: sp.Expr | None      # expression of q, t, or
+    between: tuple | None       # two frame names
+    where: tuple
+
+
+@dataclass(frozen=True)
+class Potential:
+    name: str
+    energy: sp.Expr
+    where: tuple
+
+
+@dataclass
+class Spec:
+    name: str
+    description: str
+    file: str
+    sha256: str                 # of the source file's bytes
+    source: SourceMap
+    parameters: dict            # name -> (symbol, default float)
+    inputs: dict                # name -> (symbol, default float)
+    coordinates: list           # of Coordinate, in declaration order
+    gravity: sp.Matrix          # 3x1 in world
+    frames: list                # of Frame, parents before children
+    bodies: list = field(default_factory=list)
+    loads: list = field(default_factory=list)
+    dampers: list = field(default_factory=list)
+    springs: list = field(default_factory=list)
+    potentials: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)   # of Diagnostic
+
+    def frame(self, name: str) -> Frame:
+        return next(f for f in self.frames if f.name == name)
+
+    def parameter_values(self) -> dict:
+        return {name: value for name, (_, value) in self.parameters.items()}

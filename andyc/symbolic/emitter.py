@@ -1,0 +1,33 @@
+"""An ordered list of intermediate assignments `symbol = expression`.
+
+The symbolic stage never expands a chain into one big expression: every
+nonzero entry of a frame's rotation, position, velocity, Jacobian and bias
+acceleration gets its own symbol, defined from its parent's symbols. Code
+generation later keeps only the assignments an output needs and runs cse
+over them.
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+
+class Emitter:
+    def __init__(self):
+        self.assignments: list[tuple[sp.Symbol, sp.Expr]] = []
+
+    def scalar(self, label: str, expr) -> sp.Expr:
+        """Name `expr` unless it is already cheap (a number, a symbol, or minus one)."""
+        expr = sp.sympify(expr)
+        if expr.is_Atom or (expr.is_Mul and len(expr.args) == 2 and expr.args[0] == -1 and expr.args[1].is_Atom):
+            return expr
+        sym = sp.Symbol(label, real=True)
+        self.assignments.append((sym, expr))
+        return sym
+
+    def matrix(self, label: str, mat: sp.Matrix) -> sp.Matrix:
+        rows, cols = mat.shape
+        if cols == 1:
+            return sp.Matrix([self.scalar(f"{label}{i}", mat[i]) for i in range(rows)])
+        return sp.Matrix(rows, cols, lambda i, j: self.scalar(f"{label}{i}{j}" if cols <= 3 and rows <= 3
+                                                              else f"{label}{i}_{j}", mat[i, j]))

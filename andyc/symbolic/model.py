@@ -1,0 +1,36 @@
+"""SymbolicModel: the equations of motion as ordered SymPy assignments."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from andyc.spec.model import Spec
+
+
+@dataclass
+class SymbolicModel:
+    """Equations of motion M(q) dv/dt = G(q, v, t) and friends.
+
+    Every expression is written in the symbols q, v, t, parameters p, inputs u
+    and the intermediate symbols of `assignments` (in dependency order).
+    """
+    spec: Spec
+    t: sp.Symbol
+    q: list
+    v: list
+    parameters: list          # symbols, in the order of spec.parameters
+    inputs: list              # symbols, in the order of spec.inputs
+    assignments: list         # [(symbol, expression)], each uses only earlier ones
+    M: sp.Matrix              # n x n, symmetric
+    G: sp.Matrix              # n x 1
+    energy: sp.Expr           # kinetic + potential
+    power: sp.Expr            # power of the non-conservative elements
+    frame_positions: dict     # frame name -> 3x1, world (user frames only)
+    elements: list            # ElementTerms, per element
+    derive_seconds: float = 0.0
+
+    @property
+    def dof(self) -> int:
+        return len(self.q)
