@@ -1,0 +1,30 @@
+# andyc: `make demo` runs a shipped example, `make test` the test suite,
+# `make bench` the benchmarks. Each creates .venv and installs andyc first.
+VENV ?= .venv
+PY := $(VENV)/bin/python
+ANDYC := $(VENV)/bin/andyc
+STAMP := $(VENV)/.andyc-installed
+DEMO := double_pendulum
+
+.PHONY: demo test bench clean
+
+$(STAMP): pyproject.toml
+	test -x $(PY) || python3 -m venv $(VENV)
+	$(PY) -m pip install --quiet --disable-pip-version-check -e '.[test]'
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(ANDYC) check models/$(DEMO).yaml
+	$(ANDYC) build models/$(DEMO).yaml
+	$(ANDYC) sim models/$(DEMO).yaml --t-end 20 --dt 1e-3 --every 10 --frames all \
+		--out runs/$(DEMO).h5 --out runs/$(DEMO).csv
+	$(ANDYC) plot runs/$(DEMO).h5 -o runs/$(DEMO).png
+
+test: $(STAMP)
+	$(VENV)/bin/pytest -q
+
+bench: $(STAMP)
+	$(PY) bench/run.py
+
+clean:
+	rm -rf build runs .pytest_cache

@@ -1,0 +1,29 @@
+"""Shared fixtures: models are built once per session into a temporary build folder."""
+
+from pathlib import Path
+
+import pytest
+
+import andyc
+
+ROOT = Path(__file__).resolve().parents[1]
+MODELS = ROOT / "models"
+
+
+@pytest.fixture(scope="session")
+def build_dir(tmp_path_factory):
+    return tmp_path_factory.mktemp("build")
+
+
+@pytest.fixture(scope="session")
+def compiled(build_dir):
+    """compiled(name_or_path) -> CompiledModel, built once per session."""
+    cache = {}
+
+    def get(model):
+        path = Path(model) if str(model).endswith((".yaml", ".yml")) else MODELS / f"{model}.yaml"
+        if path not in cache:
+            cache[path] = andyc.compile_model(path, build_dir)[0]
+        return cache[path]
+
+    return get

@@ -1,0 +1,58 @@
+"""The command line, as a user runs it: exit codes, files written, messages."""
+
+import subprocess
+import sys
+
+import h5py
+import pytest
+
+import andyc
+from tests.conftest import MODELS
+
+
+def andyc_cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "andyc.cli", *map(str, args)], capture_output=True,
+                          text=True, cwd=cwd)
+
+
+def test_version():
+    proc = andyc_cli("--version")
+    assert proc.returncode == 0 and andyc.__version__ in proc.stdout
+
+
+def test_build_then_up_to_date(tmp_path):
+    first = andyc_cli("build", MODELS / "double_pendulum.yaml", "-o", tmp_path)
+    assert first.returncode == 0, first.stderr
+    assert "built; derive" in first.stdout and "operations" in first.stdout
+    assert (tmp_path / "double_pendulum" / "double_pendulum.py").exists()
+    second = andyc_cli("build", MODELS / "double_pendulum.yaml", "-o", tmp_path)
+    assert "up to date" in second.stdout
+
+
+def test_sim_writes_h5_and_csv_and_plot_draws_them(tmp_path, build_dir):
+    h5, csv, png = tmp_path / "run.h5", tmp_path / "run.csv", tmp_path / "run.png"
+    proc = andyc_cli("sim", MODELS / "double_pendulum.yaml", "--t-end", 2, "--dt", 1e-3, "--every", 10,
+                     "--set", "m2=0.7", "--frames", "tip", "--out", h5, "--out", csv, "-o", build_dir)
+    assert proc.returncode == 0, proc.stderr
+    assert "2000 steps" in proc.stdout and "energy" in proc.stdout
+    with h5py.File(h5) as f:
+        assert f["time"].shape == (201,)
+        assert list(f["frames"]) == ["tip"]
+        assert '"m2": 0.7' in f.attrs["parameters"]
+    assert csv.read_text().startswith("# model: double_pendulum")
+    proc = andyc_cli("plot", h5, "-o", png)
+    assert proc.returncode == 0, proc.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--set", "nope=1"], "unknown parameter 'nope'"),
+    (["--set", "m2"], "'m2' is not NAME=NUMBER"),
+    (["--method", "euler"], "'euler' is not one of"),
+    (["--frames", "hand"], "unknown frame(s) hand"),
+    (["--out", "run.txt"], "unknown run file type '.txt'"),
+])
+def test_sim_usage_errors_exit_2_with_a_message(args, message, build_dir, tmp_path):
+    proc = andyc_cli("sim", MODELS / "double_pendulum.yaml", "--t-end", 0.01, "-o", build_dir, *args, cwd=tmp_path)
+    assert proc.returncode == 2
+    assert message in proc.stderr and "Traceback" not in proc.stderr

@@ -1,0 +1,156 @@
+"""Runtime: run files, stops that keep data, scipy methods, rebuild skipping, the bare module."""
+
+import subprocess
+import sys
+import textwrap
+
+import h5py
+import numpy as np
+import pytest
+
+import andyc
+from andyc.runtime.run import read_h5
+from tests.conftest import MODELS
+
+
+def test_double_pendulum_matches_closed_form_M_and_G(compiled):
+    """Relative angle q2: M = [[(m1+m2)L1^2 + m2 L2^2 + 2 m2 L1 L2 c2, m2 L2^2 + m2 L1 L2 c2],
+    [., m2 L2^2]]; G from Lagrange's equations, evaluated at non-default parameters."""
+    model = compiled("double_pendulum")
+    L1, L2, m1, m2, g = 1.3, 0.7, 2.0, 0.6, 9.5
+    p = model.parameters({"L1": L1, "L2": L2, "m1": m1, "m2": m2, "g": g})
+    rng = np.random.default_rng(1)
+    for _ in range(10):
+        q1, q2, w1, w2 = rng.uniform(-3, 3, 4)
+        c2, s2 = np.cos(q2), np.sin(q2)
+        M = np.array([[(m1 + m2) * L1**2 + m2 * L2**2 + 2 * m2 * L1 * L2 * c2, m2 * L2**2 + m2 * L1 * L2 * c2],
+                      [m2 * L2**2 + m2 * L1 * L2 * c2, m2 * L2**2]])
+        G = np.array([m2 * L1 * L2 * s2 * (2 * w1 * w2 + w2**2)
+                      - (m1 + m2) * g * L1 * np.sin(q1) - m2 * g * L2 * np.sin(q1 + q2),
+                      -m2 * L1 * L2 * s2 * w1**2 - m2 * g * L2 * np.sin(q1 + q2)])
+        x = np.array([q1, q2, w1, w2])
+        assert np.allclose(model.module.mass_matrix(0.0, x, model.input_defaults, p), M, rtol=1e-12, atol=1e-12)
+        assert np.allclose(model.module.generalized_force(0.0, x, model.input_defaults, p), G, rtol=1e-12, atol=1e-12)
+
+
+def test_run_files_follow_the_design_layout(compiled, tmp_path):
+    model = compiled("double_pendulum")
+    run = andyc.simulate(model, 1.0, dt=1e-3, every=10, frames="all")
+    run.save(tmp_path / "run.h5")
+    run.save(tmp_path / "run.csv")
+    with h5py.File(tmp_path / "run.h5") as f:
+        n = f["time"].shape[0]
+        assert n == 101
+        assert f["state"].shape == (n, 4)
+        assert list(f["state"].attrs["names"]) == ["q1", "q2", "q1_dot", "q2_dot"]
+        assert f["flow"].shape == (n,)
+        assert f["multipliers"].shape == (n, 0)
+        assert f["residual/position"].shape == (n, 0) and f["residual/velocity"].shape == (n, 0)
+        assert f["energy"].shape == (n,)
+        assert set(f["frames"]) == {"upper", "elbow", "lower", "tip"}
+        assert f["frames/tip"].shape == (n, 3)
+        assert f["events"].dtype.names == ("time", "jump", "from_flow", "to_flow")
+        for key in ("model", "spec_sha256", "andyc_version", "method", "dt", "rtol", "atol",
+                    "parameters", "t_end", "status"):
+            assert key in f.attrs
+        assert f.attrs["status"] == "finished"
+    back = read_h5(tmp_path / "run.h5")
+    assert np.array_equal(back.state, run.state)
+    lines = (tmp_path / "run.csv").read_text().splitlines()
+    meta = [ln for ln in lines if ln.startswith("#")]
+    assert any(ln.startswith("# spec_sha256: ") for ln in meta)
+    header = lines[len(meta)].split(",")
+    assert header[:6] == ["time", "q1", "q2", "q1_dot", "q2_dot", "flow"]
+    data = np.loadtxt(tmp_path / "run.csv", delimiter=",", skiprows=len(meta) + 1)
+    assert np.array_equal(data[:, 1:5], run.state)   # %.17g round-trips exactly
+    assert np.array_equal(data[:, header.index("tip.y")], run.frames["tip"][:, 1])
+
+
+STIFF = textwrap.dedent("""\
+    name: stiff_slider
+    parameters: {k: 1.0e+6, m: 1.0}
+    coordinates:
+      s: {initial: 0.01}
+    frames:
+      - {name: cart, parent: world, prismatic: s, axis: x}
+    bodies:
+      - {name: block, frame: cart, mass: m}
+    springs:
+      - {name: spring, stiffness: k, length: s}
+    """)
+
+
+def test_blow_up_stops_with_when_and_keeps_the_samples(tmp_path, build_dir):
+    path = tmp_path / "stiff.yaml"
+    path.write_text(STIFF)
+    model = andyc.compile_model(path, build_dir)[0]
+    # omega = 1000 rad/s: RK4 at h = 5e-3 has h*omega = 5 > 2.83, far past its stability limit.
+    run = andyc.simulate(model, 10.0, dt=5e-3)
+    assert run.status.startswith("stopped: the state became non-finite")
+    assert " at t = " in run.status
+    assert run.time[-1] < 10.0 and len(run.time) > 10
+    assert np.all(np.isfinite(run.state))
+    run.save(tmp_path / "blown.h5")
+    assert read_h5(tmp_path / "blown.h5").status == run.status
+    # The CLI says so, keeps the file and exits 1.
+    out = tmp_path / "cli.h5"
+    proc = subprocess.run([sys.executable, "-m", "andyc.cli", "sim", str(path), "--dt", "5e-3", "--t-end", "10",
+                           "--out", str(out), "-o", str(build_dir)], capture_output=True, text=True)
+    assert proc.returncode == 1
+    assert "stopped: the state became non-finite" in proc.stderr and "Traceback" not in proc.stderr
+    assert out.exists()
+
+
+@pytest.mark.parametrize("method", ["DOP853", "Radau", "LSODA"])
+def test_scipy_methods_agree_with_rk4(compiled, method):
+    model = compiled("double_pendulum")
+    reference = andyc.simulate(model, 2.0, dt=1e-4, every=100)
+    run = andyc.simulate(model, 2.0, dt=1e-2, method=method, rtol=1e-11, atol=1e-12)
+    assert run.finished and run.stats["rhs_evaluations"] > 0
+    assert np.allclose(run.time, reference.time)
+    assert np.max(abs(run.state - reference.state)) < 1e-6
+
+
+def test_rebuild_is_skipped_when_the_spec_is_unchanged(tmp_path):
+    path = tmp_path / "pendulum.yaml"
+    path.write_text((MODELS / "pendulum_a01.yaml").read_text())
+    first = andyc.build(path, tmp_path / "build")
+    second = andyc.build(path, tmp_path / "build")
+    assert not first.skipped and second.skipped
+    path.write_text(path.read_text().replace("L: 1.0", "L: 2.0"))
+    third = andyc.build(path, tmp_path / "build")
+    assert not third.skipped and third.build_key != first.build_key
+
+
+def test_generated_module_runs_without_andyc_or_numba(compiled):
+    """The module imports only numpy and math (numba optional): block numba and andyc."""
+    model = compiled("double_pendulum")
+    source = model.path.read_text()
+    assert "andyc" not in [line.split()[1] for line in source.splitlines() if line.startswith(("import ", "from "))]
+    script = textwrap.dedent(f"""
+        import sys, importlib.util
+        sys.modules['numba'] = None      # import numba -> ImportError
+        sys.modules['andyc'] = None
+        spec = importlib.util.spec_from_file_location('dp', {str(model.path)!r})
+        dp = importlib.util.module_from_spec(spec); spec.loader.exec_module(dp)
+        from scipy.integrate import solve_ivp
+        assert dp.NUMBA is False
+        sol = solve_ivp(dp.rhs, (0, 1), dp.initial_state(), rtol=1e-11, atol=1e-12,
+                        args=(dp.INPUT_DEFAULTS, dp.PARAMETER_DEFAULTS))
+        print(*sol.y[:, -1])
+        """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    x_end = np.array(proc.stdout.split(), dtype=float)
+    reference = andyc.simulate(model, 1.0, dt=1e-4)
+    assert np.max(abs(x_end - reference.state[-1])) < 1e-7
+
+
+def test_parameters_and_inputs_are_checked(compiled):
+    model = compiled("double_pendulum")
+    with pytest.raises(andyc.errors.SimulationError, match="unknown parameter 'L3'.*L1, L2"):
+        andyc.simulate(model, 1.0, parameters={"L3": 1.0})
+    with pytest.raises(andyc.errors.SimulationError, match="unknown method"):
+        andyc.simulate(model, 1.0, method="euler")
+    with pytest.raises(andyc.errors.SimulationError, match="not a whole number of steps"):
+        andyc.simulate(model, 1.0005, dt=1e-3)
