@@ -17,8 +17,7 @@ from andyc.errors import SimulationError, SpecError
 def _fail_spec(exc: SpecError) -> None:
     for d in exc.diagnostics:
         click.echo(str(d), err=True)
-    n = len(exc.diagnostics)
-    click.echo(f"{n} problem{'s' if n != 1 else ''} found", err=True)
+    click.echo(f"{_plural(len(exc.diagnostics), 'problem')} found", err=True)
     sys.exit(1)
 
 
@@ -43,7 +42,7 @@ def main():
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
 def check(files):
     """Validate model FILES; print every problem as FILE:LINE: PATH: what; fix."""
-    failed = False
+    problems = 0
     for file in files:
         try:
             spec = andyc.load(file)
@@ -51,7 +50,7 @@ def check(files):
         except SpecError as exc:
             for d in exc.diagnostics:
                 click.echo(str(d), err=True)
-            failed = True
+            problems += len(exc.diagnostics)
             continue
         for w in spec.warnings:
             click.echo(f"{w} (warning)", err=True)
@@ -63,7 +62,9 @@ def check(files):
             f"{_plural(len(spec.bodies), 'body').replace('bodys', 'bodies')}, {_plural(len(user_frames), 'frame')} "
             f"besides world, {_plural(len(spec.parameters), 'parameter')}, {_plural(len(spec.inputs), 'input')}, "
             f"{_plural(n_elements, 'force element')}; {len(model.assignments)} intermediate expressions.")
-    sys.exit(1 if failed else 0)
+    if problems:
+        click.echo(f"{_plural(problems, 'problem')} found", err=True)
+    sys.exit(1 if problems else 0)
 
 
 @main.command()

@@ -68,7 +68,7 @@ def test_run_files_follow_the_design_layout(compiled, tmp_path):
 
 STIFF = textwrap.dedent("""\
     name: stiff_slider
-    parameters: {k: 1.0e+6, m: 1.0}
+    parameters: {k: 1e6, m: 1.0}     # YAML 1.2 style float (PyYAML alone reads a string)
     coordinates:
       s: {initial: 0.01}
     frames:

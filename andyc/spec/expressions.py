@@ -34,11 +34,15 @@ _BINOPS = {
 
 
 class ExpressionError(ValueError):
-    """An expression that is not allowed; `hint` says what to do."""
+    """An expression that is not allowed; `hint` says what to do.
 
-    def __init__(self, message: str, hint: str):
+    `name` is set when the problem is a name not allowed in this context.
+    """
+
+    def __init__(self, message: str, hint: str, name: str | None = None):
         super().__init__(message)
         self.hint = hint
+        self.name = name
 
 
 def number(value) -> sp.Expr:
@@ -71,9 +75,12 @@ def parse(text, names: dict[str, sp.Symbol], allow_time: bool = True) -> sp.Expr
     try:
         tree = ast.parse(source, mode="eval")
     except SyntaxError as exc:
-        raise ExpressionError(f"cannot parse {text!r}: {exc.msg} at column {exc.offset}",
-                              "check the brackets and operators; allowed: + - * / ** and functions "
-                              + ", ".join(sorted(FUNCTIONS)))
+        # offset is 1-based; 0 or past the end means Python ran out of text.
+        where = (f"at character {exc.offset} ({source[exc.offset - 1]!r})" if 0 < (exc.offset or 0) <= len(source)
+                 else "at the end (something is missing)")
+        raise ExpressionError(f"cannot parse {text!r}: {exc.msg} {where}",
+                              "check the brackets and operators (allowed: + - * / ** and the functions "
+                              + ", ".join(sorted(FUNCTIONS)) + ")")
     return _Builder(text, names, allow_time).visit(tree.body)
 
 
@@ -83,8 +90,8 @@ class _Builder:
         self.names = names
         self.allow_time = allow_time
 
-    def fail(self, what: str, hint: str):
-        raise ExpressionError(f"in {self.text!r}: {what}", hint)
+    def fail(self, what: str, hint: str, name: str | None = None):
+        raise ExpressionError(f"in {self.text!r}: {what}", hint, name)
 
     def visit(self, node) -> sp.Expr:
         if isinstance(node, ast.Constant):
@@ -112,10 +119,10 @@ class _Builder:
             return TIME
         known = sorted(set(self.names) | set(CONSTANTS) | ({"t"} if self.allow_time else set()))
         close = difflib.get_close_matches(ident, known, n=1)
-        hint = (f"did you mean '{close[0]}'? " if close else "") + "known names: " + ", ".join(known)
+        hint = (f"did you mean '{close[0]}'? " if close else "") + "names allowed here: " + ", ".join(known)
         if ident in FUNCTIONS:
             self.fail(f"function '{ident}' used as a value", f"call it, e.g. {ident}(x)")
-        self.fail(f"unknown name '{ident}'", hint)
+        self.fail(f"unknown name '{ident}'", hint, ident)
 
     def call(self, node: ast.Call) -> sp.Expr:
         if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:

@@ -7,6 +7,7 @@ one SpecError carrying all of them, so `andyc check` can print them at once.
 from __future__ import annotations
 
 import difflib
+import functools
 import hashlib
 import json
 import keyword
@@ -17,7 +18,7 @@ import jsonschema
 import numpy as np
 import sympy as sp
 
-from andyc.errors import Diagnostic, SpecError
+from andyc.errors import Diagnostic, SpecError, format_path
 from andyc.spec.expressions import RESERVED, ExpressionError, parse
 from andyc.spec.model import (Body, Coordinate, Damper, Frame, Load, Potential,
                               Rotate, Spec, Spring, Translate)
@@ -27,10 +28,19 @@ SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "andyc-model.sch
 AXES = {"x": (1, 0, 0), "y": (0, 1, 0), "z": (0, 0, 1),
         "-x": (-1, 0, 0), "-y": (0, -1, 0), "-z": (0, 0, -1)}
 ELEMENT_SECTIONS = ("bodies", "forces", "torques", "dampers", "springs", "potentials")
+_KIND = {"parameters": "parameter", "inputs": "input", "coordinates": "coordinate", "frames": "frame",
+         "bodies": "body", "forces": "force", "torques": "torque", "dampers": "damper",
+         "springs": "spring", "potentials": "potential"}
 
 
 def schema() -> dict:
     return json.loads(SCHEMA_PATH.read_text())
+
+
+@functools.lru_cache(maxsize=1)
+def _defs() -> dict:
+    """The schema's $defs, read once (to tell which definition an error is in)."""
+    return schema()["$defs"]
 
 
 def load(path) -> Spec:
@@ -46,13 +56,13 @@ def load(path) -> Spec:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
         raise SpecError([Diagnostic(file, 1, "", "the file is not UTF-8 text", "save it as UTF-8")])
-    data, smap = load_yaml(text, file)
+    data, smap, duplicates = load_yaml(text, file)
     if not isinstance(data, dict):
         raise SpecError([Diagnostic(file, 1, "", "the document is not a mapping",
                                     "a model starts with keys such as 'name:', 'coordinates:', 'frames:'")])
-    problems = _schema_problems(data, smap)
+    problems = _schema_problems(data, smap) + duplicates
     if problems:
-        raise SpecError(problems)
+        raise SpecError(sorted(problems, key=lambda d: d.line))
     return _Builder(data, smap, hashlib.sha256(raw).hexdigest()).build()
 
 
@@ -60,55 +70,135 @@ def load(path) -> Spec:
 
 def _schema_problems(data, smap: SourceMap) -> list[Diagnostic]:
     validator = jsonschema.Draft202012Validator(schema())
-    out = []
-    for error in sorted(validator.iter_errors(data), key=lambda e: list(map(str, e.absolute_path))):
-        if error.context:
-            error = jsonschema.exceptions.best_match(error.context)
-        message, hint = _explain(error)
-        out.append(smap.diag(tuple(error.absolute_path), message, hint))
-    return out
+    found = []                                  # (path, message, hint)
+    for error in validator.iter_errors(data):
+        found += _explain_all(error)
+    # A typo such as 'masss' is one problem, not also a missing 'mass'.
+    typos = {(path[:-1], hint.split("'")[1]) for path, message, hint in found
+             if message.startswith("unknown field") and hint.startswith("did you mean")}
+    found = [(path, message, hint) for path, message, hint in found
+             if not (message.startswith("missing required field") and (path, message.split("'")[1]) in typos)]
+    out = [smap.diag(path, message, hint) for path, message, hint in found]
+    return sorted(out, key=lambda d: d.line)
 
 
-def _explain(error) -> tuple[str, str]:
-    v, inst = error.validator, error.instance
-    names = {"object": "a mapping", "array": "a list", "string": "a string", "number": "a number",
-             "boolean": "true or false", "integer": "an integer"}
-    if v == "required":
-        field = error.message.split("'")[1]
-        return f"missing required field '{field}'", f"add '{field}:' here"
-    if v == "additionalProperties":
+def _explain_all(error) -> list[tuple]:
+    """One schema error -> [(path, message, hint)], usually one entry."""
+    path = tuple(error.absolute_path)
+    if error.validator == "oneOf":
+        return _explain_one_of(error, path)
+    if error.validator == "additionalProperties" and isinstance(error.instance, dict):
         allowed = sorted(error.schema.get("properties", {}))
-        extra = [k for k in inst if k not in allowed] if isinstance(inst, dict) else []
-        key = extra[0] if extra else "?"
-        close = difflib.get_close_matches(key, allowed, n=1)
-        return (f"unknown field '{key}'",
-                (f"did you mean '{close[0]}'? " if close else "") + "allowed fields: " + ", ".join(allowed))
+        out = []
+        for key in (k for k in error.instance if k not in allowed):
+            close = difflib.get_close_matches(str(key), allowed, n=1)
+            out.append((path + (key,), f"unknown field '{key}'",
+                        (f"did you mean '{close[0]}'? " if close else "") + "allowed fields: " + ", ".join(allowed)))
+        return out
+    if "propertyNames" in error.schema_path:      # a bad key: point at the key itself
+        path += (error.instance,)
+    return [(path, *_explain(error, path))]
+
+
+# What each 'oneOf' of the schema accepts, by $defs name: (what it is, how to write it).
+_ALTERNATIVES = {
+    "rotation": ("a rotation", "write one of {axis: z, angle: 0.5}, {rpy: [roll, pitch, yaw]} "
+                               "or {quaternion: [w, x, y, z]}"),
+    "damper": ("a damper", "give either 'speed: <coordinate>' or 'frame: <frame>'"),
+    "spring": ("a spring", "give either 'length: <expression>' or 'between: [frameA, frameB]'"),
+    "axis": ("axis", "write x, y, z, -x, -y, -z or three numbers such as [0, 0.6, 0.8]"),
+    "inertia": ("inertia", "write [Ixx, Iyy, Izz], [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] "
+                           "or a 3x3 matrix [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]]"),
+}
+
+
+def _explain_one_of(error, path) -> list[tuple]:
+    """jsonschema says only 'not valid under any of the given schemas'; say which and why."""
+    kind = next((name for name, s in _defs().items() if s == error.schema), None)
+    what, how = _ALTERNATIVES.get(kind, ("value", "see schemas/andyc-model.schema.json"))
+    branches = error.schema["oneOf"]
+    inst = error.instance
+    if all("required" in b for b in branches):
+        # Alternatives told apart by which fields are present (a non-mapping is a 'type' error).
+        if not isinstance(inst, dict):
+            return []
+        options = [b["required"] for b in branches]
+        present = [k for k in inst if any(k in o for o in options)]
+        if any(set(o) <= set(present) for o in options):
+            return [(path, f"conflicting fields {', '.join(map(repr, present))}: {what} is given one way only", how)]
+        for option in options:
+            given = [k for k in option if k in present]
+            if given:
+                missing = [k for k in option if k not in present]
+                return [(path, f"missing field '{missing[0]}' (it goes with '{given[0]}')", how)]
+        wanted = (" or " if len(options) == 2 else ", or ").join(" and ".join(map(repr, o)) for o in options)
+        return [(path, f"{what} needs {wanted}", how)]
+    # Alternatives told apart by shape (axis, inertia): if exactly one alternative has the
+    # right shape and fails only inside, report its errors; otherwise say what is accepted.
+    by_branch = {}
+    for sub in error.context:
+        by_branch.setdefault(sub.relative_schema_path[0], []).append(sub)
+    fitting = [errs for errs in by_branch.values()
+               if all(e.relative_path and e.validator not in ("type", "enum", "const") for e in errs)]
+    if len(fitting) == 1:
+        return [(tuple(e.absolute_path), *_explain(e, tuple(e.absolute_path))) for e in fitting[0]]
+    return [(path, f"{_describe(inst)} is not a valid {what}", how)]
+
+
+_KINDS = {"object": "a mapping", "array": "a list", "string": "a name or text", "number": "a number",
+          "boolean": "true or false", "integer": "a whole number"}
+_TYPE_HINTS = {"object": "write 'key: value' entries, or {} for none", "array": "write a list such as [0, 0, 1]",
+               "string": "write a name", "number": "write a number such as 1.5",
+               "boolean": "write true or false", "integer": "write a whole number"}
+_ITEMS = {"dh": "[d, theta, a, alpha]", "quaternion": "[w, x, y, z]", "rpy": "[roll, pitch, yaw]",
+          "between": "[frameA, frameB]", "inertia": "one row of the matrix, such as [Ixx, Ixy, Ixz]"}
+
+
+def _describe(inst) -> str:
+    if inst is None:
+        return "an empty value"
+    if isinstance(inst, bool):
+        return str(inst).lower()
+    if isinstance(inst, dict):
+        return "a mapping"
+    if isinstance(inst, list):
+        text = repr(inst)
+        return "a list " + (text if len(text) <= 60 else text[:57] + "...")
+    if isinstance(inst, str):
+        return f"the text {inst!r}"
+    return f"the number {inst!r}"
+
+
+def _explain(error, path) -> tuple[str, str]:
+    v, inst, sch = error.validator, error.instance, error.schema
+    field = next((p for p in reversed(path) if isinstance(p, str)), "")
+    if v == "required":
+        name = error.message.split("'")[1]
+        return f"missing required field '{name}'", f"add '{name}:' " + ("here" if path else "at the top level")
     if v == "type":
-        want = error.validator_value
-        want = [want] if isinstance(want, str) else want
-        got = type(inst).__name__ if not isinstance(inst, (dict, list)) else ("a mapping" if isinstance(inst, dict) else "a list")
-        return f"expected {' or '.join(names.get(w, w) for w in want)}, got {got} {inst!r}"[:200], \
-            "change the value to the expected kind"
+        want = [error.validator_value] if isinstance(error.validator_value, str) else error.validator_value
+        if set(want) == {"number", "string"}:
+            return f"expected a number or an expression, got {_describe(inst)}", \
+                'write a number, or an expression such as "L/2"'
+        how = next((how for kind, (_, how) in _ALTERNATIVES.items() if _defs()[kind] == sch),
+                   _TYPE_HINTS.get(want[0], "see schemas/andyc-model.schema.json"))
+        return f"expected {' or '.join(_KINDS.get(w, w) for w in want)}, got {_describe(inst)}", how
     if v in ("minItems", "maxItems"):
-        return f"expected {error.validator_value} {'or more' if v == 'minItems' else 'or fewer'} items, got {len(inst)}", \
-            "give the right number of entries"
+        lo, hi = sch.get("minItems"), sch.get("maxItems")
+        if lo == hi:
+            example = _ITEMS.get(field, "[x, y, z]" if lo == 3 else "")
+            return f"expected {lo} items, got {len(inst)}", f"write {lo} entries" + (f": {example}" if example else "")
+        if v == "minItems":
+            return f"expected at least {lo} item{'s' if lo != 1 else ''}, got {len(inst)}", "add the missing entries"
+        return f"expected at most {hi} items, got {len(inst)}", "remove the extra entries"
     if v == "pattern":
-        return f"'{inst}' is not a valid name", "names start with a letter and use letters, digits and '_'"
+        return f"{_describe(inst)} is not a valid name", "names start with a letter and use letters, digits and '_'"
     if v in ("enum", "const"):
         allowed = error.validator_value if v == "enum" else [error.validator_value]
-        return f"{inst!r} is not allowed", "use one of: " + ", ".join(map(str, allowed))
+        return f"{_describe(inst)} is not allowed here", "use one of: " + ", ".join(map(str, allowed))
     if v == "minProperties":
         return "must not be empty", "declare at least one entry"
-    if v == "not" or v == "oneOf":
-        return "conflicting or missing fields", _ONE_OF_HINTS.get(error.absolute_path and str(error.absolute_path[0]), "see the schema for the allowed combinations")
     return error.message, "see schemas/andyc-model.schema.json"
-
-
-_ONE_OF_HINTS = {
-    "frames": "a rotation is one of {axis, angle}, {rpy} or {quaternion}",
-    "dampers": "a damper acts on either 'speed: <coordinate>' or 'frame: <frame>', not both",
-    "springs": "a spring has either 'length: <expression>' or 'between: [frameA, frameB]', not both",
-}
 
 
 # -- meaning ------------------------------------------------------------------
@@ -132,7 +222,10 @@ class _Builder:
         try:
             result = parse(value, names)
         except ExpressionError as exc:
-            self.error(where, str(exc), exc.hint + (f" ({context})" if "unknown name" in str(exc) else ""))
+            message = str(exc)
+            if exc.name in self.declared:   # declared, but not usable in this context
+                message = f"in {value!r}: {_KIND[self.declared[exc.name]]} '{exc.name}' cannot be used here"
+            self.error(where, message, exc.hint + (f" ({context})" if exc.name else ""))
             return sp.Integer(0)
         self.used |= result.free_symbols
         return result
@@ -152,6 +245,10 @@ class _Builder:
     def build(self) -> Spec:
         d = self.data
         self.check_names()
+        for section in ("parameters", "inputs"):
+            for n, v in (d.get(section) or {}).items():
+                if not math.isfinite(v):
+                    self.error((section, n), f"{v} is not a finite number", "give a finite default value")
         self.parameters = {n: (sp.Symbol(f"p_{n}", real=True), float(v))
                            for n, v in (d.get("parameters") or {}).items()}
         self.inputs = {n: (sp.Symbol(f"u_{n}", real=True), float(v))
@@ -160,7 +257,6 @@ class _Builder:
         self.defaults = {s: v for s, v in self.parameters.values()}
         coords = []
         for name, entry in d["coordinates"].items():
-            entry = entry or {}
             where = ("coordinates", name)
             q = sp.Symbol(f"q_{name}", real=True)
             v = sp.Symbol(f"v_{name}", real=True)
@@ -172,7 +268,7 @@ class _Builder:
         self.load_names = {**self.kin_names, **{n: s for n, (s, _) in self.inputs.items()}}
 
         frames = self.frames()
-        self.frame_names = {"world"} | {f.name for f in frames}
+        self.frame_names = {"world"} | {f["name"] for f in d["frames"]}
         extra_frames: list[Frame] = []
         bodies = [self.body(i, b, extra_frames) for i, b in enumerate(d.get("bodies") or [])]
         loads = [self.load_(kind, i, f, extra_frames)
@@ -186,7 +282,7 @@ class _Builder:
         gravity = (self.vector(d["gravity"], ("gravity",), self.param_names, "only parameters are allowed here")
                    if "gravity" in d else sp.zeros(3, 1))
         if self.problems:
-            raise SpecError(self.problems)
+            raise SpecError(sorted(self.problems, key=lambda p: p.line))
         for name, (sym, _) in self.parameters.items():
             if sym not in self.used:
                 self.warnings.append(self.smap.diag(("parameters", name), f"parameter '{name}' is not used",
@@ -201,6 +297,7 @@ class _Builder:
         """Every name is unique across the model and not reserved."""
         d = self.data
         seen: dict[str, tuple] = {}
+        self.declared = {}          # name -> its section, for messages
         entries = [(("parameters", n), n) for n in (d.get("parameters") or {})]
         entries += [(("inputs", n), n) for n in (d.get("inputs") or {})]
         entries += [(("coordinates", n), n) for n in d["coordinates"]]
@@ -211,10 +308,12 @@ class _Builder:
                 self.error(where, f"'{name}' is a reserved name", "choose another name (reserved: t, pi, world, "
                            "the function names and Python keywords)")
             elif name in seen:
-                self.error(where, f"duplicate name '{name}' (first defined at line {self.smap.line(seen[name])})",
-                           "names must be unique across parameters, inputs, coordinates, frames and elements; rename one")
+                first = f"line {self.smap.line(seen[name])}, {format_path(seen[name])}"
+                self.error(where, f"duplicate name '{name}' (first defined at {first})",
+                           "rename one (names are unique across parameters, inputs, coordinates, frames and elements)")
             else:
                 seen[name] = where
+                self.declared[name] = where[0]
 
     def frames(self) -> list[Frame]:
         raw = self.data["frames"]
@@ -231,7 +330,7 @@ class _Builder:
             if name in trail:
                 cycle = trail[trail.index(name):] + [name]
                 self.error(("frames", i, "parent"), "the frame graph has a cycle: " + " -> ".join(cycle),
-                           "frames form a tree rooted at 'world'; give one of these frames another parent")
+                           "give one of these frames another parent (frames form a tree rooted at 'world')")
                 for n in cycle:
                     state[n] = "done"
                 return
@@ -329,9 +428,11 @@ class _Builder:
 
     def body(self, i, b, extra) -> Body:
         where = ("bodies", i)
+        before = len(self.problems)
         mass, m = self.constant(b["mass"], where + ("mass",))
-        if not m > 0:
-            self.error(where + ("mass",), f"mass must be positive, got {m:g}", "give a positive mass in kg")
+        if len(self.problems) == before and not m > 0:   # (a bad expression is reported already)
+            value = f"{m:g}" if mass.is_number else f"{b['mass']} = {m:g}"
+            self.error(where + ("mass",), f"mass must be positive, got {value}", "give a positive mass in kg")
         inertia = self.inertia(b.get("inertia", [0, 0, 0]), where + ("inertia",))
         frame = b["frame"]
         if self.frame_ref(frame, where + ("frame",)) and "com" in b:
@@ -339,6 +440,7 @@ class _Builder:
         return Body(b["name"], frame, mass, inertia, where)
 
     def inertia(self, value, where) -> sp.Matrix:
+        before = len(self.problems)
         if len(value) == 3 and all(isinstance(r, list) for r in value):
             rows = [[self.constant(x, where + (i, j))[0] for j, x in enumerate(row)] for i, row in enumerate(value)]
             mat = sp.Matrix(rows)
@@ -347,6 +449,8 @@ class _Builder:
         else:
             xx, yy, zz, xy, xz, yz = (self.constant(x, where + (i,))[0] for i, x in enumerate(value))
             mat = sp.Matrix([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+        if len(self.problems) > before:     # a bad entry is reported already
+            return mat
         try:
             num = np.array(mat.subs(self.defaults), dtype=float)
         except (TypeError, ValueError):
@@ -354,7 +458,7 @@ class _Builder:
         if not np.allclose(num, num.T, rtol=1e-12, atol=1e-12 * max(1.0, abs(num).max())):
             i, j = np.unravel_index(np.argmax(abs(num - num.T)), num.shape)
             self.error(where, f"inertia is not symmetric: I[{i}][{j}] = {num[i, j]:g} but I[{j}][{i}] = {num[j, i]:g}",
-                       "an inertia tensor is symmetric; make the off-diagonal pairs equal")
+                       "make the off-diagonal pairs equal (an inertia tensor is symmetric)")
             return mat
         eig = np.linalg.eigvalsh(num)
         scale = max(1.0, abs(eig).max())
