@@ -8,8 +8,6 @@ and lets Numba compile (or load its cache).
 from __future__ import annotations
 
 import time
-from pathlib import Path
-
 from andyc.codegen.generate import BuildResult, build_key, existing_build_key, module_path
 from andyc.codegen.generate import generate as _generate
 from andyc.spec.load import load as _load
@@ -45,6 +43,3 @@ def compile_model(path, out_dir="build", force: bool = False):
     result.timings["compile"] = time.perf_counter() - t0
     return compiled, result
 
-
-def is_model_file(path) -> bool:
-    return Path(path).suffix.lower() in (".yaml", ".yml")

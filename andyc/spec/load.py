@@ -384,8 +384,13 @@ class _Builder:
         if norm < 1e-12:
             self.error(where, "the axis is zero", "give a direction such as [0, 0, 1] or z")
             return sp.Matrix([0, 0, 1])
+        # Exact when the norm is rational (z, [0, 0.6, 0.8]) so that zeros stay
+        # structural; otherwise 17-digit floats, not a huge exact surd.
         m = sp.Matrix([sp.Rational(repr(float(x))) for x in vec])
-        return m / sp.sqrt(sum(x ** 2 for x in m))
+        norm = sp.sqrt(sum(x ** 2 for x in m))
+        if norm.is_Rational:
+            return m / norm
+        return sp.Matrix([sp.Float(float(x) / float(norm), 17) for x in m])
 
     def rotation(self, r, where) -> list:
         ctx = "rotation angles use parameters, coordinates and t"

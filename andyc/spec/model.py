@@ -120,8 +120,5 @@ class Spec:
     potentials: list = field(default_factory=list)
     warnings: list = field(default_factory=list)   # of Diagnostic
 
-    def frame(self, name: str) -> Frame:
-        return next(f for f in self.frames if f.name == name)
-
     def parameter_values(self) -> dict:
         return {name: value for name, (_, value) in self.parameters.items()}
