@@ -154,3 +154,15 @@ def test_parameters_and_inputs_are_checked(compiled):
         andyc.simulate(model, 1.0, method="euler")
     with pytest.raises(andyc.errors.SimulationError, match="not a whole number of steps"):
         andyc.simulate(model, 1.0005, dt=1e-3)
+
+
+def test_progress_reports_after_the_first_second_at_most_once_a_second(monkeypatch, capsys):
+    from andyc.runtime import simulate as sim_module
+
+    clock = iter([0.0, 0.5, 1.2, 1.7, 2.4, 2.5])       # perf_counter readings
+    monkeypatch.setattr(sim_module.time, "perf_counter", lambda: next(clock))
+    bar = sim_module.Progress("model rk4", 10.0, enabled=True)   # reads 0.0
+    for t in (1.0, 2.0, 3.0, 4.0, 5.0):                 # reads 0.5, 1.2, 1.7, 2.4, 2.5
+        bar(t)
+    lines = [ln for ln in capsys.readouterr().err.replace("\r", "\n").splitlines() if ln]
+    assert lines == ["model rk4: t = 2 / 10 s (20%), 1 s elapsed", "model rk4: t = 4 / 10 s (40%), 2 s elapsed"]
