@@ -12,6 +12,7 @@ import click
 
 import andyc
 from andyc.errors import SimulationError, SpecError
+from andyc.runtime.simulate import METHODS
 
 
 def _fail_spec(exc: SpecError) -> None:
@@ -105,7 +106,7 @@ def _parse_sets(values) -> dict:
 @click.option("--t-end", default=10.0, show_default=True, help="End time, s.")
 @click.option("--dt", default=1e-3, show_default=True, help="Step (rk4) or output spacing (adaptive methods), s.")
 @click.option("--method", default="rk4", show_default=True,
-              type=click.Choice(list(__import__("andyc.runtime.simulate", fromlist=["METHODS"]).METHODS)))
+              type=click.Choice(list(METHODS)))
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
 @click.option("--out", "outs", multiple=True, metavar="RUN.h5|RUN.csv",
               help="Run file(s) to write; default runs/<name>.h5.")
