@@ -1,5 +1,6 @@
 """Runtime: run files, stops that keep data, scipy methods, rebuild skipping, the bare module."""
 
+import os
 import subprocess
 import sys
 import textwrap
@@ -166,3 +167,15 @@ def test_progress_reports_after_the_first_second_at_most_once_a_second(monkeypat
         bar(t)
     lines = [ln for ln in capsys.readouterr().err.replace("\r", "\n").splitlines() if ln]
     assert lines == ["model rk4: t = 2 / 10 s (20%), 1 s elapsed", "model rk4: t = 4 / 10 s (40%), 2 s elapsed"]
+
+
+def test_generated_code_does_not_depend_on_the_hash_seed(tmp_path):
+    """Same spec, same andyc -> the same module text, whatever PYTHONHASHSEED is."""
+    texts = []
+    for seed in ("1", "2"):
+        out = tmp_path / seed
+        env = {**os.environ, "PYTHONHASHSEED": seed}
+        subprocess.run([sys.executable, "-m", "andyc.cli", "build", str(MODELS / "chain3d.yaml"), "-o", str(out)],
+                       check=True, capture_output=True, env=env)
+        texts.append((out / "chain3d" / "chain3d.py").read_text())
+    assert texts[0] == texts[1]

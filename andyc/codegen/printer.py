@@ -45,16 +45,17 @@ class FunctionBody:
 
 def function_body(outputs: list[tuple[str, sp.Expr]], pool: dict[sp.Symbol, sp.Expr]) -> FunctionBody:
     """cse and order the computation of `outputs` from the assignment `pool`."""
-    needed: list[sp.Symbol] = []
-    seen: set = set()
-    stack = [s for _, e in outputs for s in sp.sympify(e).free_symbols]
+    # The assignments the outputs reach, kept in pool order (the pool is in
+    # dependency order), so the generated code does not depend on set order.
+    reached: set = set()
+    stack = [s for _, e in outputs for s in _ordered_symbols(sp.sympify(e))]
     while stack:
         s = stack.pop()
-        if s in seen or s not in pool:
+        if s in reached or s not in pool:
             continue
-        seen.add(s)
-        needed.append(s)
-        stack.extend(pool[s].free_symbols)
+        reached.add(s)
+        stack.extend(_ordered_symbols(pool[s]))
+    needed = [s for s in pool if s in reached]
     exprs = [pool[s] for s in needed] + [sp.sympify(e) for _, e in outputs]
     replacements, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("c", real=True), order="none")
     defs = dict(replacements)
