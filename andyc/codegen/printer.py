@@ -20,9 +20,6 @@ class _Printer(PythonCodePrinter):
     def _print_Rational(self, expr):
         return repr(float(expr))
 
-    def _print_Half(self, expr):
-        return "0.5"
-
     def _print_Integer(self, expr):
         # Numba types integer literals as int64; print larger ones as floats.
         return str(expr.p) if abs(expr.p) < 2**53 else repr(float(expr))

@@ -230,7 +230,7 @@ class _Builder:
         self.used |= result.free_symbols
         return result
 
-    def vector(self, values, where, names, context, n=3):
+    def vector(self, values, where, names, context):
         return sp.Matrix([self.expr(v, where + (i,), names, context) for i, v in enumerate(values)])
 
     def constant(self, value, where):

@@ -25,7 +25,7 @@ dE/dt = power for models whose potentials do not depend on t.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import sympy as sp
 
@@ -43,7 +43,6 @@ class ElementTerms:
     G: sp.Matrix | None = None
     energy: sp.Expr = sp.Integer(0)
     power: sp.Expr = sp.Integer(0)
-    frames: tuple = field(default_factory=tuple)
 
 
 def _norm(vec: sp.Matrix) -> sp.Expr:
@@ -65,12 +64,12 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
         G = K.Jv.T * (b.mass * (spec.gravity - K.ac)) - K.Jw.T * h
         T = (b.mass * K.v.dot(K.v) + K.w.dot(Iw * K.w)) / 2
         V = -b.mass * spec.gravity.dot(K.r)
-        out.append(ElementTerms(b.name, M=M, G=G, energy=T + V, frames=(b.frame,)))
+        out.append(ElementTerms(b.name, M=M, G=G, energy=T + V))
     for f in spec.loads:
         K = kin[f.frame]
         vec = kin[f.in_frame].R * f.vector
         J, rate = (K.Jv, K.v) if f.kind == "force" else (K.Jw, K.w)
-        out.append(ElementTerms(f.name, G=J.T * vec, power=rate.dot(vec), frames=(f.frame, f.in_frame)))
+        out.append(ElementTerms(f.name, G=J.T * vec, power=rate.dot(vec)))
     for d in spec.dampers:
         if d.speed is not None:
             j = [c.name for c in spec.coordinates].index(d.speed)
@@ -81,8 +80,7 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
             K = kin[d.frame]
             J, chi = (K.Jw, K.w) if d.angular else (K.Jv, K.v)
         gain = d.coefficient * (_norm(chi) if d.law == "quadratic" else 1)
-        out.append(ElementTerms(d.name, G=-gain * (J.T * chi), power=-gain * chi.dot(chi),
-                                frames=(d.frame,) if d.frame else ()))
+        out.append(ElementTerms(d.name, G=-gain * (J.T * chi), power=-gain * chi.dot(chi)))
     for s in spec.springs:
         if s.length is not None:
             x = s.length
@@ -93,8 +91,7 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
             x = emit.scalar(f"s_{s.name}_len", _norm(delta))
             dx = (a.Jv - b.Jv).T * delta / x
         stretch = x - s.rest_length
-        out.append(ElementTerms(s.name, G=-s.stiffness * stretch * dx, energy=s.stiffness * stretch ** 2 / 2,
-                                frames=tuple(s.between or ())))
+        out.append(ElementTerms(s.name, G=-s.stiffness * stretch * dx, energy=s.stiffness * stretch ** 2 / 2))
     for p in spec.potentials:
         out.append(ElementTerms(p.name, G=-sp.Matrix([sp.diff(p.energy, qi) for qi in q]), energy=p.energy))
     return out
