@@ -68,14 +68,8 @@ def existing_build_key(path: Path) -> str | None:
 
 
 def _unpack(model: SymbolicModel, used: set) -> list[str]:
-    nq = len(model.q)
-    lines = []
-    for i, s in enumerate(model.q):
-        if s in used:
-            lines.append(f"{s} = x[{i}]")
-    for i, s in enumerate(model.v):
-        if s in used:
-            lines.append(f"{s} = x[{nq + i}]")
+    states = model.q + model.v + model.signals
+    lines = [f"{s} = x[{i}]" for i, s in enumerate(states) if s in used]
     for i, s in enumerate(model.parameters):
         if s in used:
             lines.append(f"{s} = p[{i}]")
@@ -109,20 +103,22 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         _function(model, pool, "power", "t, x, u, p",
                   "Power of the non-conservative elements (forces, torques, dampers).",
                   [("w", model.power)], returns="w"),
+        _function(model, pool, "signal_rates", "t, x, u, p, xdot",
+                  "Rates of the nonholonomic signals (eq. 4) into xdot[NQ + NV:].",
+                  [(f"xdot[{len(model.q) + n + i}]", r) for i, r in enumerate(model.signal_rates)]),
         _function(model, pool, "frame_positions", "t, x, u, p, out",
                   "Origins of FRAMES in world coordinates into out (len(FRAMES), 3).",
                   [(f"out[{k}, {i}]", model.frame_positions[f][i]) for k, f in enumerate(frames) for i in range(3)]),
     ]
     # M is symmetric: copy the upper triangle after it is written.
     functions[0]["outputs"] += [(t, str(src)) for t, src in mirror]
-    init_syms = set()
-    values = []
-    for c in spec.coordinates:
-        init_syms |= c.initial.free_symbols
-        values.append(to_code(c.initial))
-    for c in spec.coordinates:
-        init_syms |= c.velocity.free_symbols
-        values.append(to_code(c.velocity))
+    initial = ([c.initial for c in spec.coordinates] + [c.velocity for c in spec.coordinates]
+               + [s.initial for s in spec.speeds] + [s.initial for s in spec.signals])
+    init_syms = set().union(*(e.free_symbols for e in initial))
+    values = [to_code(e) for e in initial]
+    # Each quaternion signal: the index of its w component in x.
+    nx_before = len(model.q) + n
+    quaternions = [nx_before + i for i, s in enumerate(spec.signals) if s.component == "qw"]
     unpack = [f"    {s} = p[{i}]" for i, s in enumerate(model.parameters) if s in init_syms]
     operations = {f["name"]: f["operations"] for f in functions}
     context = {
@@ -130,7 +126,9 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         "build_key": key, "name": spec.name,
         "description": (spec.description or "").strip().replace('"""', "'''"),
         "coordinates": [c.name for c in spec.coordinates],
-        "speeds": [f"{c.name}_dot" for c in spec.coordinates],
+        "speeds": spec.speed_names,
+        "signals": [s.name for s in spec.signals],
+        "quaternions": quaternions,
         "parameters": list(spec.parameters),
         "parameter_defaults": repr([v for _, v in spec.parameters.values()]),
         "inputs": list(spec.inputs),

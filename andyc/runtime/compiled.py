@@ -27,8 +27,10 @@ class CompiledModel:
     spec_sha256: str
     nq: int
     nv: int
+    ns: int
     nx: int
     state_names: tuple
+    quaternions: tuple          # index in x of each quaternion signal's w
     parameter_names: tuple
     parameter_defaults: np.ndarray
     input_names: tuple
@@ -78,7 +80,8 @@ def load_compiled(path) -> CompiledModel:
     spec.loader.exec_module(module)
     model = CompiledModel(
         module=module, path=path, name=module.NAME, spec_sha256=module.SPEC_SHA256,
-        nq=module.NQ, nv=module.NV, nx=module.NX, state_names=tuple(module.STATES),
+        nq=module.NQ, nv=module.NV, ns=module.NS, nx=module.NX, state_names=tuple(module.STATES),
+        quaternions=tuple(module.QUATERNIONS),
         parameter_names=tuple(module.PARAMETERS), parameter_defaults=module.PARAMETER_DEFAULTS,
         input_names=tuple(module.INPUTS), input_defaults=module.INPUT_DEFAULTS,
         frame_names=tuple(module.FRAMES))
@@ -87,6 +90,7 @@ def load_compiled(path) -> CompiledModel:
     x = model.initial_state(p)
     ws = Workspace.for_model(model)
     module.rhs_into(0.0, x, u, p, ws.k[0], ws.M, ws.G)
+    module.normalize(x.copy())
     module.energy(0.0, x, u, p)
     module.power(0.0, x, u, p)
     module.frame_positions(0.0, x, u, p, np.zeros((len(model.frame_names), 3)))

@@ -6,7 +6,10 @@
 
 `rk4_chunk` advances a block of steps and returns to Python, which reports
 progress between blocks; the model's `rhs_into` is passed in as a compiled
-function, so each model gets its own specialised loop.
+function, so each model gets its own specialised loop. With `project`, the
+model's `normalize` puts quaternion signals back on the unit sphere after
+every step (a projection of the step's result; its cost and effect are
+measured in bench/run.py).
 """
 
 from __future__ import annotations
@@ -19,7 +22,8 @@ OK, NONFINITE, SINGULAR_MASS = 0, 1, 2
 
 
 @njit(cache=False)
-def rk4_chunk(rhs_into, t0, dt, step0, n_steps, every, x, u, p, out_t, out_x, row, M, G, k, xt):
+def rk4_chunk(rhs_into, normalize, project, t0, dt, step0, n_steps, every, x, u, p, out_t, out_x, row,
+              M, G, k, xt):
     """Advance x (in place) from step index step0 by up to n_steps steps.
 
     Time is t0 + i dt (no accumulated round-off). Every `every`-th step is
@@ -51,6 +55,8 @@ def rk4_chunk(rhs_into, t0, dt, step0, n_steps, every, x, u, p, out_t, out_x, ro
             total += x[j]
         if not math.isfinite(total):
             return s + 1, row, NONFINITE
+        if project:
+            normalize(x)
         if (i + 1) % every == 0:
             out_t[row] = t0 + (i + 1) * h
             for j in range(nx):

@@ -17,6 +17,8 @@ class Run:
     spec_sha256: str
     method: str
     dt: float
+    nq: int                          # state = (q [nq], v [nv], signals [rest])
+    nv: int
     rtol: float
     atol: float
     t_end: float
@@ -32,6 +34,10 @@ class Run:
     andyc_version: str = andyc.__version__
 
     @property
+    def signal_names(self) -> list:
+        return self.state_names[self.nq + self.nv:]
+
+    @property
     def finished(self) -> bool:
         return self.status == "finished"
 
@@ -40,7 +46,7 @@ class Run:
 
     def attributes(self) -> dict:
         return {"model": self.model, "spec_sha256": self.spec_sha256, "andyc_version": self.andyc_version,
-                "method": self.method, "dt": self.dt, "rtol": self.rtol, "atol": self.atol,
+                "method": self.method, "dt": self.dt, "nq": self.nq, "nv": self.nv, "rtol": self.rtol, "atol": self.atol,
                 "parameters": json.dumps(self.parameters), "inputs": json.dumps(self.inputs),
                 "t_end": self.t_end, "status": self.status, "stats": json.dumps(self.stats)}
 
@@ -86,6 +92,7 @@ def read_h5(path) -> Run:
         a = dict(f.attrs)
         frames = {name: f["frames"][name][()] for name in f["frames"]} if "frames" in f else {}
         return Run(model=a["model"], spec_sha256=a["spec_sha256"], method=a["method"], dt=float(a["dt"]),
+                   nq=int(a["nq"]), nv=int(a["nv"]),
                    rtol=float(a["rtol"]), atol=float(a["atol"]), t_end=float(a["t_end"]),
                    parameters=json.loads(a["parameters"]), inputs=json.loads(a.get("inputs", "{}")),
                    state_names=[str(s) for s in f["state"].attrs["names"]], time=f["time"][()],

@@ -53,11 +53,15 @@ class Progress:
 
 def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str = "rk4",
              parameters: dict | None = None, inputs: dict | None = None, x0=None, every: int = 1,
-             frames=None, rtol: float = 1e-8, atol: float = 1e-10, progress: bool | None = None) -> Run:
+             frames=None, rtol: float = 1e-8, atol: float = 1e-10, progress: bool | None = None,
+             normalize: bool = True) -> Run:
     """Integrate `model` from t = 0 to t_end and return the logged Run.
 
     dt is the step of rk4 and the output spacing of the adaptive methods;
     every N logs one sample in N steps. frames: None, "all" or a list of names.
+    normalize: rk4 renormalizes quaternion signals after each step. (The
+    adaptive methods do not; their norm drift stays within the tolerances and
+    never reaches the dynamics, whose rotation matrices are exact for any norm.)
     """
     if method not in METHODS:
         raise SimulationError(f"unknown method '{method}'; available: {', '.join(METHODS)}")
@@ -73,7 +77,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     start = time.perf_counter()
     try:
         if method == "rk4":
-            t_log, x_log, status, stats = _run_rk4(model, x, u, p, t_end, dt, every, bar)
+            t_log, x_log, status, stats = _run_rk4(model, x, u, p, t_end, dt, every, bar,
+                                                   normalize and bool(model.quaternions))
         else:
             t_log, x_log, status, stats = _run_scipy(model, method, x, u, p, t_end, dt * every, rtol, atol, bar)
     finally:
@@ -86,7 +91,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
         xyz = np.empty((t_log.shape[0], len(model.frame_names), 3))
         rk4.evaluate_frames(model.module.frame_positions, t_log, x_log, u, p, xyz)
         frames_out = {name: xyz[:, model.frame_names.index(name)] for name in frame_names}
-    return Run(model=model.name, spec_sha256=model.spec_sha256, method=method, dt=dt,
+    return Run(model=model.name, spec_sha256=model.spec_sha256, method=method, dt=dt, nq=model.nq, nv=model.nv,
                rtol=rtol if method != "rk4" else 0.0, atol=atol if method != "rk4" else 0.0, t_end=t_end,
                parameters=dict(zip(model.parameter_names, map(float, p))),
                inputs=dict(zip(model.input_names, map(float, u))), state_names=list(model.state_names),
@@ -105,7 +110,7 @@ def _frame_selection(model: CompiledModel, frames) -> list:
     return names
 
 
-def _run_rk4(model, x, u, p, t_end, dt, every, bar):
+def _run_rk4(model, x, u, p, t_end, dt, every, bar, project):
     n_steps = int(round(t_end / dt))
     if abs(n_steps * dt - t_end) > 1e-9 * max(1.0, t_end):
         raise SimulationError(f"t_end = {t_end} is not a whole number of steps dt = {dt}; "
@@ -119,7 +124,8 @@ def _run_rk4(model, x, u, p, t_end, dt, every, bar):
     while done < n_steps and status == rk4.OK:
         n = min(chunk, n_steps - done)
         tic = time.perf_counter()
-        steps, row, status = rk4.rk4_chunk(model.module.rhs_into, 0.0, dt, done, n, every, x, u, p,
+        steps, row, status = rk4.rk4_chunk(model.module.rhs_into, model.module.normalize, project,
+                                           0.0, dt, done, n, every, x, u, p,
                                            out_t, out_x, row, ws.M, ws.G, ws.k, ws.x_tmp)
         done += steps
         elapsed = time.perf_counter() - tic

@@ -20,15 +20,17 @@ import sympy as sp
 
 from andyc.errors import Diagnostic, SpecError, format_path
 from andyc.spec.expressions import RESERVED, ExpressionError, parse
-from andyc.spec.model import (Body, Coordinate, Damper, Frame, Load, Potential,
-                              Rotate, Spec, Spring, Translate)
+from andyc.spec.model import (Body, Coordinate, Damper, Frame, Load, Nonholonomic, Potential,
+                              Rotate, Signal, Spec, Speed, Spring, Translate)
 from andyc.spec.yamlpos import SourceMap, load_yaml
 
 SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "andyc-model.schema.json"
 AXES = {"x": (1, 0, 0), "y": (0, 1, 0), "z": (0, 0, 1),
         "-x": (-1, 0, 0), "-y": (0, -1, 0), "-z": (0, 0, -1)}
 ELEMENT_SECTIONS = ("bodies", "forces", "torques", "dampers", "springs", "potentials")
-_KIND = {"parameters": "parameter", "inputs": "input", "coordinates": "coordinate", "frames": "frame",
+JOINTS = ("dh", "revolute", "prismatic", "ball", "floating", "nonholonomic")
+_KIND = {"parameters": "parameter", "inputs": "input", "coordinates": "coordinate", "speeds": "speed",
+         "frames": "frame",
          "bodies": "body", "forces": "force", "torques": "torque", "dampers": "damper",
          "springs": "spring", "potentials": "potential"}
 
@@ -64,6 +66,20 @@ def load(path) -> Spec:
     if problems:
         raise SpecError(sorted(problems, key=lambda d: d.line))
     return _Builder(data, smap, hashlib.sha256(raw).hexdigest()).build()
+
+
+def _signal_names(frame: dict) -> dict:
+    """State names of the signals a frame's link creates -> what they are."""
+    out = {}
+    link = frame.get("ball") or frame.get("floating") or frame.get("nonholonomic")
+    if not isinstance(link, dict):
+        return out
+    name = frame["name"]
+    if "floating" in frame or "velocity" in link:
+        out.update({f"{name}_{c}": "position" for c in "xyz"})
+    if "ball" in frame or "floating" in frame or "angular_velocity" in link:
+        out.update({f"{name}_q{c}": "quaternion" for c in "wxyz"})
+    return out
 
 
 # -- schema -------------------------------------------------------------------
@@ -264,8 +280,15 @@ class _Builder:
             vel, _ = self.constant(entry.get("velocity", 0), where + ("velocity",))
             coords.append(Coordinate(name, q, v, init, vel, where))
         self.coords = coords
+        self.speeds = [Speed(name, sp.Symbol(f"v_{name}", real=True),
+                             self.constant((entry or {}).get("initial", 0), ("speeds", name, "initial"))[0],
+                             ("speeds", name))
+                       for name, entry in (d.get("speeds") or {}).items()]
         self.kin_names = {**self.param_names, **{c.name: c.q for c in coords}}
         self.load_names = {**self.kin_names, **{n: s for n, (s, _) in self.inputs.items()}}
+        # Nonholonomic velocities may also use every speed: coordinate rates as <name>_dot.
+        self.rate_names = {**{f"{c.name}_dot": c.v for c in coords}, **{s.name: s.v for s in self.speeds}}
+        self.signals: list[Signal] = []
 
         frames = self.frames()
         self.frame_names = {"world"} | {f["name"] for f in d["frames"]}
@@ -274,7 +297,7 @@ class _Builder:
         loads = [self.load_(kind, i, f, extra_frames)
                  for kind, section in (("force", "forces"), ("torque", "torques"))
                  for i, f in enumerate(d.get(section) or [])]
-        dampers = [self.damper(i, x) for i, x in enumerate(d.get("dampers") or [])]
+        dampers = [self.damper(i, x, extra_frames) for i, x in enumerate(d.get("dampers") or [])]
         springs = [self.spring(i, x) for i, x in enumerate(d.get("springs") or [])]
         potentials = [Potential(x["name"], self.expr(x["energy"], ("potentials", i, "energy"),
                                                      self.kin_names, "potentials use parameters, coordinates and t"),
@@ -289,7 +312,7 @@ class _Builder:
                                                     "remove it or use it in an expression"))
         return Spec(name=d["name"], description=d.get("description", ""), file=self.smap.file,
                     sha256=self.sha, source=self.smap, parameters=self.parameters, inputs=self.inputs,
-                    coordinates=coords, gravity=gravity, frames=frames + extra_frames, bodies=bodies,
+                    coordinates=coords, speeds=self.speeds, signals=self.signals, gravity=gravity, frames=frames + extra_frames, bodies=bodies,
                     loads=loads, dampers=dampers, springs=springs, potentials=potentials,
                     warnings=self.warnings)
 
@@ -301,10 +324,18 @@ class _Builder:
         entries = [(("parameters", n), n) for n in (d.get("parameters") or {})]
         entries += [(("inputs", n), n) for n in (d.get("inputs") or {})]
         entries += [(("coordinates", n), n) for n in d["coordinates"]]
+        entries += [(("speeds", n), n) for n in (d.get("speeds") or {})]
         for section in ("frames",) + ELEMENT_SECTIONS:
             entries += [((section, i, "name"), x["name"]) for i, x in enumerate(d.get(section) or [])]
+        # Names andyc makes: coordinate rates and signal states.
+        made = {f"{c}_dot": f"the rate of coordinate '{c}'" for c in d["coordinates"]}
+        for f in d["frames"]:
+            for name, what in _signal_names(f).items():
+                made[name] = f"the {what} signal of frame '{f['name']}'"
         for where, name in entries:
-            if name in RESERVED or keyword.iskeyword(name):
+            if name in made:
+                self.error(where, f"the name '{name}' is taken by {made[name]}", "choose another name")
+            elif name in RESERVED or keyword.iskeyword(name):
                 self.error(where, f"'{name}' is a reserved name", "choose another name (reserved: t, pi, world, "
                            "the function names and Python keywords)")
             elif name in seen:
@@ -358,7 +389,7 @@ class _Builder:
             steps.append(Translate(self.vector(f["translation"], where + ("translation",), self.kin_names, ctx)))
         if "rotation" in f:
             steps += self.rotation(f["rotation"], where + ("rotation",))
-        joints = [k for k in ("dh", "revolute", "prismatic") if k in f]
+        joints = [k for k in JOINTS if k in f]
         if len(joints) > 1:
             self.error(where, f"a frame has one joint, got {' and '.join(joints)}",
                        "split the link into two frames")
@@ -376,7 +407,93 @@ class _Builder:
                 steps.append(Rotate(axis, value) if kind == "revolute" else Translate(axis * value))
         steps = [s for s in steps if not (isinstance(s, Translate) and s.vector == sp.zeros(3, 1))
                  and not (isinstance(s, Rotate) and s.angle == 0)]
+        for kind in ("ball", "floating", "nonholonomic"):
+            if kind in f and len(joints) == 1:
+                steps.append(self.nonholonomic(f["name"], kind, f[kind], where + (kind,)))
         return Frame(f["name"], f["parent"], tuple(steps), where)
+
+    def nonholonomic(self, frame: str, kind: str, link: dict, where) -> Nonholonomic:
+        """A ball, floating or general nonholonomic link, and its signals (paper eq. 4)."""
+        if kind == "nonholonomic":
+            ctx = ("nonholonomic velocities use parameters, coordinates, speeds, "
+                   "<coordinate>_dot and t")
+            names = {**self.kin_names, **self.rate_names}
+            vel = (self.vector(link["velocity"], where + ("velocity",), names, ctx)
+                   if "velocity" in link else None)
+            ang = (self.vector(link["angular_velocity"], where + ("angular_velocity",), names, ctx)
+                   if "angular_velocity" in link else None)
+            for key, value in (("velocity", vel), ("angular_velocity", ang)):
+                if value is not None:
+                    self.check_linear(value, where + (key,))
+            for key, needs in (("position", "velocity"), ("quaternion", "angular_velocity")):
+                if key in link and needs not in link:
+                    self.error(where + (key,), f"'{key}' goes with '{needs}'",
+                               f"add '{needs}:' or remove '{key}' (a fixed offset is 'translation' or 'rotation')")
+        else:
+            count = 3 if kind == "ball" else 6
+            speeds = self.joint_speeds(link["speeds"], count, kind, where + ("speeds",))
+            vel = sp.Matrix(speeds[:3]) if kind == "floating" else None
+            ang = sp.Matrix(speeds[-3:])
+        position = quaternion = None
+        if vel is not None:
+            init = self.vector(link.get("position", [0, 0, 0]), where + ("position",), self.param_names,
+                               "initial positions use parameters")
+            position = tuple(self.signal(frame, c, init[i], where + ("position",)) for i, c in enumerate("xyz"))
+        if ang is not None:
+            init = self.quaternion(link.get("quaternion", [1, 0, 0, 0]), where + ("quaternion",))
+            quaternion = tuple(self.signal(frame, f"q{c}", init[i], where + ("quaternion",))
+                               for i, c in enumerate("wxyz"))
+        return Nonholonomic(vel, ang, link.get("in", "body") == "body", position, quaternion)
+
+    def joint_speeds(self, names: list, count: int, kind: str, where) -> list:
+        what = "the angular velocity [wx, wy, wz]" if count == 3 else "[vx, vy, vz, wx, wy, wz]"
+        if len(names) != count:
+            self.error(where, f"a {kind} joint has {count} speeds, got {len(names)}",
+                       f"list {count} speeds declared under 'speeds:': {what}")
+            return [sp.Integer(0)] * count
+        known = {s.name: s.v for s in self.speeds}
+        out = []
+        for j, name in enumerate(names):
+            if name not in known:
+                close = difflib.get_close_matches(name, list(known), n=1)
+                self.error(where + (j,), f"'{name}' is not a declared speed",
+                           (f"did you mean '{close[0]}'? " if close else "")
+                           + "declare it under 'speeds:' (speeds: " + (", ".join(known) or "none") + ")")
+                out.append(sp.Integer(0))
+            else:
+                out.append(known[name])
+                self.used.add(known[name])
+        if len(set(names)) != len(names):
+            self.error(where, "a speed is listed twice", "list distinct speeds")
+        return out
+
+    def check_linear(self, vec: sp.Matrix, where):
+        """Velocities must be linear in the speeds: v = J(q, t) speeds + b(q, t)."""
+        speeds = list(self.rate_names.values())
+        for i, e in enumerate(vec):
+            if any(sp.diff(e, a, b) != 0 for a in speeds for b in speeds):
+                self.error(where + (i,), f"'{e}' is not linear in the speeds",
+                           "a velocity is J(q, t) * speeds + b(q, t); speeds may not be squared, "
+                           "multiplied together or inside functions")
+
+    def quaternion(self, values, where) -> list:
+        """An initial unit quaternion of constants; an error names the value and its norm."""
+        exprs = [self.expr(v, where + (i,), {}, "initial quaternions are constants") for i, v in enumerate(values)]
+        if any(not e.is_number for e in exprs):
+            return [sp.Integer(1), sp.Integer(0), sp.Integer(0), sp.Integer(0)]
+        nums = [float(e) for e in exprs]
+        norm = math.sqrt(sum(c * c for c in nums))
+        if abs(norm - 1.0) > 1e-9:
+            unit = ", ".join(f"{c / norm:.12g}" for c in nums) if norm > 0 else "1, 0, 0, 0"
+            self.error(where, f"quaternion [{', '.join(f'{c:g}' for c in nums)}] has norm {norm:.12g}, not 1",
+                       f"use the unit quaternion [{unit}]")
+        return exprs
+
+    def signal(self, frame, component, initial, where) -> sp.Symbol:
+        name = f"{frame}_{component}"
+        sym = sp.Symbol(f"s_{name}", real=True)
+        self.signals.append(Signal(name, component, sym, initial, frame, where))
+        return sym
 
     def axis(self, value, where) -> sp.Matrix:
         vec = AXES[value] if isinstance(value, str) else value
@@ -400,12 +517,12 @@ class _Builder:
             roll, pitch, yaw = (self.expr(x, where + ("rpy", k), self.kin_names, ctx) for k, x in enumerate(r["rpy"]))
             # R = Rz(yaw) Ry(pitch) Rx(roll): applied left to right as z, then y, then x.
             return [Rotate(sp.Matrix([0, 0, 1]), yaw), Rotate(sp.Matrix([0, 1, 0]), pitch), Rotate(sp.Matrix([1, 0, 0]), roll)]
-        w, x, y, z = (float(c) for c in r["quaternion"])
+        exprs = self.quaternion(r["quaternion"], where + ("quaternion",))
+        if not all(e.is_number for e in exprs):
+            return []
+        w, x, y, z = (float(e) for e in exprs)
         norm = math.sqrt(w * w + x * x + y * y + z * z)
         if abs(norm - 1.0) > 1e-9:
-            unit = ", ".join(f"{c / norm:.12g}" for c in (w, x, y, z)) if norm > 0 else "1, 0, 0, 0"
-            self.error(where + ("quaternion",), f"quaternion [{w}, {x}, {y}, {z}] has norm {norm:.12g}, not 1",
-                       f"use the unit quaternion [{unit}]")
             return []
         angle = 2 * math.atan2(math.sqrt(x * x + y * y + z * z), w)
         if angle == 0:
@@ -423,10 +540,17 @@ class _Builder:
         return False
 
     def offset_frame(self, owner: str, frame: str, offset, where, extra: list) -> str:
-        """A fixed child of `frame` at `offset` (frame axes); returns its name."""
+        """A fixed child of `frame` at `offset` (frame axes); returns its name.
+
+        Elements at the same point (a body's COM and a damper on it) share one
+        frame, so its kinematics are computed once.
+        """
         vec = self.vector(offset, where, self.param_names, "offsets use parameters only")
         if vec == sp.zeros(3, 1):
             return frame
+        for f in extra:
+            if f.parent == frame and f.transforms == (Translate(vec),):
+                return f.name
         name = f"{owner}__{where[-1]}"
         extra.append(Frame(name, frame, (Translate(vec),), where, internal=True))
         return name
@@ -491,20 +615,26 @@ class _Builder:
                           "forces use parameters, inputs, coordinates and t")
         return Load(f["name"], kind, frame, vec, in_frame, where)
 
-    def damper(self, i, x) -> Damper:
+    def damper(self, i, x, extra) -> Damper:
         where = ("dampers", i)
         coef, _ = self.constant(x["coefficient"], where + ("coefficient",))
         speed = x.get("speed")
-        if speed is not None and speed not in {c.name for c in self.coords}:
-            close = difflib.get_close_matches(speed, [c.name for c in self.coords], n=1)
-            self.error(where + ("speed",), f"'{speed}' is not a coordinate",
-                       (f"did you mean '{close[0]}'? " if close else "") + "coordinates: "
-                       + ", ".join(c.name for c in self.coords))
-        if "frame" in x:
-            self.frame_ref(x["frame"], where + ("frame",))
-        if "angular" in x and "frame" not in x:
-            self.error(where + ("angular",), "'angular' goes with 'frame'", "remove it, or damp a frame")
-        return Damper(x["name"], coef, x.get("law", "linear"), speed, x.get("frame"), bool(x.get("angular", False)), where)
+        damped = [c.name for c in self.coords] + [s.name for s in self.speeds]
+        if speed is not None and speed not in damped:
+            close = difflib.get_close_matches(speed, damped, n=1)
+            self.error(where + ("speed",), f"'{speed}' is not a coordinate or a speed",
+                       (f"did you mean '{close[0]}'? " if close else "") + "coordinates and speeds: "
+                       + ", ".join(damped))
+        frame = x.get("frame")
+        if frame is not None and self.frame_ref(frame, where + ("frame",)) and "point" in x:
+            if x.get("angular"):
+                self.error(where + ("point",), "an angular damper has no point", "remove 'point'")
+            else:
+                frame = self.offset_frame(x["name"], frame, x["point"], where + ("point",), extra)
+        for key in ("angular", "point"):
+            if key in x and "frame" not in x:
+                self.error(where + (key,), f"'{key}' goes with 'frame'", "remove it, or damp a frame")
+        return Damper(x["name"], coef, x.get("law", "linear"), speed, frame, bool(x.get("angular", False)), where)
 
     def spring(self, i, x) -> Spring:
         where = ("springs", i)

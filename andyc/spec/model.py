@@ -9,9 +9,11 @@ right (each in the frame produced by the previous one):
 
     Translate(p)          origin moves by p(q, t)
     Rotate(axis, angle)   rotation by angle(q, t) about a fixed unit axis
+    Nonholonomic(...)     motion given by velocities (paper eq. 4); last if present
 
-Every link kind of the spec (fixed translation, axis-angle, roll-pitch-yaw,
-quaternion, Denavit-Hartenberg, revolute, prismatic) lowers to these two.
+Every holonomic link kind of the spec (fixed translation, axis-angle,
+roll-pitch-yaw, quaternion, Denavit-Hartenberg, revolute, prismatic) lowers to
+the first two; ball, floating and nonholonomic links lower to the third.
 """
 
 from __future__ import annotations
@@ -32,6 +34,42 @@ class Translate:
 class Rotate:
     axis: sp.Matrix             # 3x1 unit vector, constant
     angle: sp.Expr              # expression of q, t, parameters
+
+
+@dataclass(frozen=True)
+class Nonholonomic:
+    """A link whose velocity is given, not its position (ANDY paper eq. 4).
+
+    Its position and rotation are signals integrated alongside the dynamics:
+    sigma_r' = v and quat' = 1/2 quat (x) [0, w] (w in the link's own axes) or
+    1/2 [0, w] (x) quat (w in the reference axes). The reference axes are the
+    parent's, turned by any fixed translation/rotation written before the link.
+    """
+    velocity: sp.Matrix | None          # 3x1, linear in the speeds, or None (no translation)
+    angular_velocity: sp.Matrix | None  # 3x1, linear in the speeds, or None (no rotation)
+    in_body: bool                       # velocities written in the link's own axes
+    position: tuple | None              # 3 signal symbols sigma_r
+    quaternion: tuple | None            # 4 signal symbols (w, x, y, z)
+
+
+@dataclass(frozen=True)
+class Signal:
+    """A nonholonomic signal: a state with its own first-order ODE (eq. 4)."""
+    name: str                   # state name, e.g. ball_qw
+    component: str              # x, y, z (position) or qw, qx, qy, qz (quaternion)
+    symbol: sp.Symbol
+    initial: sp.Expr            # expression of parameters
+    frame: str                  # the frame whose link it belongs to
+    where: tuple
+
+
+@dataclass(frozen=True)
+class Speed:
+    """A quasi-velocity: a speed that is not the rate of any coordinate."""
+    name: str
+    v: sp.Symbol
+    initial: sp.Expr
+    where: tuple
 
 
 @dataclass(frozen=True)
@@ -111,6 +149,8 @@ class Spec:
     parameters: dict            # name -> (symbol, default float)
     inputs: dict                # name -> (symbol, default float)
     coordinates: list           # of Coordinate, in declaration order
+    speeds: list                # of Speed (quasi-velocities), in declaration order
+    signals: list               # of Signal, in frame order; quaternions as 4 consecutive entries
     gravity: sp.Matrix          # 3x1 in world
     frames: list                # of Frame, parents before children
     bodies: list = field(default_factory=list)
@@ -119,6 +159,15 @@ class Spec:
     springs: list = field(default_factory=list)
     potentials: list = field(default_factory=list)
     warnings: list = field(default_factory=list)   # of Diagnostic
+
+    @property
+    def speed_symbols(self) -> list:
+        """All speeds v: coordinate rates first, then quasi-velocities."""
+        return [c.v for c in self.coordinates] + [s.v for s in self.speeds]
+
+    @property
+    def speed_names(self) -> list:
+        return [f"{c.name}_dot" for c in self.coordinates] + [s.name for s in self.speeds]
 
     def parameter_values(self) -> dict:
         return {name: value for name, (_, value) in self.parameters.items()}

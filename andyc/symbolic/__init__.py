@@ -22,9 +22,11 @@ def derive(spec: Spec) -> SymbolicModel:
     kin = frame_kinematics(spec, emit)
     terms = element_terms(spec, kin, emit)
     M, G, energy, power = assemble(spec, terms)
+    rates = {sym: rate for K in kin.values() for sym, rate in K.signal_rates.items()}
     return SymbolicModel(
         spec=spec, t=TIME,
-        q=[c.q for c in spec.coordinates], v=[c.v for c in spec.coordinates],
+        q=[c.q for c in spec.coordinates], v=spec.speed_symbols,
+        signals=[s.symbol for s in spec.signals], signal_rates=[rates[s.symbol] for s in spec.signals],
         parameters=[s for s, _ in spec.parameters.values()],
         inputs=[s for s, _ in spec.inputs.values()],
         assignments=emit.assignments, M=M, G=G, energy=energy, power=power,

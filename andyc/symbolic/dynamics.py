@@ -51,8 +51,13 @@ def _norm(vec: sp.Matrix) -> sp.Expr:
 
 def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) -> list[ElementTerms]:
     q = [c.q for c in spec.coordinates]
-    v = sp.Matrix([c.v for c in spec.coordinates])
-    n = len(q)
+    v = sp.Matrix(spec.speed_symbols)
+    n = len(v)
+    damped = [c.name for c in spec.coordinates] + [s.name for s in spec.speeds]
+
+    def gradient(expr) -> sp.Matrix:
+        """d expr / dq, one entry per speed (zero for quasi-velocities)."""
+        return sp.Matrix([sp.diff(expr, qi) for qi in q] + [0] * (n - len(q)))
     out = []
     for b in spec.bodies:
         K = kin[b.frame]
@@ -72,7 +77,7 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
         out.append(ElementTerms(f.name, G=J.T * vec, power=rate.dot(vec)))
     for d in spec.dampers:
         if d.speed is not None:
-            j = [c.name for c in spec.coordinates].index(d.speed)
+            j = damped.index(d.speed)
             J = sp.zeros(1, n)
             J[0, j] = 1
             chi = sp.Matrix([v[j]])
@@ -84,7 +89,7 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
     for s in spec.springs:
         if s.length is not None:
             x = s.length
-            dx = sp.Matrix([sp.diff(x, qi) for qi in q])
+            dx = gradient(x)
         else:
             a, b = kin[s.between[0]], kin[s.between[1]]
             delta = a.r - b.r
@@ -93,13 +98,13 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
         stretch = x - s.rest_length
         out.append(ElementTerms(s.name, G=-s.stiffness * stretch * dx, energy=s.stiffness * stretch ** 2 / 2))
     for p in spec.potentials:
-        out.append(ElementTerms(p.name, G=-sp.Matrix([sp.diff(p.energy, qi) for qi in q]), energy=p.energy))
+        out.append(ElementTerms(p.name, G=-gradient(p.energy), energy=p.energy))
     return out
 
 
 def assemble(spec: Spec, terms: list[ElementTerms]):
-    """Sum the element terms (eq. 8); check that every coordinate moves mass."""
-    n = len(spec.coordinates)
+    """Sum the element terms (eq. 8); check that every speed moves mass."""
+    n = len(spec.speed_symbols)
     M = sp.zeros(n, n)
     G = sp.zeros(n, 1)
     energy = sp.Integer(0)
@@ -111,10 +116,11 @@ def assemble(spec: Spec, terms: list[ElementTerms]):
             G += e.G
         energy += e.energy
         power += e.power
-    idle = [c for j, c in enumerate(spec.coordinates) if all(M[j, i] == 0 for i in range(n))]
+    owners = [("coordinate", c) for c in spec.coordinates] + [("speed", s) for s in spec.speeds]
+    idle = [owners[j] for j in range(n) if all(M[j, i] == 0 for i in range(n))]
     if idle:
-        raise SpecError([spec.source.diag(c.where, f"coordinate '{c.name}' moves no mass or inertia, so the "
+        raise SpecError([spec.source.diag(x.where, f"{kind} '{x.name}' moves no mass or inertia, so the "
                                           "mass matrix is singular",
                                           "use it in a link that carries a body, or remove it")
-                         for c in idle])
+                         for kind, x in idle])
     return M, G, energy, power

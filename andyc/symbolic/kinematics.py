@@ -22,16 +22,30 @@ w_rel, v_rel and their Jacobians; from a parent P, with d = R_P p_rel:
 
 The relative terms are derivatives of the link's own small expressions, so
 nothing large is ever differentiated.
+
+Speeds v are the coordinate rates dq/dt first, then quasi-velocities. A
+nonholonomic link (paper eq. 4) has no position expression to differentiate:
+its relative velocities are given, linear in v, and its rotation Q and
+position are signals. With w_g, v_g as written (rates at dv/dt = 0: w_g', v_g'):
+
+    in the reference axes   w_rel = w_g     v_rel = v_g     al_rel = w_g'   ac_rel = v_g'
+    in the link's own axes  w_rel = Q w_g   v_rel = Q v_g   al_rel = Q w_g'
+                            ac_rel = Q (w_g x v_g + v_g')   (since Q' = Q [w_g]x)
+
+and the signals follow sigma_r' = v_rel and quat' = 1/2 quat (x) [0, w_g]
+(own axes) or 1/2 [0, w_g] (x) quat (reference axes). Q is written so that it
+is a rotation for any nonzero quat, so a drift of |quat| never reaches the
+dynamics (the runtime also renormalizes after each step).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import sympy as sp
 
 from andyc.spec.expressions import TIME
-from andyc.spec.model import Rotate, Spec, Translate
+from andyc.spec.model import Nonholonomic, Rotate, Spec, Translate
 from andyc.symbolic.emitter import Emitter
 
 
@@ -46,6 +60,7 @@ class FrameKinematics:
     Jv: sp.Matrix
     al: sp.Matrix
     ac: sp.Matrix
+    signal_rates: dict = field(default_factory=dict)   # signal symbol -> its rate (eq. 4)
 
 
 def rotation_matrix(axis: sp.Matrix, angle) -> sp.Matrix:
@@ -62,17 +77,25 @@ def cross(a: sp.Matrix, b: sp.Matrix) -> sp.Matrix:
     return sp.Matrix([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
+def quaternion_matrix(w, x, y, z, two_over_norm2) -> sp.Matrix:
+    """Rotation matrix of the quaternion (w, x, y, z), exact for any norm: s = 2 / |quat|^2."""
+    s = two_over_norm2
+    return sp.Matrix([[1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)],
+                      [s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)],
+                      [s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y)]])
+
+
 def _rate(expr, q, v):
-    """Total time derivative of expr(q, v, t) with dv/dt = 0."""
+    """Total time derivative of expr(q, v, t) with dv/dt = 0 (dq/dt is the first len(q) speeds)."""
     return sum((sp.diff(expr, qi) * vi for qi, vi in zip(q, v)), sp.diff(expr, TIME))
 
 
 def link_motion(transforms, q, v):
-    """Relative motion of a link in its parent's axes.
+    """Relative motion of a holonomic link in its parent's axes.
 
-    Returns R_rel, p_rel, Jw_rel, Jv_rel (3 x n), w_rel, v_rel, al_rel, ac_rel.
+    Returns R_rel, p_rel, Jw_rel, Jv_rel (3 x len(v)), w_rel, v_rel, al_rel, ac_rel.
     """
-    n = len(q)
+    n = len(v)
     R = sp.eye(3)
     p = sp.zeros(3, 1)
     Jw = sp.zeros(3, n)
@@ -86,7 +109,9 @@ def link_motion(transforms, q, v):
                 Jw[:, j] += axis * sp.diff(step.angle, qj)
             w_t += axis * sp.diff(step.angle, TIME)
             R = R * rotation_matrix(step.axis, step.angle)
-    Jv = p.jacobian(q) if n else sp.zeros(3, 0)
+    Jv = sp.zeros(3, n)
+    for j, qj in enumerate(q):
+        Jv[:, j] = sp.diff(p, qj)
     vvec = sp.Matrix(v)
     w_rel = Jw * vvec + w_t
     v_rel = Jv * vvec + sp.diff(p, TIME)
@@ -95,28 +120,74 @@ def link_motion(transforms, q, v):
     return R, p, Jw, Jv, w_rel, v_rel, al_rel, ac_rel
 
 
+def nonholonomic_motion(step: Nonholonomic, q, v, emit: Emitter, label: str):
+    """Relative motion of a nonholonomic link (eq. 4) and the rates of its signals."""
+    zero = sp.zeros(3, 1)
+    Q = sp.eye(3)
+    if step.quaternion:
+        w, x, y, z = step.quaternion
+        s = emit.scalar(f"{label}n", 2 / (w * w + x * x + y * y + z * z))
+        Q = emit.matrix(f"{label}Q", quaternion_matrix(w, x, y, z, s))
+    p = sp.Matrix(step.position) if step.position else zero
+    w_g = step.angular_velocity if step.angular_velocity is not None else zero
+    v_g = step.velocity if step.velocity is not None else zero
+    Jw_g, Jv_g = w_g.jacobian(v), v_g.jacobian(v)
+    al_g = w_g.applyfunc(lambda e: _rate(e, q, v))
+    ac_g = v_g.applyfunc(lambda e: _rate(e, q, v))
+    if step.in_body:
+        motion = (Q, p, Q * Jw_g, Q * Jv_g, Q * w_g, Q * v_g, Q * al_g, Q * (cross(w_g, v_g) + ac_g))
+    else:
+        motion = (Q, p, Jw_g, Jv_g, w_g, v_g, al_g, ac_g)
+    rates = {}
+    if step.position:
+        rates.update(zip(step.position, motion[5]))
+    if step.quaternion:
+        qw, qv = step.quaternion[0], sp.Matrix(step.quaternion[1:])
+        # Hamilton product: quat (x) [0, w] = (-qv.w, qw w + qv x w); [0, w] (x) quat = (-w.qv, qw w + w x qv).
+        turn = cross(qv, w_g) if step.in_body else cross(w_g, qv)
+        vec = (qw * w_g + turn) / 2
+        rates.update(zip(step.quaternion, [-qv.dot(w_g) / 2, *vec]))
+    return motion, rates
+
+
+def _attach(P: FrameKinematics, motion, emit: Emitter, label: str, index: int) -> FrameKinematics:
+    """World kinematics of a frame from its parent's and its link's relative motion (eq. 1-3)."""
+    R_rel, p_rel, Jw_rel, Jv_rel, w_rel, v_rel, al_rel, ac_rel = motion
+    n = P.Jw.shape[1]
+    d = emit.matrix(f"{label}d", P.R * p_rel)
+    Rw_rel = P.R * w_rel
+    Rv_rel = P.R * v_rel
+    R = emit.matrix(f"{label}R", P.R * R_rel)
+    r = emit.matrix(f"{label}r", P.r + d)
+    w = emit.matrix(f"{label}w", P.w + Rw_rel)
+    vel = emit.matrix(f"{label}v", P.v + cross(P.w, d) + Rv_rel)
+    Jw = emit.matrix(f"{label}Jw", P.Jw + P.R * Jw_rel)
+    Jv_cols = [P.Jv[:, j] + cross(P.Jw[:, j], d) + P.R * Jv_rel[:, j] for j in range(n)]
+    Jv = emit.matrix(f"{label}Jv", sp.Matrix.hstack(*Jv_cols) if n else sp.zeros(3, 0))
+    al = emit.matrix(f"{label}al", P.al + P.R * al_rel + cross(P.w, Rw_rel))
+    ac = emit.matrix(f"{label}ac", P.ac + cross(P.al, d) + cross(P.w, cross(P.w, d))
+                     + 2 * cross(P.w, Rv_rel) + P.R * ac_rel)
+    return FrameKinematics(index, R, r, w, vel, Jw, Jv, al, ac)
+
+
 def frame_kinematics(spec: Spec, emit: Emitter) -> dict[str, FrameKinematics]:
     """World kinematics of every frame, parents first, as emitted symbols."""
     q = [c.q for c in spec.coordinates]
-    v = [c.v for c in spec.coordinates]
-    n = len(q)
+    v = spec.speed_symbols
+    n = len(v)
     zero = sp.zeros(3, 1)
     out = {"world": FrameKinematics(-1, sp.eye(3), zero, zero, zero, sp.zeros(3, n), sp.zeros(3, n), zero, zero)}
     for k, frame in enumerate(spec.frames):
         P = out[frame.parent]
-        R_rel, p_rel, Jw_rel, Jv_rel, w_rel, v_rel, al_rel, ac_rel = link_motion(frame.transforms, q, v)
-        d = emit.matrix(f"f{k}d", P.R * p_rel)
-        Rw_rel = P.R * w_rel
-        Rv_rel = P.R * v_rel
-        R = emit.matrix(f"f{k}R", P.R * R_rel)
-        r = emit.matrix(f"f{k}r", P.r + d)
-        w = emit.matrix(f"f{k}w", P.w + Rw_rel)
-        vel = emit.matrix(f"f{k}v", P.v + cross(P.w, d) + Rv_rel)
-        Jw = emit.matrix(f"f{k}Jw", P.Jw + P.R * Jw_rel)
-        Jv_cols = [P.Jv[:, j] + cross(P.Jw[:, j], d) + P.R * Jv_rel[:, j] for j in range(n)]
-        Jv = emit.matrix(f"f{k}Jv", sp.Matrix.hstack(*Jv_cols) if n else sp.zeros(3, 0))
-        al = emit.matrix(f"f{k}al", P.al + P.R * al_rel + cross(P.w, Rw_rel))
-        ac = emit.matrix(f"f{k}ac", P.ac + cross(P.al, d) + cross(P.w, cross(P.w, d))
-                         + 2 * cross(P.w, Rv_rel) + P.R * ac_rel)
-        out[frame.name] = FrameKinematics(k, R, r, w, vel, Jw, Jv, al, ac)
+        steps = list(frame.transforms)
+        rates = {}
+        if steps and isinstance(steps[-1], Nonholonomic):
+            nonholonomic = steps.pop()
+            if steps:   # fixed offsets first: the link's reference frame
+                P = _attach(P, link_motion(steps, q, v), emit, f"f{k}ref", k)
+            motion, rates = nonholonomic_motion(nonholonomic, q, v, emit, f"f{k}")
+        else:
+            motion = link_motion(steps, q, v)
+        out[frame.name] = _attach(P, motion, emit, f"f{k}", k)
+        out[frame.name].signal_rates = rates
     return out

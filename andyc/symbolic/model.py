@@ -11,15 +11,17 @@ from andyc.spec.model import Spec
 
 @dataclass
 class SymbolicModel:
-    """Equations of motion M(q) dv/dt = G(q, v, t) and friends.
+    """Equations of motion M(q, sigma) dv/dt = G(q, v, sigma, t) and friends.
 
-    Every expression is written in the symbols q, v, t, parameters p, inputs u
+    Every expression is written in the symbols q, v, sigma, t, parameters p, inputs u
     and the intermediate symbols of `assignments` (in dependency order).
     """
     spec: Spec
     t: sp.Symbol
     q: list
-    v: list
+    v: list                   # coordinate rates, then quasi-velocities
+    signals: list             # signal symbols sigma, in spec.signals order
+    signal_rates: list        # d sigma / dt, same order (eq. 4)
     parameters: list          # symbols, in the order of spec.parameters
     inputs: list              # symbols, in the order of spec.inputs
     assignments: list         # [(symbol, expression)], each uses only earlier ones
@@ -33,4 +35,4 @@ class SymbolicModel:
 
     @property
     def dof(self) -> int:
-        return len(self.q)
+        return len(self.v)
