@@ -59,7 +59,8 @@ def check(files):
         n_elements = len(spec.loads) + len(spec.dampers) + len(spec.springs) + len(spec.potentials)
         click.echo(
             f"{file}: model '{spec.name}' is valid: {_plural(model.dof, 'degree')} of freedom "
-            f"({', '.join(c.name for c in spec.coordinates)}), {_plural(2 * model.dof, 'state')}, "
+            f"({', '.join([c.name for c in spec.coordinates] + [s.name for s in spec.speeds])}), {_plural(len(model.q) + model.dof + len(model.signals), 'state')}"
+            f"{f' incl. {len(model.signals)} nonholonomic signals' if model.signals else ''}, "
             f"{_plural(len(spec.bodies), 'body').replace('bodys', 'bodies')}, {_plural(len(user_frames), 'frame')} "
             f"besides world, {_plural(len(spec.parameters), 'parameter')}, {_plural(len(spec.inputs), 'input')}, "
             f"{_plural(n_elements, 'force element')}; {len(model.assignments)} intermediate expressions.")

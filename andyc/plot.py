@@ -1,38 +1,164 @@
-"""Plots of runs (matplotlib, no screen needed)."""
+"""Plots of runs (matplotlib, no screen needed).
+
+`figure_for(run)` builds the Figure, `plot_run(run, out)` saves it. Panels,
+each only when it applies: the world trajectories of the logged frames in 3-D
+and their x, y, z against time (as Fig. 6 of the ANDY paper shows the ends of
+the swing bar; a world axis along which no frame moves is left out),
+coordinates, speeds, quaternion signals, position signals, other signals,
+energy and its relative change.
+"""
 
 from __future__ import annotations
+
+from functools import partial
 
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
 
 from andyc.runtime.run import Run  # noqa: E402
 
+QUATERNION = ("_qw", "_qx", "_qy", "_qz")
+POSITION = ("_x", "_y", "_z")
+
 
 def plot_run(run: Run, out) -> None:
-    """Coordinates, speeds, energy and its relative change against time."""
-    nq = len(run.state_names) // 2
-    fig, axes = plt.subplots(4, 1, figsize=(9, 9), sharex=True, height_ratios=[3, 3, 2, 2])
-    for j in range(nq):
-        axes[0].plot(run.time, run.state[:, j], label=run.state_names[j])
-        axes[1].plot(run.time, run.state[:, nq + j], label=run.state_names[nq + j])
-    axes[0].set_ylabel("coordinates")
-    axes[1].set_ylabel("speeds")
-    for ax in axes[:2]:
-        ax.legend(loc="upper right", fontsize="small", ncol=min(nq, 4))
-    e = run.energy
-    axes[2].plot(run.time, e, color="k")
-    axes[2].set_ylabel("energy E, J")
-    axes[2].ticklabel_format(axis="y", useOffset=False)
-    scale = max(abs(e[0]), np.abs(e).max(), 1e-300)
-    axes[3].plot(run.time, (e - e[0]) / scale, color="tab:red", lw=0.8)
-    axes[3].set_ylabel("(E - E(0)) / max|E|")
-    axes[3].set_xlabel("time, s")
-    for ax in axes:
-        ax.grid(alpha=0.3)
+    """Write the figure of `run` to `out` (PNG)."""
+    figure_for(run).savefig(out, dpi=110)
+
+
+def figure_for(run: Run) -> Figure:
+    """3-D frame trajectories on the left (energy below them), time series on the right;
+    without frames, one column of time series."""
+    series = _series_panels(run)
+    energy = [_energy, _energy_change]
+    if run.frames:
+        fig = Figure(figsize=(16, max(10, 1.8 * len(series))), layout="constrained")
+        grid = fig.add_gridspec(1, 2, width_ratios=[1, 1.1])
+        left = grid[0].subgridspec(3, 1, height_ratios=[5, 1.5, 1.5])
+        _trajectories(fig.add_subplot(left[0], projection="3d"), run)
+        axes = _time_axes(fig, grid[1].subgridspec(len(series), 1), series, run)
+        _time_axes(fig, [left[1], left[2]], energy, run, sharex=axes[0])
+    else:
+        panels = series + energy
+        fig = Figure(figsize=(10, 2.2 * len(panels) + 1), layout="constrained")
+        _time_axes(fig, fig.add_gridspec(len(panels), 1, height_ratios=[3] * len(series) + [2, 2]), panels, run)
     fig.suptitle(f"{run.model}: {run.method}, dt = {run.dt:g} s, {run.status}")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    return fig
+
+
+def _series_panels(run: Run) -> list:
+    """The drawing functions of the right-hand (or only) column, top to bottom."""
+    panels = [partial(_frame_axis, k=k) for k in range(3) if _moves(run.frames, k)]
+    panels += [partial(_states, cols=range(run.nq), ylabel="coordinates q, rad | m"),
+               partial(_states, cols=range(run.nq, run.nq + run.nv), ylabel="speeds v, rad/s | m/s")]
+    quaternions, positions, others = _signal_groups(run.signal_names)
+    if quaternions:
+        panels.append(partial(_quaternions, bases=quaternions))
+    for names, ylabel in ((positions, "position signals, m"), (others, "other signals")):
+        if names:
+            panels.append(partial(_states, cols=[run.state_names.index(n) for n in names], ylabel=ylabel))
+    return panels
+
+
+def _time_axes(fig, specs, panels, run, sharex=None) -> list:
+    """One axes per panel down `specs`, sharing the time axis; only the bottom one labels it."""
+    axes = []
+    for spec, draw in zip(specs, panels):
+        ax = fig.add_subplot(spec, sharex=sharex or (axes[0] if axes else None))
+        draw(ax, run)
+        ax.grid(alpha=0.3)
+        ax.tick_params(labelbottom=False)
+        axes.append(ax)
+    axes[-1].tick_params(labelbottom=True)
+    axes[-1].set_xlabel("time, s")
+    return axes
+
+
+def _legend(ax) -> None:
+    ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small", frameon=False)
+
+
+def _moves(frames: dict, k: int) -> bool:
+    """Whether any frame moves along world axis k."""
+    if not frames:
+        return False
+    xyz = np.concatenate(list(frames.values()))
+    scale = max(np.nanmax(np.abs(xyz)), 1.0)
+    return any(np.nanmax(p[:, k]) - np.nanmin(p[:, k]) > 1e-9 * scale for p in frames.values())
+
+
+def _signal_groups(names: list) -> tuple:
+    """(quaternion base names, position signal names, the other signal names)."""
+    bases = [n[:-3] for n in names if n.endswith("_qw") and all(n[:-3] + s in names for s in QUATERNION)]
+    in_quaternion = {b + s for b in bases for s in QUATERNION}
+    positions = [n for n in names if n.endswith(POSITION) and n not in in_quaternion]
+    others = [n for n in names if n not in in_quaternion and n not in positions]
+    return bases, positions, others
+
+
+def _frame_paths(frames: dict) -> list:
+    """[(label, xyz)]: frames whose paths coincide (e.g. a joint frame at a link's end) share one
+    line labelled 'a = b', so that no line hides another."""
+    paths = []
+    for name, xyz in frames.items():
+        same = next((p for p in paths if np.allclose(p[1], xyz, rtol=1e-9, atol=1e-12, equal_nan=True)), None)
+        if same:
+            same[0].append(name)
+        else:
+            paths.append(([name], xyz))
+    return [(" = ".join(names), xyz) for names, xyz in paths]
+
+
+def _trajectories(ax, run: Run) -> None:
+    """Each frame's path in world coordinates, start (●) and end (■) marked, on equal axes."""
+    for i, (name, xyz) in enumerate(_frame_paths(run.frames)):
+        ax.plot(*xyz.T, color=f"C{i}", lw=0.8, label=name)
+        ax.scatter(*xyz[0], color=f"C{i}", marker="o", s=30)
+        ax.scatter(*xyz[-1], color=f"C{i}", marker="s", s=30)
+    points = np.concatenate(list(run.frames.values()))
+    lo, hi = np.nanmin(points, axis=0), np.nanmax(points, axis=0)
+    centre, half = (lo + hi) / 2, max(np.max(hi - lo) / 2, 1e-3) * 1.05
+    for setter, c, label in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), centre, "xyz"):
+        setter(c - half, c + half)
+        getattr(ax, f"set_{label}label")(f"{label}, m", labelpad=10)
+    ax.set_box_aspect((1, 1, 1), zoom=0.92)
+    ax.set_title("frame trajectories in world (● start, ■ end)")
+    ax.legend(loc="upper left", fontsize="small")
+
+
+def _frame_axis(ax, run: Run, k: int) -> None:
+    for i, (name, xyz) in enumerate(_frame_paths(run.frames)):
+        ax.plot(run.time, xyz[:, k], color=f"C{i}", lw=1, label=name)
+    ax.set_ylabel(f"frame {'xyz'[k]}, m")
+    _legend(ax)
+
+
+def _states(ax, run: Run, cols, ylabel: str) -> None:
+    for j in cols:
+        ax.plot(run.time, run.state[:, j], lw=1, label=run.state_names[j])
+    ax.set_ylabel(ylabel)
+    _legend(ax)
+
+
+def _quaternions(ax, run: Run, bases: list) -> None:
+    """Components w, x, y, z in fixed colours; one line style per quaternion."""
+    for b, style in zip(bases, ["-", "--", ":", "-."] * len(bases)):
+        for c, s in enumerate(QUATERNION):
+            ax.plot(run.time, run.column(b + s), color=f"C{c}", ls=style, lw=1, label=b + s)
+    ax.set_ylabel("quaternion (w, x, y, z), 1")
+    _legend(ax)
+
+
+def _energy(ax, run: Run) -> None:
+    ax.plot(run.time, run.energy, color="k", lw=1)
+    ax.set_ylabel("energy E, J")
+    ax.ticklabel_format(axis="y", useOffset=False)
+
+
+def _energy_change(ax, run: Run) -> None:
+    e = run.energy
+    ax.plot(run.time, (e - e[0]) / max(abs(e[0]), np.abs(e).max(), 1e-300), color="tab:red", lw=0.8)
+    ax.set_ylabel("(E - E(0)) / max|E|, 1")

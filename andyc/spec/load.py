@@ -101,7 +101,7 @@ def _schema_problems(data, smap: SourceMap) -> list[Diagnostic]:
 def _explain_all(error) -> list[tuple]:
     """One schema error -> [(path, message, hint)], usually one entry."""
     path = tuple(error.absolute_path)
-    if error.validator == "oneOf":
+    if error.validator in ("oneOf", "anyOf"):
         return _explain_one_of(error, path)
     if error.validator == "additionalProperties" and isinstance(error.instance, dict):
         allowed = sorted(error.schema.get("properties", {}))
@@ -116,11 +116,13 @@ def _explain_all(error) -> list[tuple]:
     return [(path, *_explain(error, path))]
 
 
-# What each 'oneOf' of the schema accepts, by $defs name: (what it is, how to write it).
+# What each 'oneOf'/'anyOf' of the schema accepts, by $defs name: (what it is, how to write it).
 _ALTERNATIVES = {
     "rotation": ("a rotation", "write one of {axis: z, angle: 0.5}, {rpy: [roll, pitch, yaw]} "
                                "or {quaternion: [w, x, y, z]}"),
     "damper": ("a damper", "give either 'speed: <coordinate>' or 'frame: <frame>'"),
+    "nonholonomic": ("a nonholonomic link", "give 'velocity: [vx, vy, vz]', 'angular_velocity: [wx, wy, wz]' "
+                                            "or both, as expressions of the speeds"),
     "spring": ("a spring", "give either 'length: <expression>' or 'between: [frameA, frameB]'"),
     "axis": ("axis", "write x, y, z, -x, -y, -z or three numbers such as [0, 0.6, 0.8]"),
     "inertia": ("inertia", "write [Ixx, Iyy, Izz], [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] "
@@ -132,7 +134,7 @@ def _explain_one_of(error, path) -> list[tuple]:
     """jsonschema says only 'not valid under any of the given schemas'; say which and why."""
     kind = next((name for name, s in _defs().items() if s == error.schema), None)
     what, how = _ALTERNATIVES.get(kind, ("value", "see schemas/andyc-model.schema.json"))
-    branches = error.schema["oneOf"]
+    branches = error.schema[error.validator]
     inst = error.instance
     if all("required" in b for b in branches):
         # Alternatives told apart by which fields are present (a non-mapping is a 'type' error).
@@ -198,6 +200,10 @@ def _explain(error, path) -> tuple[str, str]:
                 'write a number, or an expression such as "L/2"'
         how = next((how for kind, (_, how) in _ALTERNATIVES.items() if _defs()[kind] == sch),
                    _TYPE_HINTS.get(want[0], "see schemas/andyc-model.schema.json"))
+        if len(path) == 2 and path[0] in ("coordinates", "speeds") and want == ["object"]:
+            value = inst if isinstance(inst, (int, float, str)) and not isinstance(inst, bool) else 0
+            how = f"write {{initial: {value}}}" + (", with 'velocity:' for the initial rate"
+                                                   if path[0] == "coordinates" else "")
         return f"expected {' or '.join(_KINDS.get(w, w) for w in want)}, got {_describe(inst)}", how
     if v in ("minItems", "maxItems"):
         lo, hi = sch.get("minItems"), sch.get("maxItems")
@@ -234,9 +240,9 @@ class _Builder:
         self.problems.append(self.smap.diag(where, message, hint))
 
     # expression contexts --------------------------------------------------
-    def expr(self, value, where, names: dict, context: str):
+    def expr(self, value, where, names: dict, context: str, allow_time: bool = True):
         try:
-            result = parse(value, names)
+            result = parse(value, names, allow_time)
         except ExpressionError as exc:
             message = str(exc)
             if exc.name in self.declared:   # declared, but not usable in this context
@@ -424,7 +430,7 @@ class _Builder:
                    if "angular_velocity" in link else None)
             for key, value in (("velocity", vel), ("angular_velocity", ang)):
                 if value is not None:
-                    self.check_linear(value, where + (key,))
+                    self.check_linear(value, link[key], where + (key,))
             for key, needs in (("position", "velocity"), ("quaternion", "angular_velocity")):
                 if key in link and needs not in link:
                     self.error(where + (key,), f"'{key}' goes with '{needs}'",
@@ -463,23 +469,26 @@ class _Builder:
             else:
                 out.append(known[name])
                 self.used.add(known[name])
-        if len(set(names)) != len(names):
-            self.error(where, "a speed is listed twice", "list distinct speeds")
+        for j, name in enumerate(names):
+            if name in names[:j]:
+                self.error(where + (j,), f"speed '{name}' is listed twice", "list distinct speeds")
         return out
 
-    def check_linear(self, vec: sp.Matrix, where):
+    def check_linear(self, vec: sp.Matrix, written: list, where):
         """Velocities must be linear in the speeds: v = J(q, t) speeds + b(q, t)."""
         speeds = list(self.rate_names.values())
         for i, e in enumerate(vec):
             if any(sp.diff(e, a, b) != 0 for a in speeds for b in speeds):
-                self.error(where + (i,), f"'{e}' is not linear in the speeds",
+                self.error(where + (i,), f"in {written[i]!r}: the velocity is not linear in the speeds",
                            "a velocity is J(q, t) * speeds + b(q, t); speeds may not be squared, "
                            "multiplied together or inside functions")
 
     def quaternion(self, values, where) -> list:
         """An initial unit quaternion of constants; an error names the value and its norm."""
-        exprs = [self.expr(v, where + (i,), {}, "initial quaternions are constants") for i, v in enumerate(values)]
-        if any(not e.is_number for e in exprs):
+        before = len(self.problems)
+        exprs = [self.expr(v, where + (i,), {}, "initial quaternions are constants", allow_time=False)
+                 for i, v in enumerate(values)]
+        if len(self.problems) > before:     # a bad entry is reported already
             return [sp.Integer(1), sp.Integer(0), sp.Integer(0), sp.Integer(0)]
         nums = [float(e) for e in exprs]
         norm = math.sqrt(sum(c * c for c in nums))
@@ -517,10 +526,7 @@ class _Builder:
             roll, pitch, yaw = (self.expr(x, where + ("rpy", k), self.kin_names, ctx) for k, x in enumerate(r["rpy"]))
             # R = Rz(yaw) Ry(pitch) Rx(roll): applied left to right as z, then y, then x.
             return [Rotate(sp.Matrix([0, 0, 1]), yaw), Rotate(sp.Matrix([0, 1, 0]), pitch), Rotate(sp.Matrix([1, 0, 0]), roll)]
-        exprs = self.quaternion(r["quaternion"], where + ("quaternion",))
-        if not all(e.is_number for e in exprs):
-            return []
-        w, x, y, z = (float(e) for e in exprs)
+        w, x, y, z = (float(e) for e in self.quaternion(r["quaternion"], where + ("quaternion",)))
         norm = math.sqrt(w * w + x * x + y * y + z * z)
         if abs(norm - 1.0) > 1e-9:
             return []

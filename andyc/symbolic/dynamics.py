@@ -1,11 +1,10 @@
-"""Elements -> equations of motion M(q) dv/dt = G(q, v, t) (ANDY paper eq. 5-8).
+"""Elements -> equations of motion M dv/dt = G (ANDY paper eq. 5-8).
 
-Body k at frame k (COM at the origin), mass m, inertia I (frame axes),
-I_w = R_k I R_k^T:
+Body at frame k (COM at the origin), mass m, inertia I (own axes), with the
+angular quantities in the body's own axes (wb, Jwb, alb; see kinematics):
 
-    M_k = Jv^T m Jv + Jw^T I_w Jw                                    (eq. 5)
-    G_k = -Jv^T m ac - Jw^T (I_w al + w x I_w w)    (inertial, eq. 6)
-          + Jv^T m g                                 (gravity, Table 1)
+    M_k = Jv^T m Jv + Jwb^T I Jwb                                     (eq. 5)
+    G_k = Jv^T m (g - ac) - Jwb^T (I alb + wb x I wb)                 (eq. 6)
 
 Every other element has virtual power A = chi^T K zeta (Table 1) and adds
 G = J_chi^T K zeta (eq. 7):
@@ -17,15 +16,18 @@ G = J_chi^T K zeta (eq. 7):
     spring of length x(q) or |r_a - r_b|       G -= k (x - x0) dx/dq
     potential V(q, t)                          G -= dV/dq
 
-The total M and G are the sums over elements (eq. 8). The energy is the
-kinetic energy plus gravity, spring and potential energy; `power` is the
-power of the non-conservative elements (forces, torques, dampers), so that
-dE/dt = power for models whose potentials do not depend on t.
+Each element states its terms as pairs (J, f): G += J^T f, and (J, W):
+M += J^T W J. The sums (eq. 8) first add the f and W of elements that share
+a Jacobian (a body and the damper at its COM; the bars of one rigid body),
+then multiply once. The energy is the kinetic energy plus gravity, spring and
+potential energy; `power` is the power of the non-conservative elements
+(forces, torques, dampers), so that dE/dt = power when potentials do not
+depend on t.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import sympy as sp
 
@@ -37,12 +39,22 @@ from andyc.symbolic.kinematics import FrameKinematics, cross
 
 @dataclass
 class ElementTerms:
-    """What one element contributes: to M, to G, to energy, to power."""
+    """What one element contributes: M += sum J^T W J, G += sum J^T f + G_direct."""
     name: str
-    M: sp.Matrix | None = None
-    G: sp.Matrix | None = None
+    inertia: list = field(default_factory=list)     # [(J 3 x n, W 3 x 3 or scalar)]
+    loads: list = field(default_factory=list)       # [(J 3 x n, f 3 x 1)]
+    G_direct: sp.Matrix | None = None               # n x 1, for elements on speeds or coordinates
     energy: sp.Expr = sp.Integer(0)
     power: sp.Expr = sp.Integer(0)
+
+    @property
+    def M(self) -> sp.Matrix | None:
+        return sum((J.T * W * J for J, W in self.inertia), None) if self.inertia else None
+
+    @property
+    def G(self) -> sp.Matrix | None:
+        terms = [J.T * f for J, f in self.loads] + ([self.G_direct] if self.G_direct is not None else [])
+        return sum(terms[1:], terms[0]) if terms else None
 
 
 def _norm(vec: sp.Matrix) -> sp.Expr:
@@ -58,23 +70,26 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
     def gradient(expr) -> sp.Matrix:
         """d expr / dq, one entry per speed (zero for quasi-velocities)."""
         return sp.Matrix([sp.diff(expr, qi) for qi in q] + [0] * (n - len(q)))
+
     out = []
     for b in spec.bodies:
         K = kin[b.frame]
-        k = K.index
-        Iw = emit.matrix(f"b{k}I", K.R * b.inertia * K.R.T) if b.inertia != sp.zeros(3, 3) else sp.zeros(3, 3)
-        IwJw = emit.matrix(f"b{k}W", Iw * K.Jw) if Iw != sp.zeros(3, 3) else sp.zeros(3, n)
-        M = b.mass * (K.Jv.T * K.Jv) + K.Jw.T * IwJw
-        h = Iw * K.al + cross(K.w, Iw * K.w)
-        G = K.Jv.T * (b.mass * (spec.gravity - K.ac)) - K.Jw.T * h
-        T = (b.mass * K.v.dot(K.v) + K.w.dot(Iw * K.w)) / 2
-        V = -b.mass * spec.gravity.dot(K.r)
-        out.append(ElementTerms(b.name, M=M, G=G, energy=T + V))
+        terms = ElementTerms(b.name, inertia=[(K.Jv, b.mass * sp.eye(3))], loads=[(K.Jv, b.mass * (spec.gravity - K.ac))],
+                             energy=(b.mass * K.v.dot(K.v) + K.wb.dot(b.inertia * K.wb)) / 2
+                             - b.mass * spec.gravity.dot(K.r))
+        if b.inertia != sp.zeros(3, 3):
+            Iw = b.inertia * K.wb
+            terms.inertia.append((K.Jwb, b.inertia))
+            terms.loads.append((K.Jwb, -(b.inertia * K.alb + cross(K.wb, Iw))))
+        out.append(terms)
     for f in spec.loads:
         K = kin[f.frame]
-        vec = kin[f.in_frame].R * f.vector
-        J, rate = (K.Jv, K.v) if f.kind == "force" else (K.Jw, K.w)
-        out.append(ElementTerms(f.name, G=J.T * vec, power=rate.dot(vec)))
+        if f.kind == "torque" and f.in_frame == f.frame:    # already in the body's axes
+            J, rate, vec = K.Jwb, K.wb, f.vector
+        else:
+            vec = kin[f.in_frame].R * f.vector
+            J, rate = (K.Jv, K.v) if f.kind == "force" else (K.Jw, K.w)
+        out.append(ElementTerms(f.name, loads=[(J, vec)], power=rate.dot(vec)))
     for d in spec.dampers:
         if d.speed is not None:
             j = damped.index(d.speed)
@@ -83,9 +98,9 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
             chi = sp.Matrix([v[j]])
         else:
             K = kin[d.frame]
-            J, chi = (K.Jw, K.w) if d.angular else (K.Jv, K.v)
+            J, chi = (K.Jwb, K.wb) if d.angular else (K.Jv, K.v)
         gain = d.coefficient * (_norm(chi) if d.law == "quadratic" else 1)
-        out.append(ElementTerms(d.name, G=-gain * (J.T * chi), power=-gain * chi.dot(chi)))
+        out.append(ElementTerms(d.name, loads=[(J, -gain * chi)], power=-gain * chi.dot(chi)))
     for s in spec.springs:
         if s.length is not None:
             x = s.length
@@ -96,9 +111,9 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
             x = emit.scalar(f"s_{s.name}_len", _norm(delta))
             dx = (a.Jv - b.Jv).T * delta / x
         stretch = x - s.rest_length
-        out.append(ElementTerms(s.name, G=-s.stiffness * stretch * dx, energy=s.stiffness * stretch ** 2 / 2))
+        out.append(ElementTerms(s.name, G_direct=-s.stiffness * stretch * dx, energy=s.stiffness * stretch ** 2 / 2))
     for p in spec.potentials:
-        out.append(ElementTerms(p.name, G=-gradient(p.energy), energy=p.energy))
+        out.append(ElementTerms(p.name, G_direct=-gradient(p.energy), energy=p.energy))
     return out
 
 
@@ -109,13 +124,23 @@ def assemble(spec: Spec, terms: list[ElementTerms]):
     G = sp.zeros(n, 1)
     energy = sp.Integer(0)
     power = sp.Integer(0)
+    inertia: dict = {}      # Jacobian entries -> (J, summed W)
+    loads: dict = {}        # Jacobian entries -> (J, summed f)
     for e in terms:
-        if e.M is not None:
-            M += e.M
-        if e.G is not None:
-            G += e.G
+        for J, W in e.inertia:
+            key = tuple(J)
+            inertia[key] = (J, inertia[key][1] + W if key in inertia else W)
+        for J, f in e.loads:
+            key = tuple(J)
+            loads[key] = (J, loads[key][1] + f if key in loads else f)
+        if e.G_direct is not None:
+            G += e.G_direct
         energy += e.energy
         power += e.power
+    for J, W in inertia.values():
+        M += J.T * W * J
+    for J, f in loads.values():
+        G += J.T * f
     owners = [("coordinate", c) for c in spec.coordinates] + [("speed", s) for s in spec.speeds]
     idle = [owners[j] for j in range(n) if all(M[j, i] == 0 for i in range(n))]
     if idle:

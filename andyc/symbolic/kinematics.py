@@ -23,6 +23,16 @@ w_rel, v_rel and their Jacobians; from a parent P, with d = R_P p_rel:
 The relative terms are derivatives of the link's own small expressions, so
 nothing large is ever differentiated.
 
+Bodies use the angular quantities in their own axes (as Pinocchio's local
+frame): wb_k = R_k^T w_k, Jwb_k, alb_k. With R_rel the link rotation and
+w_own = R_rel^T w_rel (the link's angular velocity in its own axes, formed
+step by step so that a joint's axis stays a constant), al_own = d/dt w_own:
+
+    Jwb_k = R_rel^T Jwb_P + Jw_own      wb_k = R_rel^T wb_P + w_own
+    alb_k = R_rel^T alb_P + al_own + (R_rel^T wb_P) x w_own
+
+A ball joint's speeds then enter its body's Jacobian as the identity.
+
 Speeds v are the coordinate rates dq/dt first, then quasi-velocities. A
 nonholonomic link (paper eq. 4) has no position expression to differentiate:
 its relative velocities are given, linear in v, and its rotation Q and
@@ -60,6 +70,9 @@ class FrameKinematics:
     Jv: sp.Matrix
     al: sp.Matrix
     ac: sp.Matrix
+    wb: sp.Matrix               # angular velocity, own axes
+    Jwb: sp.Matrix              # 3 x n, own axes
+    alb: sp.Matrix              # angular acceleration at dv/dt = 0, own axes
     signal_rates: dict = field(default_factory=dict)   # signal symbol -> its rate (eq. 4)
 
 
@@ -90,34 +103,56 @@ def _rate(expr, q, v):
     return sum((sp.diff(expr, qi) * vi for qi, vi in zip(q, v)), sp.diff(expr, TIME))
 
 
-def link_motion(transforms, q, v):
-    """Relative motion of a holonomic link in its parent's axes.
+@dataclass
+class LinkMotion:
+    """A link's motion relative to its parent: in the parent's axes, and angular in its own."""
+    R: sp.Matrix        # rotation, own axes -> parent axes
+    p: sp.Matrix        # origin position
+    Jw: sp.Matrix       # 3 x n
+    Jv: sp.Matrix       # 3 x n
+    w: sp.Matrix
+    v: sp.Matrix
+    al: sp.Matrix       # dw/dt at dv/dt = 0
+    ac: sp.Matrix       # dv/dt at dv/dt = 0
+    Jw_own: sp.Matrix   # R^T Jw
+    w_own: sp.Matrix    # R^T w
+    al_own: sp.Matrix   # R^T al = d/dt (R^T w)
 
-    Returns R_rel, p_rel, Jw_rel, Jv_rel (3 x len(v)), w_rel, v_rel, al_rel, ac_rel.
-    """
+
+def link_motion(transforms, q, v) -> LinkMotion:
+    """Relative motion of a holonomic link (its Translate and Rotate steps)."""
     n = len(v)
     R = sp.eye(3)
     p = sp.zeros(3, 1)
     Jw = sp.zeros(3, n)
-    w_t = sp.zeros(3, 1)            # explicit-time part of w_rel
+    w_t = sp.zeros(3, 1)            # explicit-time part of w
+    Jw_own = sp.zeros(3, n)         # the same, in the axes reached so far
+    w_t_own = sp.zeros(3, 1)
     for step in transforms:
         if isinstance(step, Translate):
             p = p + R * step.vector
-        else:
-            axis = R * step.axis
-            for j, qj in enumerate(q):
-                Jw[:, j] += axis * sp.diff(step.angle, qj)
-            w_t += axis * sp.diff(step.angle, TIME)
-            R = R * rotation_matrix(step.axis, step.angle)
+            continue
+        rate = sp.Matrix([sp.diff(step.angle, qj) for qj in q] + [0] * (n - len(q))).T
+        axis = R * step.axis
+        Jw += axis * rate
+        w_t += axis * sp.diff(step.angle, TIME)
+        turn = rotation_matrix(step.axis, step.angle)
+        # A rotation leaves its own axis fixed, so this axis enters as a constant.
+        Jw_own = turn.T * Jw_own + step.axis * rate
+        w_t_own = turn.T * w_t_own + step.axis * sp.diff(step.angle, TIME)
+        R = R * turn
     Jv = sp.zeros(3, n)
     for j, qj in enumerate(q):
         Jv[:, j] = sp.diff(p, qj)
     vvec = sp.Matrix(v)
     w_rel = Jw * vvec + w_t
     v_rel = Jv * vvec + sp.diff(p, TIME)
-    al_rel = w_rel.applyfunc(lambda e: _rate(e, q, v))
-    ac_rel = v_rel.applyfunc(lambda e: _rate(e, q, v))
-    return R, p, Jw, Jv, w_rel, v_rel, al_rel, ac_rel
+    w_own = Jw_own * vvec + w_t_own
+
+    def rate(vec):
+        return vec.applyfunc(lambda e: _rate(e, q, v))
+
+    return LinkMotion(R, p, Jw, Jv, w_rel, v_rel, rate(w_rel), rate(v_rel), Jw_own, w_own, rate(w_own))
 
 
 def nonholonomic_motion(step: Nonholonomic, q, v, emit: Emitter, label: str):
@@ -135,12 +170,13 @@ def nonholonomic_motion(step: Nonholonomic, q, v, emit: Emitter, label: str):
     al_g = w_g.applyfunc(lambda e: _rate(e, q, v))
     ac_g = v_g.applyfunc(lambda e: _rate(e, q, v))
     if step.in_body:
-        motion = (Q, p, Q * Jw_g, Q * Jv_g, Q * w_g, Q * v_g, Q * al_g, Q * (cross(w_g, v_g) + ac_g))
+        motion = LinkMotion(Q, p, Q * Jw_g, Q * Jv_g, Q * w_g, Q * v_g, Q * al_g, Q * (cross(w_g, v_g) + ac_g),
+                            Jw_g, w_g, al_g)
     else:
-        motion = (Q, p, Jw_g, Jv_g, w_g, v_g, al_g, ac_g)
+        motion = LinkMotion(Q, p, Jw_g, Jv_g, w_g, v_g, al_g, ac_g, Q.T * Jw_g, Q.T * w_g, Q.T * al_g)
     rates = {}
     if step.position:
-        rates.update(zip(step.position, motion[5]))
+        rates.update(zip(step.position, motion.v))
     if step.quaternion:
         qw, qv = step.quaternion[0], sp.Matrix(step.quaternion[1:])
         # Hamilton product: quat (x) [0, w] = (-qv.w, qw w + qv x w); [0, w] (x) quat = (-w.qv, qw w + w x qv).
@@ -150,9 +186,10 @@ def nonholonomic_motion(step: Nonholonomic, q, v, emit: Emitter, label: str):
     return motion, rates
 
 
-def _attach(P: FrameKinematics, motion, emit: Emitter, label: str, index: int) -> FrameKinematics:
+def _attach(P: FrameKinematics, motion: LinkMotion, emit: Emitter, label: str, index: int) -> FrameKinematics:
     """World kinematics of a frame from its parent's and its link's relative motion (eq. 1-3)."""
-    R_rel, p_rel, Jw_rel, Jv_rel, w_rel, v_rel, al_rel, ac_rel = motion
+    m = motion
+    R_rel, p_rel, Jw_rel, Jv_rel, w_rel, v_rel, al_rel, ac_rel = m.R, m.p, m.Jw, m.Jv, m.w, m.v, m.al, m.ac
     n = P.Jw.shape[1]
     d = emit.matrix(f"{label}d", P.R * p_rel)
     Rw_rel = P.R * w_rel
@@ -167,7 +204,12 @@ def _attach(P: FrameKinematics, motion, emit: Emitter, label: str, index: int) -
     al = emit.matrix(f"{label}al", P.al + P.R * al_rel + cross(P.w, Rw_rel))
     ac = emit.matrix(f"{label}ac", P.ac + cross(P.al, d) + cross(P.w, cross(P.w, d))
                      + 2 * cross(P.w, Rv_rel) + P.R * ac_rel)
-    return FrameKinematics(index, R, r, w, vel, Jw, Jv, al, ac)
+    RT = R_rel.T
+    wb_P = RT * P.wb
+    wb = emit.matrix(f"{label}wb", wb_P + m.w_own)
+    Jwb = emit.matrix(f"{label}Jwb", RT * P.Jwb + m.Jw_own)
+    alb = emit.matrix(f"{label}alb", RT * P.alb + m.al_own + cross(wb_P, m.w_own))
+    return FrameKinematics(index, R, r, w, vel, Jw, Jv, al, ac, wb, Jwb, alb)
 
 
 def frame_kinematics(spec: Spec, emit: Emitter) -> dict[str, FrameKinematics]:
@@ -176,7 +218,8 @@ def frame_kinematics(spec: Spec, emit: Emitter) -> dict[str, FrameKinematics]:
     v = spec.speed_symbols
     n = len(v)
     zero = sp.zeros(3, 1)
-    out = {"world": FrameKinematics(-1, sp.eye(3), zero, zero, zero, sp.zeros(3, n), sp.zeros(3, n), zero, zero)}
+    out = {"world": FrameKinematics(-1, sp.eye(3), zero, zero, zero, sp.zeros(3, n), sp.zeros(3, n), zero, zero,
+                                    zero, sp.zeros(3, n), zero)}
     for k, frame in enumerate(spec.frames):
         P = out[frame.parent]
         steps = list(frame.transforms)
