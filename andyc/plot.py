@@ -52,8 +52,9 @@ def figure_for(run: Run) -> Figure:
 def _series_panels(run: Run) -> list:
     """The drawing functions of the right-hand (or only) column, top to bottom."""
     panels = [partial(_frame_axis, k=k) for k in range(3) if _moves(run.frames, k)]
-    panels += [partial(_states, cols=range(run.nq), ylabel="coordinates q, rad | m"),
-               partial(_states, cols=range(run.nq, run.nq + run.nv), ylabel="speeds v, rad/s | m/s")]
+    if run.nq:          # a free body has speeds and signals only
+        panels.append(partial(_states, cols=range(run.nq), ylabel="coordinates q, rad | m"))
+    panels.append(partial(_states, cols=range(run.nq, run.nq + run.nv), ylabel="speeds v, rad/s | m/s"))
     quaternions, positions, others = _signal_groups(run.signal_names)
     if quaternions:
         panels.append(partial(_quaternions, bases=quaternions))

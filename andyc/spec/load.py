@@ -278,7 +278,7 @@ class _Builder:
         self.param_names = {n: s for n, (s, _) in self.parameters.items()}
         self.defaults = {s: v for s, v in self.parameters.values()}
         coords = []
-        for name, entry in d["coordinates"].items():
+        for name, entry in (d.get("coordinates") or {}).items():
             where = ("coordinates", name)
             q = sp.Symbol(f"q_{name}", real=True)
             v = sp.Symbol(f"v_{name}", real=True)
@@ -329,12 +329,12 @@ class _Builder:
         self.declared = {}          # name -> its section, for messages
         entries = [(("parameters", n), n) for n in (d.get("parameters") or {})]
         entries += [(("inputs", n), n) for n in (d.get("inputs") or {})]
-        entries += [(("coordinates", n), n) for n in d["coordinates"]]
+        entries += [(("coordinates", n), n) for n in (d.get("coordinates") or {})]
         entries += [(("speeds", n), n) for n in (d.get("speeds") or {})]
         for section in ("frames",) + ELEMENT_SECTIONS:
             entries += [((section, i, "name"), x["name"]) for i, x in enumerate(d.get(section) or [])]
         # Names andyc makes: coordinate rates and signal states.
-        made = {f"{c}_dot": f"the rate of coordinate '{c}'" for c in d["coordinates"]}
+        made = {f"{c}_dot": f"the rate of coordinate '{c}'" for c in (d.get("coordinates") or {})}
         for f in d["frames"]:
             for name, what in _signal_names(f).items():
                 made[name] = f"the {what} signal of frame '{f['name']}'"

@@ -186,6 +186,17 @@ def nonholonomic_motion(step: Nonholonomic, q, v, emit: Emitter, label: str):
     return motion, rates
 
 
+def _is_fixed(steps, moving: set) -> bool:
+    """A link of constant translations and rotations (parameters allowed)."""
+    return all(isinstance(s, Translate) and not (s.vector.free_symbols & moving)
+               or isinstance(s, Rotate) and not (s.angle.free_symbols & moving) for s in steps)
+
+
+def _fixed(R, p, n) -> LinkMotion:
+    zero, Z = sp.zeros(3, 1), sp.zeros(3, n)
+    return LinkMotion(R, p, Z, Z, zero, zero, zero, zero, Z, zero, zero)
+
+
 def _attach(P: FrameKinematics, motion: LinkMotion, emit: Emitter, label: str, index: int) -> FrameKinematics:
     """World kinematics of a frame from its parent's and its link's relative motion (eq. 1-3)."""
     m = motion
@@ -220,11 +231,22 @@ def frame_kinematics(spec: Spec, emit: Emitter) -> dict[str, FrameKinematics]:
     zero = sp.zeros(3, 1)
     out = {"world": FrameKinematics(-1, sp.eye(3), zero, zero, zero, sp.zeros(3, n), sp.zeros(3, n), zero, zero,
                                     zero, sp.zeros(3, n), zero)}
+    moving = set(q) | {TIME}
+    rigid = {}      # frame -> (ancestor it is fixed to, R and p relative to that ancestor)
     for k, frame in enumerate(spec.frames):
         P = out[frame.parent]
         steps = list(frame.transforms)
         rates = {}
-        if steps and isinstance(steps[-1], Nonholonomic):
+        if _is_fixed(steps, moving):
+            # Place a fixed frame from the nearest moving ancestor, so the frames
+            # between (a bar's end, when only its COM carries a body) need no
+            # Jacobians of their own.
+            link = link_motion(steps, q, v)
+            root, R0, p0 = rigid.get(frame.parent, (frame.parent, sp.eye(3), zero))
+            rigid[frame.name] = (root, R0 * link.R, p0 + R0 * link.p)
+            P = out[root]
+            motion = _fixed(*rigid[frame.name][1:], n)
+        elif steps and isinstance(steps[-1], Nonholonomic):
             nonholonomic = steps.pop()
             if steps:   # fixed offsets first: the link's reference frame
                 P = _attach(P, link_motion(steps, q, v), emit, f"f{k}ref", k)
