@@ -49,10 +49,13 @@ class ElementTerms:
 
     @property
     def M(self) -> sp.Matrix | None:
-        return sum((J.T * W * J for J, W in self.inertia), None) if self.inertia else None
+        """This element's own mass-matrix term (the assembly groups them instead)."""
+        terms = [J.T * W * J for J, W in self.inertia]
+        return sum(terms[1:], terms[0]) if terms else None
 
     @property
     def G(self) -> sp.Matrix | None:
+        """This element's own generalized force."""
         terms = [J.T * f for J, f in self.loads] + ([self.G_direct] if self.G_direct is not None else [])
         return sum(terms[1:], terms[0]) if terms else None
 
