@@ -484,18 +484,23 @@ class _Builder:
                            "multiplied together or inside functions")
 
     def quaternion(self, values, where) -> list:
-        """An initial unit quaternion of constants; an error names the value and its norm."""
+        """A unit quaternion of constants; an error names the value and its norm.
+
+        After a reported problem it returns the identity, so later checks stay quiet.
+        """
+        identity = [sp.Integer(1), sp.Integer(0), sp.Integer(0), sp.Integer(0)]
         before = len(self.problems)
         exprs = [self.expr(v, where + (i,), {}, "initial quaternions are constants", allow_time=False)
                  for i, v in enumerate(values)]
         if len(self.problems) > before:     # a bad entry is reported already
-            return [sp.Integer(1), sp.Integer(0), sp.Integer(0), sp.Integer(0)]
+            return identity
         nums = [float(e) for e in exprs]
         norm = math.sqrt(sum(c * c for c in nums))
         if abs(norm - 1.0) > 1e-9:
             unit = ", ".join(f"{c / norm:.12g}" for c in nums) if norm > 0 else "1, 0, 0, 0"
             self.error(where, f"quaternion [{', '.join(f'{c:g}' for c in nums)}] has norm {norm:.12g}, not 1",
                        f"use the unit quaternion [{unit}]")
+            return identity
         return exprs
 
     def signal(self, frame, component, initial, where) -> sp.Symbol:
@@ -527,13 +532,10 @@ class _Builder:
             # R = Rz(yaw) Ry(pitch) Rx(roll): applied left to right as z, then y, then x.
             return [Rotate(sp.Matrix([0, 0, 1]), yaw), Rotate(sp.Matrix([0, 1, 0]), pitch), Rotate(sp.Matrix([1, 0, 0]), roll)]
         w, x, y, z = (float(e) for e in self.quaternion(r["quaternion"], where + ("quaternion",)))
-        norm = math.sqrt(w * w + x * x + y * y + z * z)
-        if abs(norm - 1.0) > 1e-9:
-            return []
-        angle = 2 * math.atan2(math.sqrt(x * x + y * y + z * z), w)
+        s = math.sqrt(x * x + y * y + z * z)
+        angle = 2 * math.atan2(s, w)
         if angle == 0:
             return []
-        s = math.sqrt(x * x + y * y + z * z)
         return [Rotate(sp.Matrix([sp.Float(x / s, 17), sp.Float(y / s, 17), sp.Float(z / s, 17)]), sp.Float(angle, 17))]
 
     def frame_ref(self, name, where, extra=()) -> bool:
