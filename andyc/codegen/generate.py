@@ -93,6 +93,7 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
     mass = [(f"M[{i}, {j}]", model.M[i, j]) for i in range(n) for j in range(i, n)]
     mirror = [(f"M[{j}, {i}]", sp.Symbol(f"M[{i}, {j}]")) for i in range(n) for j in range(i + 1, n)]
     frames = list(model.frame_positions)
+    cons = model.constraints
     functions = [
         _function(model, pool, "dynamics", "t, x, u, p, M, G",
                   "Fill the mass matrix M (NV, NV) and generalized force G (NV,): M dv/dt = G (eq. 8).",
@@ -106,6 +107,17 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         _function(model, pool, "signal_rates", "t, x, u, p, xdot",
                   "Rates of the nonholonomic signals (eq. 4) into xdot[NQ + NV:].",
                   [(f"xdot[{len(model.q) + n + i}]", r) for i, r in enumerate(model.signal_rates)]),
+        _function(model, pool, "constraints", "t, x, u, p, phi, c, A, kappa",
+                  "Constraint residuals phi (NH,), velocity residuals c = A v + b (NC,), their Jacobian A "
+                  "(NC, NV) and kappa (NC,), with dc/dt = A dv/dt + kappa (ANDY eq. 11).",
+                  [(f"phi[{i}]", e) for i, e in enumerate(cons.phi)]
+                  + [(f"c[{i}]", e) for i, e in enumerate(cons.c)]
+                  + [(f"A[{i}, {j}]", cons.A[i, j]) for i in range(cons.nc) for j in range(n)]
+                  + [(f"kappa[{i}]", e) for i, e in enumerate(cons.kappa)]),
+        _function(model, pool, "constraint_gains", "p, ks, kd",
+                  "Soft-constraint gains K_s and K_d of each row (ANDY eq. 13-15), for the baumgarte method.",
+                  [(f"ks[{i}]", e) for i, e in enumerate(cons.stiffness)]
+                  + [(f"kd[{i}]", e) for i, e in enumerate(cons.damping)]),
         _function(model, pool, "frame_positions", "t, x, u, p, out",
                   "Origins of FRAMES in world coordinates into out (len(FRAMES), 3).",
                   [(f"out[{k}, {i}]", model.frame_positions[f][i]) for k, f in enumerate(frames) for i in range(3)]),
@@ -134,6 +146,8 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         "inputs": list(spec.inputs),
         "input_defaults": repr([v for _, v in spec.inputs.values()]),
         "frames": frames, "operations": operations,
+        "nh": cons.nh, "nc": cons.nc, "constraint_rows": cons.rows, "multipliers": cons.multipliers,
+        "conserves_energy": spec.conserves_energy,
         "initial": {"unpack": "\n".join(unpack), "state": values},
         "functions": functions,
     }

@@ -36,6 +36,11 @@ class CompiledModel:
     input_names: tuple
     input_defaults: np.ndarray
     frame_names: tuple
+    nh: int = 0                 # holonomic constraint rows (the first nh of the nc)
+    nc: int = 0                 # velocity-level constraint rows
+    multiplier_names: tuple = ()
+    constraint_rows: tuple = () # constraint name of each row
+    conserves_energy: bool = False
 
     def parameters(self, overrides: dict | None = None) -> np.ndarray:
         return _with_overrides(self.parameter_names, self.parameter_defaults, overrides, "parameter")
@@ -84,7 +89,9 @@ def load_compiled(path) -> CompiledModel:
         quaternions=tuple(module.QUATERNIONS),
         parameter_names=tuple(module.PARAMETERS), parameter_defaults=module.PARAMETER_DEFAULTS,
         input_names=tuple(module.INPUTS), input_defaults=module.INPUT_DEFAULTS,
-        frame_names=tuple(module.FRAMES))
+        frame_names=tuple(module.FRAMES), nh=module.NH, nc=module.NC,
+        multiplier_names=tuple(module.MULTIPLIERS), constraint_rows=tuple(module.CONSTRAINT_ROWS),
+        conserves_energy=bool(module.CONSERVES_ENERGY))
     # Call each function once so Numba compiles now, not inside a timed run.
     p, u = model.parameter_defaults, model.input_defaults
     x = model.initial_state(p)

@@ -31,7 +31,22 @@ class Run:
     frames: dict = field(default_factory=dict)      # name -> (N, 3)
     status: str = "finished"         # "finished" or "stopped: why"
     stats: dict = field(default_factory=dict)       # steps, rhs_evaluations, wall_seconds
+    multiplier_names: list = field(default_factory=list)
+    multipliers: np.ndarray | None = None            # (N, nc)
+    residual_position: np.ndarray | None = None      # (N, nh)
+    residual_velocity: np.ndarray | None = None      # (N, nc)
+    energy_correction: bool = False
     andyc_version: str = andyc.__version__
+
+    def __post_init__(self):
+        n = self.time.shape[0]
+        nc = len(self.multiplier_names)
+        if self.multipliers is None:
+            self.multipliers = np.zeros((n, nc))
+        if self.residual_velocity is None:
+            self.residual_velocity = np.zeros((n, nc))
+        if self.residual_position is None:
+            self.residual_position = np.zeros((n, 0))
 
     @property
     def signal_names(self) -> list:
@@ -48,7 +63,8 @@ class Run:
         return {"model": self.model, "spec_sha256": self.spec_sha256, "andyc_version": self.andyc_version,
                 "method": self.method, "dt": self.dt, "nq": self.nq, "nv": self.nv, "rtol": self.rtol, "atol": self.atol,
                 "parameters": json.dumps(self.parameters), "inputs": json.dumps(self.inputs),
-                "t_end": self.t_end, "status": self.status, "stats": json.dumps(self.stats)}
+                "t_end": self.t_end, "status": self.status, "stats": json.dumps(self.stats),
+                "energy_correction": self.energy_correction}
 
     def save(self, path) -> Path:
         path = Path(path)
@@ -73,10 +89,10 @@ def write_h5(run: Run, path: Path) -> None:
         f["state"] = run.state
         f["state"].attrs["names"] = run.state_names
         f["flow"] = np.zeros(n, dtype=np.int32)
-        f["multipliers"] = np.zeros((n, 0))
-        f["multipliers"].attrs["names"] = []
-        f["residual/position"] = np.zeros((n, 0))
-        f["residual/velocity"] = np.zeros((n, 0))
+        f["multipliers"] = run.multipliers
+        f["multipliers"].attrs["names"] = run.multiplier_names
+        f["residual/position"] = run.residual_position
+        f["residual/velocity"] = run.residual_velocity
         f["energy"] = run.energy
         for name, xyz in run.frames.items():
             f[f"frames/{name}"] = xyz
@@ -97,13 +113,20 @@ def read_h5(path) -> Run:
                    parameters=json.loads(a["parameters"]), inputs=json.loads(a.get("inputs", "{}")),
                    state_names=[str(s) for s in f["state"].attrs["names"]], time=f["time"][()],
                    state=f["state"][()], energy=f["energy"][()], frames=frames, status=str(a["status"]),
-                   stats=json.loads(a.get("stats", "{}")), andyc_version=str(a["andyc_version"]))
+                   stats=json.loads(a.get("stats", "{}")), andyc_version=str(a["andyc_version"]),
+                   multiplier_names=[str(s) for s in f["multipliers"].attrs["names"]],
+                   multipliers=f["multipliers"][()], residual_position=f["residual/position"][()],
+                   residual_velocity=f["residual/velocity"][()],
+                   energy_correction=bool(a.get("energy_correction", False)))
 
 
 def write_csv(run: Run, path: Path) -> None:
     header = [f"# {k}: {v}" for k, v in run.attributes().items()]
-    columns = ["time"] + list(run.state_names) + ["flow", "energy"]
-    data = [run.time[:, None], run.state, np.zeros((run.time.shape[0], 1)), run.energy[:, None]]
+    columns = (["time"] + list(run.state_names) + ["flow", "energy"] + list(run.multiplier_names)
+               + [f"phi_{m}" for m in run.multiplier_names[:run.residual_position.shape[1]]]
+               + [f"c_{m}" for m in run.multiplier_names])
+    data = [run.time[:, None], run.state, np.zeros((run.time.shape[0], 1)), run.energy[:, None],
+            run.multipliers, run.residual_position, run.residual_velocity]
     for name, xyz in run.frames.items():
         columns += [f"{name}.x", f"{name}.y", f"{name}.z"]
         data.append(xyz)

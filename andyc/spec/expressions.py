@@ -2,7 +2,8 @@
 
 The text is parsed by Python's `ast` (which only parses, never runs) and the
 tree is walked node by node: numbers, declared names, `t`, `pi`, the
-arithmetic operators and the functions in FUNCTIONS. Anything else is an
+arithmetic operators and the functions in FUNCTIONS; where the caller allows
+it, dotted names such as `tip.x` (frame quantities, resolved by the caller). Anything else is an
 error that says what is allowed. Nothing the user writes is evaluated.
 """
 
@@ -56,10 +57,12 @@ def number(value) -> sp.Expr:
     return sp.Rational(repr(float(value)))
 
 
-def parse(text, names: dict[str, sp.Symbol], allow_time: bool = True) -> sp.Expr:
+def parse(text, names: dict[str, sp.Symbol], allow_time: bool = True, dotted=None) -> sp.Expr:
     """Parse a number or an expression string into SymPy.
 
     `names` maps every name the expression may use to its symbol.
+    `dotted(owner, attribute)` resolves `owner.attribute` (or raises
+    ExpressionError); without it, dotted names are not allowed.
     Raises ExpressionError with a hint naming the allowed names.
     """
     if isinstance(text, (int, float)) and not isinstance(text, bool):
@@ -81,14 +84,15 @@ def parse(text, names: dict[str, sp.Symbol], allow_time: bool = True) -> sp.Expr
         raise ExpressionError(f"cannot parse {text!r}: {exc.msg} {where}",
                               "check the brackets and operators (allowed: + - * / ** and the functions "
                               + ", ".join(sorted(FUNCTIONS)) + ")")
-    return _Builder(text, names, allow_time).visit(tree.body)
+    return _Builder(text, names, allow_time, dotted).visit(tree.body)
 
 
 class _Builder:
-    def __init__(self, text, names, allow_time):
+    def __init__(self, text, names, allow_time, dotted):
         self.text = text
         self.names = names
         self.allow_time = allow_time
+        self.dotted = dotted
 
     def fail(self, what: str, hint: str, name: str | None = None):
         raise ExpressionError(f"in {self.text!r}: {what}", hint, name)
@@ -107,6 +111,11 @@ class _Builder:
             return -value if isinstance(node.op, ast.USub) else value
         if isinstance(node, ast.Call):
             return self.call(node)
+        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and self.dotted is not None:
+            try:
+                return self.dotted(node.value.id, node.attr)
+            except ExpressionError as exc:
+                self.fail(str(exc), exc.hint, exc.name)
         self.fail(f"'{ast.unparse(node)}' is not allowed",
                   "use numbers, declared names, t, pi, + - * / ** and functions " + ", ".join(sorted(FUNCTIONS)))
 

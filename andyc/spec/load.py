@@ -19,9 +19,9 @@ import numpy as np
 import sympy as sp
 
 from andyc.errors import Diagnostic, SpecError, format_path
-from andyc.spec.expressions import RESERVED, ExpressionError, parse
-from andyc.spec.model import (Body, Coordinate, Damper, Frame, Load, Nonholonomic, Potential,
-                              Rotate, Signal, Spec, Speed, Spring, Translate)
+from andyc.spec.expressions import RESERVED, TIME, ExpressionError, parse
+from andyc.spec.model import (Body, Constraint, Coordinate, Damper, Frame, FrameQuantity, Load, Nonholonomic,
+                              Potential, Rotate, Signal, Spec, Speed, Spring, Translate)
 from andyc.spec.yamlpos import SourceMap, load_yaml
 
 SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "andyc-model.schema.json"
@@ -32,7 +32,13 @@ JOINTS = ("dh", "revolute", "prismatic", "ball", "floating", "nonholonomic")
 _KIND = {"parameters": "parameter", "inputs": "input", "coordinates": "coordinate", "speeds": "speed",
          "frames": "frame",
          "bodies": "body", "forces": "force", "torques": "torque", "dampers": "damper",
-         "springs": "spring", "potentials": "potential"}
+         "springs": "spring", "potentials": "potential", "constraints": "constraint"}
+# Frame quantities in constraint expressions: F.<attribute> -> (kind, axis).
+FRAME_QUANTITIES = {**{a: ("position", i) for i, a in enumerate("xyz")},
+                    **{"v" + a: ("velocity", i) for i, a in enumerate("xyz")},
+                    **{"w" + a: ("angular_velocity", i) for i, a in enumerate("xyz")}}
+QUANTITY_HINT = ("frame quantities: F.x, F.y, F.z (position), F.vx, F.vy, F.vz (velocity), "
+                 "F.wx, F.wy, F.wz (angular velocity), for a frame F")
 
 
 def schema() -> dict:
@@ -124,6 +130,7 @@ _ALTERNATIVES = {
     "nonholonomic": ("a nonholonomic link", "give 'velocity: [vx, vy, vz]', 'angular_velocity: [wx, wy, wz]' "
                                             "or both, as expressions of the speeds"),
     "spring": ("a spring", "give either 'length: <expression>' or 'between: [frameA, frameB]'"),
+    "constraint": ("a constraint", "give either 'holonomic: <expressions>' or 'nonholonomic: <expressions>'"),
     "axis": ("axis", "write x, y, z, -x, -y, -z or three numbers such as [0, 0.6, 0.8]"),
     "inertia": ("inertia", "write [Ixx, Iyy, Izz], [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] "
                            "or a 3x3 matrix [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]]"),
@@ -240,9 +247,9 @@ class _Builder:
         self.problems.append(self.smap.diag(where, message, hint))
 
     # expression contexts --------------------------------------------------
-    def expr(self, value, where, names: dict, context: str, allow_time: bool = True):
+    def expr(self, value, where, names: dict, context: str, allow_time: bool = True, dotted=None):
         try:
-            result = parse(value, names, allow_time)
+            result = parse(value, names, allow_time, dotted)
         except ExpressionError as exc:
             message = str(exc)
             if exc.name in self.declared:   # declared, but not usable in this context
@@ -308,6 +315,12 @@ class _Builder:
         potentials = [Potential(x["name"], self.expr(x["energy"], ("potentials", i, "energy"),
                                                      self.kin_names, "potentials use parameters, coordinates and t"),
                                 ("potentials", i)) for i, x in enumerate(d.get("potentials") or [])]
+        constraints = [self.constraint(i, x) for i, x in enumerate(d.get("constraints") or [])]
+        constraints.sort(key=lambda c: not c.holonomic)     # holonomic rows first (DESIGN.md run layout)
+        self.check_multipliers(constraints)
+        conserves = bool(d.get("conserves_energy", False))
+        if conserves:
+            self.check_conservative(loads, dampers, constraints, frames)
         gravity = (self.vector(d["gravity"], ("gravity",), self.param_names, "only parameters are allowed here")
                    if "gravity" in d else sp.zeros(3, 1))
         if self.problems:
@@ -320,7 +333,7 @@ class _Builder:
                     sha256=self.sha, source=self.smap, parameters=self.parameters, inputs=self.inputs,
                     coordinates=coords, speeds=self.speeds, signals=self.signals, gravity=gravity, frames=frames + extra_frames, bodies=bodies,
                     loads=loads, dampers=dampers, springs=springs, potentials=potentials,
-                    warnings=self.warnings)
+                    constraints=constraints, conserves_energy=conserves, warnings=self.warnings)
 
     def check_names(self):
         """Every name is unique across the model and not reserved."""
@@ -331,7 +344,7 @@ class _Builder:
         entries += [(("inputs", n), n) for n in (d.get("inputs") or {})]
         entries += [(("coordinates", n), n) for n in (d.get("coordinates") or {})]
         entries += [(("speeds", n), n) for n in (d.get("speeds") or {})]
-        for section in ("frames",) + ELEMENT_SECTIONS:
+        for section in ("frames",) + ELEMENT_SECTIONS + ("constraints",):
             entries += [((section, i, "name"), x["name"]) for i, x in enumerate(d.get(section) or [])]
         # Names andyc makes: coordinate rates and signal states.
         made = {f"{c}_dot": f"the rate of coordinate '{c}'" for c in (d.get("coordinates") or {})}
@@ -659,3 +672,115 @@ class _Builder:
             if between[0] == between[1]:
                 self.error(where + ("between",), "a spring needs two different frames", "name two frames")
         return Spring(x["name"], k, rest, length, between, where)
+
+    # constraints ------------------------------------------------------------
+    def constraint(self, i, c) -> Constraint:
+        where = ("constraints", i)
+        holonomic = "holonomic" in c
+        key = "holonomic" if holonomic else "nonholonomic"
+        texts = c[key] if isinstance(c[key], list) else [c[key]]
+        paths = [where + (key, j) for j in range(len(texts))] if isinstance(c[key], list) else [where + (key,)]
+        in_frame = c.get("in", "world")
+        self.frame_ref(in_frame, where + ("in",))
+        quantities = {}
+
+        def quantity(owner: str, attribute: str) -> sp.Symbol:
+            if owner not in self.frame_names:
+                close = difflib.get_close_matches(owner, sorted(self.frame_names), n=1)
+                raise ExpressionError(f"frame '{owner}' does not exist",
+                                      (f"did you mean '{close[0]}'? " if close else "")
+                                      + "known frames: " + ", ".join(sorted(self.frame_names)))
+            if attribute not in FRAME_QUANTITIES:
+                close = difflib.get_close_matches(attribute, list(FRAME_QUANTITIES), n=1)
+                raise ExpressionError(f"'{owner}.{attribute}' is not a frame quantity",
+                                      (f"did you mean '{owner}.{close[0]}'? " if close else "") + QUANTITY_HINT)
+            kind, axis = FRAME_QUANTITIES[attribute]
+            if holonomic and kind != "position":
+                raise ExpressionError(f"'{owner}.{attribute}' is a velocity; a holonomic constraint depends on "
+                                      "positions only", "write velocity constraints under 'nonholonomic:'")
+            sym = sp.Symbol(f"fq_{owner}_{attribute}" + ("" if in_frame == "world" else f"_in_{in_frame}"), real=True)
+            quantities[sym] = FrameQuantity(owner, kind, axis, in_frame)
+            return sym
+
+        if holonomic:
+            names = self.kin_names
+            context = "holonomic constraints use parameters, coordinates, t and " + QUANTITY_HINT.split(", F.vx")[0]
+        else:
+            names = {**self.kin_names, **self.rate_names}
+            context = ("nonholonomic constraints use parameters, coordinates, speeds (<coordinate>_dot and "
+                       "declared speeds), t and " + QUANTITY_HINT)
+        rows = [self.expr(text, path, names, context, dotted=quantity) for text, path in zip(texts, paths)]
+        coordinates = {q.q for q in self.coords} | {s for s, f in quantities.items() if f.kind == "position"}
+        velocities = set(self.rate_names.values()) | {s for s, f in quantities.items() if f.kind != "position"}
+        for row, text, path in zip(rows, texts, paths):
+            free = row.free_symbols
+            if holonomic and not free & coordinates and free <= set(self.param_names.values()) | {TIME}:
+                self.error(path, f"the constraint {text!r} does not depend on the coordinates or any frame position",
+                           "a holonomic constraint is Gamma(t, q) = 0; use coordinates or F.x, F.y, F.z")
+            if not holonomic:
+                if not free & velocities:
+                    self.error(path, f"the constraint {text!r} uses no speed or velocity",
+                               "a constraint on positions goes under 'holonomic:'; a nonholonomic one is "
+                               "J(q, t) speeds + b(q, t) = 0")
+                elif any(sp.diff(row, a, b) != 0 for a in free & velocities for b in free & velocities):
+                    self.error(path, f"in {text!r}: the constraint is not linear in the speeds and velocities",
+                               "a nonholonomic constraint is J(q, t) speeds + b(q, t) = 0; speeds and velocities "
+                               "may not be squared, multiplied together or inside functions")
+        multipliers = c.get("multiplier")
+        if multipliers is None:
+            multipliers = [f"lambda_{c['name']}"] if len(rows) == 1 else [f"lambda_{c['name']}_{j}"
+                                                                          for j in range(len(rows))]
+        elif isinstance(multipliers, str):
+            multipliers = [multipliers]
+        if len(multipliers) != len(rows):
+            self.error(where + ("multiplier",), f"{len(multipliers)} multiplier name(s) for {len(rows)} "
+                       f"constraint row(s)", f"give one name per row ({len(rows)})")
+        gains = c.get("gains") or {}
+        if "stiffness" in gains and not holonomic:
+            self.error(where + ("gains", "stiffness"), "a nonholonomic constraint has no stiffness (ANDY eq. 14: "
+                       "K_s = 0)", "remove 'stiffness'; 'damping' acts on the constraint's velocity residual")
+        stiffness, damping = (self.gain(gains, key, where) for key in ("stiffness", "damping"))
+        return Constraint(c["name"], holonomic, tuple(rows), tuple(multipliers), stiffness, damping,
+                          quantities, where)
+
+    def gain(self, gains: dict, key: str, where) -> sp.Expr:
+        value, number = self.constant(gains.get(key, 0), where + ("gains", key))
+        if number < 0:
+            self.error(where + ("gains", key), f"the {key} gain is negative ({number:g})",
+                       "soft-constraint gains are >= 0 (a negative gain pushes away from the constraint)")
+        return value
+
+    def check_multipliers(self, constraints):
+        seen = {}
+        for c in constraints:
+            for j, name in enumerate(c.multipliers):
+                path = c.where + ("multiplier",)
+                if name in seen:
+                    self.error(path, f"duplicate multiplier name '{name}' (also in constraint '{seen[name]}')",
+                               "give each constraint row its own multiplier name")
+                elif name in self.declared:
+                    self.error(path, f"the multiplier name '{name}' is taken by a {_KIND[self.declared[name]]}",
+                               "choose another name")
+                seen[name] = c.name
+
+    def check_conservative(self, loads, dampers, constraints, frames):
+        """conserves_energy: nothing in the model may do work on it."""
+        workers = ([f"damper '{x.name}'" for x in dampers] + [f"{x.kind} '{x.name}'" for x in loads]
+                   + [f"constraint '{c.name}' (depends on t)" for c in constraints
+                      if any(TIME in r.free_symbols for r in c.rows)]
+                   + [f"frame '{f.name}' (its link depends on t)" for f in frames
+                      if any(TIME in _free(step) for step in f.transforms)])
+        if workers:
+            self.error(("conserves_energy",), "the model declares energy conserved, but " + ", ".join(workers)
+                       + (" does" if len(workers) == 1 else " do") + " work",
+                       "remove 'conserves_energy: true', or the elements that do work")
+
+
+def _free(step) -> set:
+    """Free symbols of a link step."""
+    if isinstance(step, Translate):
+        return step.vector.free_symbols
+    if isinstance(step, Rotate):
+        return step.angle.free_symbols
+    parts = [m for m in (step.velocity, step.angular_velocity) if m is not None]
+    return set().union(*(m.free_symbols for m in parts)) if parts else set()

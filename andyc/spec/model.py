@@ -139,6 +139,35 @@ class Potential:
     where: tuple
 
 
+@dataclass(frozen=True)
+class FrameQuantity:
+    """A frame quantity a constraint uses, e.g. `tip.x`: its symbol stands for
+
+        x, y, z     R_F^T (r_A - r_F)   the origin of A from F's origin, in F's axes
+        vx, vy, vz  R_F^T v_A           the velocity of A's origin (in world), in F's axes
+        wx, wy, wz  R_F^T w_A           the angular velocity of A (in world), in F's axes
+
+    with F the constraint's `in` frame (world by default).
+    """
+    frame: str                  # A
+    kind: str                   # "position" | "velocity" | "angular_velocity"
+    axis: int                   # 0, 1, 2
+    in_frame: str               # F
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """Holonomic rows Gamma(t, q) = 0 or nonholonomic rows J(t, q) v + b = 0 (ANDY eq. 10-15)."""
+    name: str
+    holonomic: bool
+    rows: tuple                 # of sp.Expr in q, v, t, parameters and FrameQuantity symbols
+    multipliers: tuple          # one name per row
+    stiffness: sp.Expr          # K_s (holonomic only), expression of parameters
+    damping: sp.Expr            # K_d
+    quantities: dict            # symbol -> FrameQuantity, for the symbols the rows use
+    where: tuple
+
+
 @dataclass
 class Spec:
     name: str
@@ -158,6 +187,8 @@ class Spec:
     dampers: list = field(default_factory=list)
     springs: list = field(default_factory=list)
     potentials: list = field(default_factory=list)
+    constraints: list = field(default_factory=list)  # of Constraint, holonomic ones first
+    conserves_energy: bool = False
     warnings: list = field(default_factory=list)   # of Diagnostic
 
     @property

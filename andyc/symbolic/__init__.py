@@ -6,6 +6,7 @@ import time
 
 from andyc.spec.expressions import TIME
 from andyc.spec.model import Spec
+from andyc.symbolic.constraints import constraint_terms
 from andyc.symbolic.dynamics import assemble, element_terms
 from andyc.symbolic.emitter import Emitter
 from andyc.symbolic.kinematics import frame_kinematics
@@ -15,13 +16,15 @@ from andyc.symbolic.model import SymbolicModel
 def derive(spec: Spec) -> SymbolicModel:
     """Derive the equations of motion of `spec`.
 
-    Stages: frame kinematics (eq. 1-3) -> element terms (eq. 5-7) -> sums (eq. 8).
+    Stages: frame kinematics (eq. 1-3) -> element terms (eq. 5-7) -> sums (eq. 8)
+    -> constraint residuals, Jacobian and velocity-product term (eq. 10-12).
     """
     start = time.perf_counter()
     emit = Emitter()
     kin = frame_kinematics(spec, emit)
     terms = element_terms(spec, kin, emit)
     M, G, energy, power = assemble(spec, terms)
+    constraints = constraint_terms(spec, kin, emit)
     rates = {sym: rate for K in kin.values() for sym, rate in K.signal_rates.items()}
     return SymbolicModel(
         spec=spec, t=TIME,
@@ -31,7 +34,7 @@ def derive(spec: Spec) -> SymbolicModel:
         inputs=[s for s, _ in spec.inputs.values()],
         assignments=emit.assignments, M=M, G=G, energy=energy, power=power,
         frame_positions={f.name: kin[f.name].r for f in spec.frames if not f.internal},
-        elements=terms, derive_seconds=time.perf_counter() - start)
+        elements=terms, constraints=constraints, derive_seconds=time.perf_counter() - start)
 
 
 __all__ = ["derive", "SymbolicModel"]

@@ -25,6 +25,11 @@ class Emitter:
         self.assignments.append((sym, expr))
         return sym
 
+    def define(self, sym: sp.Symbol, expr) -> sp.Symbol:
+        """Give `expr` a name chosen by the caller (a frame quantity used in a constraint)."""
+        self.assignments.append((sym, sp.sympify(expr)))
+        return sym
+
     def matrix(self, label: str, mat: sp.Matrix) -> sp.Matrix:
         rows, cols = mat.shape
         if cols == 1:

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from andyc.spec.model import Spec
+from andyc.symbolic.constraints import ConstraintTerms
 
 
 @dataclass
@@ -31,6 +32,7 @@ class SymbolicModel:
     power: sp.Expr            # power of the non-conservative elements
     frame_positions: dict     # frame name -> 3x1, world (user frames only)
     elements: list            # ElementTerms, per element
+    constraints: ConstraintTerms  # phi, c = A v + b, kappa (eq. 10-12); empty without constraints
     derive_seconds: float = 0.0
 
     @property

@@ -1,0 +1,162 @@
+"""Constraint residuals, Jacobian and velocity-product term (ANDY eq. 10-12).
+
+With speeds v (coordinate rates first) the active constraints give
+
+    phi(t, q)        holonomic residuals Gamma                          (nh rows)
+    c = A v + b      velocity-level residuals: dGamma/dt, then the
+                     nonholonomic rows J v + b                         (nc rows)
+    kappa            dc/dt at dv/dt = 0, so that dc/dt = A dv/dt + kappa  (eq. 11:
+                     the J' v term, with the explicit d/dt terms of rheonomic rows)
+
+A row is a small user expression f in t, q, v and frame-quantity symbols
+(`tip.x`, `tip.vx`, `tip.wx`; model.FrameQuantity). It is differentiated as
+written, and each frame quantity enters through its own rate, taken from the
+recursive kinematics (so nothing large is differentiated):
+
+    rate(f) = df/dt + sum_i df/dq_i v_i + sum_P df/dP Pdot + sum_V df/dV kappa_V
+    jac(f)  = df/dv + sum_V df/dV J_V
+
+for positions P (whose rate Pdot is itself a velocity quantity) and velocity
+quantities V = J_V v + b_V (with dV/dt = J_V dv/dt + kappa_V). With F the
+`in` frame, d = r_A - r_F and d' = v_A - v_F:
+
+    P = R_F^T d              Pdot = R_F^T (d' - w_F x d)
+                             J = R_F^T (Jv_A - Jv_F + [d]x Jw_F)
+                             kappa = R_F^T (ac_A - ac_F - al_F x d - 2 w_F x d' + w_F x (w_F x d))
+    V = R_F^T v_A            J = R_F^T Jv_A     kappa = R_F^T (ac_A - w_F x v_A)
+    W = R_F^T w_A            J = R_F^T Jw_A     kappa = R_F^T (al_A - w_F x w_A)
+
+since d/dt R_F^T = -R_F^T [w_F]x. Holonomic rows: c = rate(Gamma),
+A = jac(c), kappa = rate(c); nonholonomic rows: c = f, A = jac(f),
+kappa = rate(f).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from andyc.spec.expressions import TIME
+from andyc.spec.model import Spec
+from andyc.symbolic.emitter import Emitter
+from andyc.symbolic.kinematics import FrameKinematics, cross, skew
+
+
+@dataclass
+class ConstraintTerms:
+    rows: list              # constraint name of each velocity-level row
+    multipliers: list       # multiplier name of each row
+    phi: sp.Matrix          # nh x 1
+    c: sp.Matrix            # nc x 1
+    A: sp.Matrix            # nc x n
+    kappa: sp.Matrix        # nc x 1
+    stiffness: list         # K_s per row (0 for nonholonomic rows)
+    damping: list           # K_d per row
+
+    @property
+    def nh(self) -> int:
+        return self.phi.shape[0]
+
+    @property
+    def nc(self) -> int:
+        return self.c.shape[0]
+
+
+@dataclass
+class _Rate:
+    """A velocity-like quantity V = J v + b: its Jacobian row and kappa = dV/dt at dv/dt = 0."""
+    J: list
+    kappa: sp.Expr
+
+
+class _Quantities:
+    """Frame quantities as emitted symbols, each defined once from the frame kinematics."""
+
+    def __init__(self, kin: dict[str, FrameKinematics], emit: Emitter, n: int):
+        self.kin, self.emit, self.n = kin, emit, n
+        self.rates: dict[sp.Symbol, _Rate] = {}     # velocity-like symbol -> rate
+        self.position_rate: dict[sp.Symbol, sp.Symbol] = {}   # position symbol -> its Pdot symbol
+        self.vectors: dict = {}
+
+    def define(self, sym: sp.Symbol, fq) -> None:
+        if sym in self.rates or sym in self.position_rate:
+            return
+        value, J, kappa = self._vectors(fq.frame, fq.in_frame, fq.kind)
+        a = fq.axis
+        rate = _Rate(list(J[a, :]), kappa[a])
+        if fq.kind == "position":
+            self.emit.define(sym, value[a][0])
+            dot = self.emit.scalar(f"{sym}_dot", value[a][1])
+            self.position_rate[sym] = dot
+            if dot.is_Symbol and dot.name == f"{sym}_dot":
+                self.rates[dot] = rate
+            # otherwise Pdot is a constant or a speed: rate() and jac() see through it
+        else:
+            self.emit.define(sym, value[a])
+            self.rates[sym] = rate
+
+    def _vectors(self, frame: str, in_frame: str, kind: str):
+        """(value, J, kappa) of a frame quantity; for positions value[i] = (P_i, Pdot_i)."""
+        key = (frame, in_frame, kind)
+        if key not in self.vectors:
+            A, F = self.kin[frame], self.kin[in_frame]
+            RT = F.R.T
+            label = f"k{len(self.vectors)}"
+            if kind == "position":
+                d = A.r - F.r
+                dd = A.v - F.v
+                value = list(zip(RT * d, RT * (dd - cross(F.w, d))))
+                J = RT * (A.Jv - F.Jv + skew(d) * F.Jw)
+                kappa = RT * (A.ac - F.ac - cross(F.al, d) - 2 * cross(F.w, dd) + cross(F.w, cross(F.w, d)))
+            elif kind == "velocity":
+                value, J, kappa = RT * A.v, RT * A.Jv, RT * (A.ac - cross(F.w, A.v))
+            else:
+                value, J, kappa = RT * A.w, RT * A.Jw, RT * (A.al - cross(F.w, A.w))
+            self.vectors[key] = (value, self.emit.matrix(f"{label}J", J) if self.n else J,
+                                 self.emit.matrix(f"{label}k", kappa))
+        return self.vectors[key]
+
+
+def constraint_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) -> ConstraintTerms:
+    """phi, c, A and kappa of every constraint of `spec` (holonomic rows first)."""
+    q = [c.q for c in spec.coordinates]
+    v = spec.speed_symbols
+    n = len(v)
+    quantities = _Quantities(kin, emit, n)
+    for con in spec.constraints:
+        for sym, fq in con.quantities.items():
+            quantities.define(sym, fq)
+
+    def rate(f):
+        out = sp.diff(f, TIME) + sum((sp.diff(f, qi) * vi for qi, vi in zip(q, v)), sp.Integer(0))
+        for sym in f.free_symbols:
+            if sym in quantities.position_rate:
+                out += sp.diff(f, sym) * quantities.position_rate[sym]
+            elif sym in quantities.rates:
+                out += sp.diff(f, sym) * quantities.rates[sym].kappa
+        return out
+
+    def jac(f):
+        row = [sp.diff(f, vi) for vi in v]
+        for sym in f.free_symbols & set(quantities.rates):
+            df = sp.diff(f, sym)
+            row = [r + df * J for r, J in zip(row, quantities.rates[sym].J)]
+        return row
+
+    phi, c, A, kappa, names, lams, ks, kd = [], [], [], [], [], [], [], []
+    for con in spec.constraints:
+        for row, lam in zip(con.rows, con.multipliers):
+            if con.holonomic:
+                phi.append(row)
+                row = rate(row)
+            c.append(row)
+            A.append(jac(row))
+            kappa.append(rate(row))
+            names.append(con.name)
+            lams.append(lam)
+            ks.append(con.stiffness if con.holonomic else sp.Integer(0))
+            kd.append(con.damping)
+    return ConstraintTerms(names, lams, sp.Matrix(phi), sp.Matrix(c),
+                           sp.Matrix(len(c), n, lambda i, j: A[i][j]) if c else sp.zeros(0, n),
+                           sp.Matrix(kappa), ks, kd)
