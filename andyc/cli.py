@@ -113,10 +113,20 @@ def _parse_sets(values) -> dict:
               help="Run file(s) to write; default runs/<name>.h5.")
 @click.option("--every", default=1, show_default=True, help="Log one sample every N steps.")
 @click.option("--frames", default=None, metavar="all|F1,F2", help="Log the world positions of these frames.")
+@click.option("--init", "init", default="check", show_default=True, type=click.Choice(["check", "project", "as-is"]),
+              help="Initial state off the constraint manifold: refuse past --init-tol (check), project it onto "
+                   "the manifold (project), or start from it anyway (as-is).")
+@click.option("--init-tol", default=1e-6, show_default=True, help="Largest initial constraint residual accepted by check.")
+@click.option("--energy-correction/--no-energy-correction", default=None,
+              help="Braun & Goldfarb energy correction of the projection method; default on when the model "
+                   "declares conserves_energy.")
+@click.option("--energy-tol", default=1e-6, show_default=True,
+              help="Energy correction only where 2T exceeds this (Braun & Goldfarb eq. 6).")
 @click.option("--rtol", default=1e-8, show_default=True, help="Relative tolerance (adaptive methods).")
 @click.option("--atol", default=1e-10, show_default=True, help="Absolute tolerance (adaptive methods).")
 @click.option("-o", "--out-dir", default="build", show_default=True, help="Build folder.")
-def sim(file, t_end, dt, method, sets, outs, every, frames, rtol, atol, out_dir):
+def sim(file, t_end, dt, method, sets, outs, every, frames, init, init_tol, energy_correction, energy_tol,
+        rtol, atol, out_dir):
     """Build FILE if needed, simulate it and write run files."""
     overrides = _parse_sets(sets)
     try:
@@ -127,7 +137,8 @@ def sim(file, t_end, dt, method, sets, outs, every, frames, rtol, atol, out_dir)
     inputs = {k: v for k, v in overrides.items() if k in model.input_names}
     try:
         run = andyc.simulate(model, t_end, dt=dt, method=method, parameters=params, inputs=inputs,
-                             every=every, frames=frames, rtol=rtol, atol=atol)
+                             every=every, frames=frames, rtol=rtol, atol=atol, init=init, init_tol=init_tol,
+                             energy_correction=energy_correction, energy_tol=energy_tol)
     except SimulationError as exc:
         raise click.UsageError(str(exc))
     outs = outs or (f"runs/{model.name}.h5",)
@@ -137,13 +148,23 @@ def sim(file, t_end, dt, method, sets, outs, every, frames, rtol, atol, out_dir)
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint="--out")
     s = run.stats
+    constraints = ""
+    if model.nc:
+        constraints = (f"; largest constraint residuals: position {_largest(run.residual_position):.3g}, "
+                       f"velocity {_largest(run.residual_velocity):.3g}")
+        if "initial_projection" in s:
+            constraints += f" (initial state projected from {s['initial_projection']:.3g})"
     click.echo(f"{model.name}: {method}, t = 0 .. {run.time[-1]:.6g} s, {s['steps']} steps, "
                f"{s['rhs_evaluations']} rhs evaluations, {s['wall_seconds']:.3f} s wall; "
-               f"energy {run.energy[0]:.10g} -> {run.energy[-1]:.10g} J (change {run.energy[-1] - run.energy[0]:.3g} J); "
-               f"wrote {', '.join(outs)}")
+               f"energy {run.energy[0]:.10g} -> {run.energy[-1]:.10g} J (change {run.energy[-1] - run.energy[0]:.3g} J)"
+               f"{constraints}; wrote {', '.join(outs)}")
     if not run.finished:
         click.echo(run.status, err=True)
         sys.exit(1)
+
+
+def _largest(a) -> float:
+    return float(abs(a).max()) if a.size else 0.0
 
 
 @main.command()

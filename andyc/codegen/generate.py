@@ -19,6 +19,7 @@ import jinja2
 import sympy as sp
 
 import andyc
+from andyc.errors import format_path
 from andyc.codegen.printer import function_body, to_code
 from andyc.symbolic.model import SymbolicModel
 
@@ -148,6 +149,7 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         "frames": frames, "operations": operations,
         "nh": cons.nh, "nc": cons.nc, "constraint_rows": cons.rows, "multipliers": cons.multipliers,
         "conserves_energy": spec.conserves_energy,
+        "constraint_where": [[spec.source.line(w), format_path(w)] for c in spec.constraints for w in c.row_where],
         "initial": {"unpack": "\n".join(unpack), "state": values},
         "functions": functions,
     }

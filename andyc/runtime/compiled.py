@@ -41,12 +41,19 @@ class CompiledModel:
     multiplier_names: tuple = ()
     constraint_rows: tuple = () # constraint name of each row
     conserves_energy: bool = False
+    source: str = ""            # the model file's name
+    constraint_where: tuple = ()  # (line, document path) of each row in the model file
 
     def parameters(self, overrides: dict | None = None) -> np.ndarray:
         return _with_overrides(self.parameter_names, self.parameter_defaults, overrides, "parameter")
 
     def inputs(self, overrides: dict | None = None) -> np.ndarray:
         return _with_overrides(self.input_names, self.input_defaults, overrides, "input")
+
+    def row_location(self, row: int) -> str:
+        """`FILE:LINE: PATH` of a constraint row, for messages."""
+        line, path = self.constraint_where[row]
+        return f"{self.source}:{line}: {path}"
 
     def initial_state(self, p: np.ndarray) -> np.ndarray:
         return self.module.initial_state(p)
@@ -91,7 +98,8 @@ def load_compiled(path) -> CompiledModel:
         input_names=tuple(module.INPUTS), input_defaults=module.INPUT_DEFAULTS,
         frame_names=tuple(module.FRAMES), nh=module.NH, nc=module.NC,
         multiplier_names=tuple(module.MULTIPLIERS), constraint_rows=tuple(module.CONSTRAINT_ROWS),
-        conserves_energy=bool(module.CONSERVES_ENERGY))
+        conserves_energy=bool(module.CONSERVES_ENERGY), source=module.SOURCE,
+        constraint_where=tuple(tuple(w) for w in module.CONSTRAINT_WHERE))
     # Call each function once so Numba compiles now, not inside a timed run.
     p, u = model.parameter_defaults, model.input_defaults
     x = model.initial_state(p)

@@ -100,6 +100,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
         raise SimulationError(f"initial state has shape {x.shape}, expected ({model.nx},)")
     frame_names = _frame_selection(model, frames)
     initial = consistent_initial_state(model, x, u, p, init, init_tol) if model.nc else {}
+    if method in ("lagrange", "baumgarte") and model.nc:
+        _require_independent_rows(model, method, x, u, p)
     bar = Progress(f"{model.name} {method}", t_end, progress)
     start = time.perf_counter()
     try:
@@ -145,6 +147,21 @@ def constraint_residuals(model: CompiledModel, t: float, x, u, p):
     return phi, c
 
 
+def _require_independent_rows(model: CompiledModel, method: str, x, u, p) -> None:
+    """Multipliers (ANDY eq. 12) need independent rows; name the first row that is not."""
+    A = np.zeros((model.nc, model.nv))
+    model.module.constraints(0.0, x, u, p, np.empty(model.nh), np.empty(model.nc), A, np.empty(model.nc))
+    tol = 1e-8 * max(np.linalg.norm(A, 2), 1e-300)
+    for k in range(model.nc):
+        if np.linalg.matrix_rank(A[:k + 1], tol=tol) <= k:
+            earlier = sorted(set(model.constraint_rows[:k]))
+            raise SimulationError(
+                f"{model.row_location(k)}: row {k} of the constraints (in '{model.constraint_rows[k]}') is a "
+                f"combination of earlier rows (in {', '.join(repr(e) for e in earlier)}) at the initial state: the "
+                f"constraints are redundant or the pose is singular, so the {method} method's multipliers are not "
+                f"unique; remove the redundant constraint, or use --method projection, which allows them")
+
+
 def consistent_initial_state(model: CompiledModel, x, u, p, init: str, init_tol: float) -> dict:
     """Measure (and with init="project", remove) the initial state's constraint residuals.
 
@@ -164,11 +181,11 @@ def consistent_initial_state(model: CompiledModel, x, u, p, init: str, init_tol:
         row = k if k < model.nh else k - model.nh
         level = "position" if k < model.nh else "velocity"
         raise SimulationError(
-            f"the initial state is off the constraint manifold: position residual {out['initial_position_residual']:.3g}, "
-            f"velocity residual {out['initial_velocity_residual']:.3g}, largest at the {level} level in constraint "
-            f"'{model.constraint_rows[row]}' (row {row}), past the bound {init_tol:g}; fix the initial values, "
-            f"or use --init project to move the state onto the manifold (the smallest change in the mass-matrix "
-            f"metric), or --init as-is to start from it anyway")
+            f"{model.row_location(row)}: the initial state is off the constraint manifold: largest residual "
+            f"{rows[k]:.3g} at the {level} level (constraint '{model.constraint_rows[row]}'; all rows: position "
+            f"{out['initial_position_residual']:.3g}, velocity {out['initial_velocity_residual']:.3g}), past the bound "
+            f"{init_tol:g}; fix the initial values, or use --init project to move the state onto the manifold "
+            f"(the smallest change in the mass-matrix metric), or --init as-is to start from it anyway")
     M, G = np.empty((model.nv, model.nv)), np.empty(model.nv)
     for _ in range(50):
         if model.module.project(0.0, x, u, p, True, 0.0, -1.0, M, G) != rk4.OK:

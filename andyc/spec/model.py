@@ -166,6 +166,7 @@ class Constraint:
     damping: sp.Expr            # K_d
     quantities: dict            # symbol -> FrameQuantity, for the symbols the rows use
     where: tuple
+    row_where: tuple = ()       # document path of each row
 
 
 @dataclass

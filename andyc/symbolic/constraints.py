@@ -87,11 +87,9 @@ class _Quantities:
         rate = _Rate(list(J[a, :]), kappa[a])
         if fq.kind == "position":
             self.emit.define(sym, value[a][0])
-            dot = self.emit.scalar(f"{sym}_dot", value[a][1])
+            dot = self.emit.define(sp.Symbol(f"{sym}_dot", real=True), value[a][1])
             self.position_rate[sym] = dot
-            if dot.is_Symbol and dot.name == f"{sym}_dot":
-                self.rates[dot] = rate
-            # otherwise Pdot is a constant or a speed: rate() and jac() see through it
+            self.rates[dot] = rate
         else:
             self.emit.define(sym, value[a])
             self.rates[sym] = rate
