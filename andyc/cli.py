@@ -22,6 +22,23 @@ def _fail_spec(exc: SpecError) -> None:
     sys.exit(1)
 
 
+def _summary(file, spec, model) -> str:
+    """One line: what the model is, for `andyc check`."""
+    speeds = ", ".join([c.name for c in spec.coordinates] + [s.name for s in spec.speeds])
+    cons = model.constraints
+    freedom = (f"{_plural(model.dof, 'degree')} of freedom ({speeds})" if not spec.constraints else
+               f"{model.dof} speeds ({speeds}) less {_plural(cons.nc, 'constraint row')} ({cons.nh} holonomic) "
+               f"in {_plural(len(spec.constraints), 'constraint')}")
+    signals = f" incl. {len(model.signals)} nonholonomic signals" if model.signals else ""
+    n_elements = len(spec.loads) + len(spec.dampers) + len(spec.springs) + len(spec.potentials)
+    n_frames = len([f for f in spec.frames if not f.internal])
+    return (f"{file}: model '{spec.name}' is valid: {freedom}, "
+            f"{_plural(len(model.q) + model.dof + len(model.signals), 'state')}{signals}, "
+            f"{_plural(len(spec.bodies), 'body').replace('bodys', 'bodies')}, {_plural(n_frames, 'frame')} besides "
+            f"world, {_plural(len(spec.parameters), 'parameter')}, {_plural(len(spec.inputs), 'input')}, "
+            f"{_plural(n_elements, 'force element')}; {len(model.assignments)} intermediate expressions.")
+
+
 def _plural(n: int, word: str) -> str:
     return f"{n} {word}{'' if n == 1 else 's'}"
 
@@ -55,15 +72,7 @@ def check(files):
             continue
         for w in spec.warnings:
             click.echo(f"{w} (warning)", err=True)
-        user_frames = [f for f in spec.frames if not f.internal]
-        n_elements = len(spec.loads) + len(spec.dampers) + len(spec.springs) + len(spec.potentials)
-        click.echo(
-            f"{file}: model '{spec.name}' is valid: {_plural(model.dof, 'degree')} of freedom "
-            f"({', '.join([c.name for c in spec.coordinates] + [s.name for s in spec.speeds])}), {_plural(len(model.q) + model.dof + len(model.signals), 'state')}"
-            f"{f' incl. {len(model.signals)} nonholonomic signals' if model.signals else ''}, "
-            f"{_plural(len(spec.bodies), 'body').replace('bodys', 'bodies')}, {_plural(len(user_frames), 'frame')} "
-            f"besides world, {_plural(len(spec.parameters), 'parameter')}, {_plural(len(spec.inputs), 'input')}, "
-            f"{_plural(n_elements, 'force element')}; {len(model.assignments)} intermediate expressions.")
+        click.echo(_summary(file, spec, model))
     if problems:
         click.echo(f"{_plural(problems, 'problem')} found", err=True)
     sys.exit(1 if problems else 0)

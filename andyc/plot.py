@@ -61,6 +61,8 @@ def _series_panels(run: Run) -> list:
     for names, ylabel in ((positions, "position signals, m"), (others, "other signals")):
         if names:
             panels.append(partial(_states, cols=[run.state_names.index(n) for n in names], ylabel=ylabel))
+    if run.multiplier_names:
+        panels += [_multipliers, _residuals]
     return panels
 
 
@@ -150,6 +152,26 @@ def _quaternions(ax, run: Run, bases: list) -> None:
         for c, s in enumerate(QUATERNION):
             ax.plot(run.time, run.column(b + s), color=f"C{c}", ls=style, lw=1, label=b + s)
     ax.set_ylabel("quaternion (w, x, y, z), 1")
+    _legend(ax)
+
+
+def _multipliers(ax, run: Run) -> None:
+    for j, name in enumerate(run.multiplier_names):
+        ax.plot(run.time, run.multipliers[:, j], lw=1, label=name)
+    ax.set_ylabel("multipliers λ, N | N m")
+    _legend(ax)
+
+
+def _residuals(ax, run: Run) -> None:
+    """|phi| (solid) and |c| (dashed) per row, on a log scale floored at 1e-17 (exact zeros)."""
+    names = run.multiplier_names
+    for j in range(run.residual_position.shape[1]):
+        ax.semilogy(run.time, np.maximum(np.abs(run.residual_position[:, j]), 1e-17), color=f"C{j}", lw=1,
+                    label=f"φ {names[j]}")
+    for j in range(run.residual_velocity.shape[1]):
+        ax.semilogy(run.time, np.maximum(np.abs(run.residual_velocity[:, j]), 1e-17), color=f"C{j}", lw=1,
+                    ls="--", label=f"c {names[j]}")
+    ax.set_ylabel("constraint residuals")
     _legend(ax)
 
 

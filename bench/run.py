@@ -5,10 +5,14 @@ Targets (issue 2): derivation at least 5x faster than KanesMethod at 6 bodies,
 operation count after cse no larger than KanesMethod's after cse, at least
 1e6 RK4 steps/s for a 2-body chain. Issue 3: the swing bar builds (derive +
 generate + compile) in under 10 s and runs at least 1e6 RK4 steps/s, 40x
-ANDY's 2.4e4 steps/s. Every ratio is measured in this one run.
+ANDY's 2.4e4 steps/s. Issue 4: for the ball in a bowl, each constrained
+method at several steps against a DOP853 reference (rtol 1e-12), with
+residuals, energy drift, right-hand-side evaluations and wall time; the
+Fig. 2-style comparison is drawn into docs/ball_in_bowl_methods.png. Every
+ratio is measured in this one run.
 
-    python bench/run.py                      all sections (about 6 minutes)
-    python bench/run.py --only swing_bar     one section: chains, models, swing_bar
+    python bench/run.py                      all sections (about 7 minutes)
+    python bench/run.py --only swing_bar     one section: chains, models, swing_bar, constraints
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ from numba import njit
 
 import andyc
 from andyc.reference.chains import chain_yaml, kane_model, random_chain
+from andyc.reference.closed_forms import ball_first_integral
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -155,7 +160,91 @@ def models_benchmark(tmp: Path) -> None:
         print(f"{name:>16}: {sps:.3g} steps/s, {rhs_microseconds(model):.3f} us per rhs{note}")
 
 
-SECTIONS = ("chains", "models", "swing_bar")
+BALL_METHODS = {"lagrange": {"method": "lagrange"}, "baumgarte": {"method": "baumgarte"},
+                "projection": {"method": "projection", "energy_correction": False},
+                "projection+energy": {"method": "projection", "energy_correction": True}}
+
+
+def constraints_benchmark(tmp: Path) -> None:
+    section("ball in a bowl (Braun & Goldfarb Part II, 3.1): constrained methods, 100 s")
+    model, _ = andyc.compile_model(ROOT / "models" / "ball_in_bowl.yaml", tmp / "build")
+    p = dict(zip(model.parameter_names, model.parameter_defaults))
+    t_end, every = 100.0, 0.1
+    ref = andyc.simulate(model, t_end, dt=every, method="DOP853", rtol=1e-12, atol=1e-12, frames=["c"],
+                         progress=False)
+    print(f"reference: DOP853, rtol = atol = 1e-12, {ref.stats['rhs_evaluations']} rhs evaluations, "
+          f"{ref.stats['wall_seconds']:.2f} s; error = max |centre - reference centre| over the samples every {every} s")
+    print("residuals: largest |holonomic| and |velocity-level| rows; energy: max |E/E0 - 1|; "
+          "first integral: max change (exact: 0);\nrhs evals: 4 per RK4 step (projection adds one M and two "
+          "constraint evaluations per step, counted in 'proj')")
+    print(f"{'method':>18} {'dt':>6} {'error m':>9} {'holonomic':>9} {'velocity':>9} {'energy':>9} "
+          f"{'1st int.':>9} {'rhs evals':>9} {'proj':>6} {'wall s':>7}")
+    shown = {}
+    for label, options in BALL_METHODS.items():
+        andyc.simulate(model, 0.02, dt=0.01, progress=False, **options)       # compile outside the timing
+        for dt in (0.05, 0.02, 0.01, 0.005):
+            run = andyc.simulate(model, t_end, dt=dt, every=int(round(every / dt)), frames=["c"], progress=False,
+                                 **options)
+            if dt == 0.01:
+                shown[label] = run
+            n = run.time.shape[0]
+            err = np.max(np.linalg.norm(run.frames["c"] - ref.frames["c"][:n], axis=1))
+            eps = ball_first_integral(run, p["r"], p["R"])
+            status = "" if run.finished else f"  {run.status}"
+            print(f"{label:>18} {dt:>6g} {err:>9.2e} {np.abs(run.residual_position).max():>9.1e} "
+                  f"{np.abs(run.residual_velocity).max():>9.1e} {np.abs(run.energy / run.energy[0] - 1).max():>9.1e} "
+                  f"{np.abs(eps - eps[0]).max():>9.1e} {run.stats['rhs_evaluations']:>9} {run.stats['projections']:>6} "
+                  f"{run.stats['wall_seconds']:>7.3f}{status}", flush=True)
+    plot_ball_methods(shown, ref, p, ROOT / "docs" / "ball_in_bowl_methods.png")
+
+    section("parallelogram four-bar through its flat, singular pose: 20 s at dt = 1e-3 s")
+    model, _ = andyc.compile_model(ROOT / "models" / "fourbar.yaml", tmp / "build")
+    print(f"{'method':>12} {'reached t':>9} {'holonomic':>9} {'velocity':>9} {'energy':>9} {'coupler':>9}  status")
+    for label, options in (("lagrange", {"method": "lagrange"}), ("baumgarte", {"method": "baumgarte"}),
+                           ("projection", {"method": "projection"}),
+                           ("DOP853", {"method": "DOP853", "rtol": 1e-10, "atol": 1e-10})):
+        run = andyc.simulate(model, 20.0, dt=1e-3, progress=False, **options)
+        coupler = np.abs(run.column("th1") + run.column("th2")).max()     # 0 on the parallelogram branch
+        print(f"{label:>12} {run.time[-1]:>9.3f} {np.abs(run.residual_position).max():>9.1e} "
+              f"{np.abs(run.residual_velocity).max():>9.1e} {np.abs(run.energy / run.energy[0] - 1).max():>9.1e} "
+              f"{coupler:>9.1e}  {run.status}", flush=True)
+    print("coupler: largest |th1 + th2|, the coupler's angle (0 on the parallelogram branch, rad)")
+
+
+def plot_ball_methods(runs: dict, ref, p: dict, path: Path) -> None:
+    """Error, no-slip residual, energy error and first-integral error against time, one line per method.
+
+    (cf. Braun & Goldfarb Part II, Fig. 2; the holonomic row rho = R - r holds exactly for
+    every method here, since rho is a coordinate and its row is linear.)
+    """
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
+    panels = [("centre error against DOP853 (rtol 1e-12), m",
+               lambda r: np.linalg.norm(r.frames["c"] - ref.frames["c"][:r.time.shape[0]], axis=1)),
+              ("nonholonomic residual (no slip)", lambda r: np.abs(r.residual_velocity[:, 1:]).max(axis=1)),
+              ("energy error |E/E0 - 1|", lambda r: np.abs(r.energy / r.energy[0] - 1)),
+              ("first-integral error", lambda r: np.abs(ball_first_integral(r, p["r"], p["R"])
+                                                        - ball_first_integral(r, p["r"], p["R"])[0]))]
+    for ax, (title, value) in zip(axes.flat, panels):
+        for label, run in runs.items():
+            ax.semilogy(run.time, np.maximum(value(run), 1e-17), label=label, lw=1)
+        ax.set_title(title, fontsize=10)
+        ax.grid(True, which="major", alpha=0.3)
+    for ax in axes[1]:
+        ax.set_xlabel("t (s)")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle("Ball in a bowl, RK4 at dt = 0.01 s (floor 1e-17 = exact)")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    print(f"wrote {path.relative_to(ROOT)}")
+
+
+SECTIONS = ("chains", "models", "swing_bar", "constraints")
 
 
 def main(argv=None):
@@ -173,6 +262,8 @@ def main(argv=None):
             models_benchmark(tmp)
         if "swing_bar" in only:
             swing_bar_benchmark(tmp)
+        if "constraints" in only:
+            constraints_benchmark(tmp)
 
 
 if __name__ == "__main__":

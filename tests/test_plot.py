@@ -73,3 +73,18 @@ def test_run_without_frames_or_signals_has_only_states_and_energy(tmp_path):
     assert np.array_equal(fig.axes[1].get_lines()[1].get_ydata(), -np.ones(n))
     plot_run(run, tmp_path / "run.png")
     assert (tmp_path / "run.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_constrained_run_shows_multipliers_and_residuals_per_row():
+    run = make_run(["q", "q_dot"], 1, 1, np.zeros((50, 2)))
+    run.multiplier_names = ["lam_a", "lam_b"]
+    run.multipliers = np.column_stack([np.linspace(-1, 1, 50), np.ones(50)])
+    run.residual_position = np.full((50, 1), 1e-12)
+    run.residual_velocity = np.column_stack([np.full(50, 1e-13), np.zeros(50)])   # exact zeros: floored
+    panels = axes_by_ylabel(figure_for(run))
+    lines = panels["multipliers λ, N | N m"].get_lines()
+    assert [line.get_label() for line in lines] == ["lam_a", "lam_b"]
+    residuals = panels["constraint residuals"]
+    assert residuals.get_yscale() == "log"
+    assert [line.get_label() for line in residuals.get_lines()] == ["φ lam_a", "c lam_a", "c lam_b"]
+    assert residuals.get_lines()[2].get_ydata().min() == 1e-17

@@ -241,7 +241,8 @@ def _run_rk4(model, rhs, x, u, p, t_end, dt, every, bar, projection):
     if status != rk4.OK:
         message = (f"stopped: {_STOPPED[status]} at t = {done * dt:.9g} s, step {done}; "
                    f"the {row} samples before it are kept")
-    return out_t[:row], out_x[:row], message, {"steps": done, "rhs_evaluations": 4 * done}
+    projections = done if projection[1] else 0
+    return out_t[:row], out_x[:row], message, {"steps": done, "rhs_evaluations": 4 * done, "projections": projections}
 
 
 class _Stopped(Exception):

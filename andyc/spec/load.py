@@ -131,6 +131,7 @@ _ALTERNATIVES = {
                                             "or both, as expressions of the speeds"),
     "spring": ("a spring", "give either 'length: <expression>' or 'between: [frameA, frameB]'"),
     "constraint": ("a constraint", "give either 'holonomic: <expressions>' or 'nonholonomic: <expressions>'"),
+    "constraint_rows": ("constraint expression", 'write one expression such as "x - L", or a non-empty list of them'),
     "axis": ("axis", "write x, y, z, -x, -y, -z or three numbers such as [0, 0.6, 0.8]"),
     "inertia": ("inertia", "write [Ixx, Iyy, Izz], [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] "
                            "or a 3x3 matrix [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]]"),
@@ -681,23 +682,42 @@ class _Builder:
         texts = c[key] if isinstance(c[key], list) else [c[key]]
         paths = [where + (key, j) for j in range(len(texts))] if isinstance(c[key], list) else [where + (key,)]
         in_frame = c.get("in", "world")
-        self.frame_ref(in_frame, where + ("in",))
+        in_ok = self.frame_ref(in_frame, where + ("in",))
         quantities = {}
 
         def quantity(owner: str, attribute: str) -> sp.Symbol:
+            written = f"{owner}.{attribute}"
+            known = sorted(self.frame_names)
             if owner not in self.frame_names:
-                close = difflib.get_close_matches(owner, sorted(self.frame_names), n=1)
+                if owner in self.declared:          # a body, a parameter, ... written as a frame
+                    frame = next((b["frame"] for b in self.data.get("bodies") or [] if b["name"] == owner), None)
+                    raise ExpressionError(f"'{owner}' is a {_KIND[self.declared[owner]]}, not a frame",
+                                          (f"use the frame it is on: '{frame}.{attribute}'" if frame else
+                                           "frame quantities belong to frames") + "; known frames: " + ", ".join(known))
+                close = difflib.get_close_matches(owner, known, n=1)
                 raise ExpressionError(f"frame '{owner}' does not exist",
                                       (f"did you mean '{close[0]}'? " if close else "")
-                                      + "known frames: " + ", ".join(sorted(self.frame_names)))
+                                      + "known frames: " + ", ".join(known))
             if attribute not in FRAME_QUANTITIES:
-                close = difflib.get_close_matches(attribute, list(FRAME_QUANTITIES), n=1)
-                raise ExpressionError(f"'{owner}.{attribute}' is not a frame quantity",
+                close = ([attribute.lower()] if attribute.lower() in FRAME_QUANTITIES
+                         else difflib.get_close_matches(attribute, list(FRAME_QUANTITIES), n=1))
+                raise ExpressionError(f"'{written}' is not a frame quantity",
                                       (f"did you mean '{owner}.{close[0]}'? " if close else "") + QUANTITY_HINT)
             kind, axis = FRAME_QUANTITIES[attribute]
             if holonomic and kind != "position":
-                raise ExpressionError(f"'{owner}.{attribute}' is a velocity; a holonomic constraint depends on "
-                                      "positions only", "write velocity constraints under 'nonholonomic:'")
+                what = "a velocity" if kind == "velocity" else "an angular velocity"
+                raise ExpressionError(f"'{written}' is {what}; a holonomic constraint depends on positions only",
+                                      "write velocity constraints under 'nonholonomic:'; holonomic rows use "
+                                      "F.x, F.y, F.z")
+            if kind == "position" and owner == in_frame:
+                raise ExpressionError(f"'{written}' is always 0: positions are measured from the origin of the "
+                                      f"'in' frame, here '{in_frame}' itself",
+                                      "use the position of another frame"
+                                      + (f", or remove 'in: {in_frame}' to measure from world"
+                                         if in_frame != "world" else ""))
+            if kind != "position" and owner == "world":
+                raise ExpressionError(f"'{written}' is always 0: the world frame does not move",
+                                      "use the velocity of a moving frame")
             sym = sp.Symbol(f"fq_{owner}_{attribute}" + ("" if in_frame == "world" else f"_in_{in_frame}"), real=True)
             quantities[sym] = FrameQuantity(owner, kind, axis, in_frame)
             return sym
@@ -709,12 +729,33 @@ class _Builder:
             names = {**self.kin_names, **self.rate_names}
             context = ("nonholonomic constraints use parameters, coordinates, speeds (<coordinate>_dot and "
                        "declared speeds), t and " + QUANTITY_HINT)
-        rows = [self.expr(text, path, names, context, dotted=quantity) for text, path in zip(texts, paths)]
+
+        def row(text, path):
+            """The parsed row, or None after reporting a problem in it."""
+            if holonomic:
+                # A speed is reported as a speed, not as an unknown name: parse once more with the speeds.
+                try:
+                    trial = parse(text, {**names, **self.rate_names}, True, quantity)
+                except ExpressionError:
+                    trial = None
+                speeds = [n for n, s in self.rate_names.items() if trial is not None and s in trial.free_symbols]
+                if speeds:
+                    self.error(path, f"in {text!r}: '{speeds[0]}' is a speed; a holonomic constraint depends on "
+                               "positions only", "write velocity constraints under 'nonholonomic:'; holonomic "
+                               "rows use parameters, coordinates, t and F.x, F.y, F.z")
+                    return None
+            before = len(self.problems)
+            value = self.expr(text, path, names, context, dotted=quantity)
+            return value if len(self.problems) == before else None
+
+        parsed = [row(text, path) for text, path in zip(texts, paths)]
         coordinates = {q.q for q in self.coords} | {s for s, f in quantities.items() if f.kind == "position"}
         velocities = set(self.rate_names.values()) | {s for s, f in quantities.items() if f.kind != "position"}
-        for row, text, path in zip(rows, texts, paths):
-            free = row.free_symbols
-            if holonomic and not free & coordinates and free <= set(self.param_names.values()) | {TIME}:
+        for value, text, path in zip(parsed, texts, paths):
+            if value is None:                           # reported already
+                continue
+            free = value.free_symbols
+            if holonomic and not free & coordinates:
                 self.error(path, f"the constraint {text!r} does not depend on the coordinates or any frame position",
                            "a holonomic constraint is Gamma(t, q) = 0; use coordinates or F.x, F.y, F.z")
             if not holonomic:
@@ -722,10 +763,15 @@ class _Builder:
                     self.error(path, f"the constraint {text!r} uses no speed or velocity",
                                "a constraint on positions goes under 'holonomic:'; a nonholonomic one is "
                                "J(q, t) speeds + b(q, t) = 0")
-                elif any(sp.diff(row, a, b) != 0 for a in free & velocities for b in free & velocities):
+                elif any(sp.diff(value, a, b) != 0 for a in free & velocities for b in free & velocities):
                     self.error(path, f"in {text!r}: the constraint is not linear in the speeds and velocities",
                                "a nonholonomic constraint is J(q, t) speeds + b(q, t) = 0; speeds and velocities "
                                "may not be squared, multiplied together or inside functions")
+        if "in" in c and in_ok and not quantities and None not in parsed:
+            self.error(where + ("in",), f"'in: {in_frame}' has no effect: the constraint uses no frame quantity",
+                       f"remove 'in', or write the constraint with frame quantities such as {in_frame}.x "
+                       "(they are then taken in the axes of '" + in_frame + "')")
+        rows = tuple(sp.Integer(0) if value is None else value for value in parsed)
         multipliers = c.get("multiplier")
         if multipliers is None:
             multipliers = [f"lambda_{c['name']}"] if len(rows) == 1 else [f"lambda_{c['name']}_{j}"
@@ -739,37 +785,83 @@ class _Builder:
         if "stiffness" in gains and not holonomic:
             self.error(where + ("gains", "stiffness"), "a nonholonomic constraint has no stiffness (ANDY eq. 14: "
                        "K_s = 0)", "remove 'stiffness'; 'damping' acts on the constraint's velocity residual")
-        stiffness, damping = (self.gain(gains, key, where) for key in ("stiffness", "damping"))
-        return Constraint(c["name"], holonomic, tuple(rows), tuple(multipliers), stiffness, damping,
-                          quantities, where)
+        stiffness = self.gain(gains, "stiffness", where) if holonomic else sp.Integer(0)
+        damping = self.gain(gains, "damping", where)
+        return Constraint(c["name"], holonomic, rows, tuple(multipliers), stiffness, damping,
+                          quantities, where, tuple(paths))
 
     def gain(self, gains: dict, key: str, where) -> sp.Expr:
-        value, number = self.constant(gains.get(key, 0), where + ("gains", key))
-        if number < 0:
-            self.error(where + ("gains", key), f"the {key} gain is negative ({number:g})",
-                       "soft-constraint gains are >= 0 (a negative gain pushes away from the constraint)")
+        path = where + ("gains", key)
+        before = len(self.problems)
+        value, number = self.constant(gains.get(key, 0), path)
+        if len(self.problems) > before:             # a bad expression is reported already
+            return value
+        if TIME in value.free_symbols:
+            self.error(path, f"the {key} gain {gains[key]!r} depends on t",
+                       "gains are constants: a number or an expression of parameters")
+        elif number < 0:
+            shown = f"{number:g}" if value.is_number else f"{gains[key]} = {number:g}"
+            self.error(path, f"the {key} gain is negative, got {shown}",
+                       "give a gain >= 0 (a negative gain pushes the motion away from the constraint)")
         return value
 
     def check_multipliers(self, constraints):
+        """Multiplier names are unique and taken by nothing else (they name run-file columns)."""
+        made = {f"{q.name}_dot": f"the rate of coordinate '{q.name}'" for q in self.coords}
+        made.update({s.name: f"the {'position' if s.component in 'xyz' else 'quaternion'} signal of frame "
+                             f"'{s.frame}'" for s in self.signals})
+        made.update({n: f"the run-file column '{n}'" for n in ("time", "flow", "energy")})
         seen = {}
-        for c in constraints:
+        for c in sorted(constraints, key=lambda c: c.where[1]):        # in document order
+            written = self.data["constraints"][c.where[1]].get("multiplier")
             for j, name in enumerate(c.multipliers):
-                path = c.where + ("multiplier",)
+                if written is None:         # lambda_<constraint>: point at the name it comes from
+                    path, what = c.where + ("name",), f"the default multiplier name '{name}' of constraint '{c.name}'"
+                    fix = f"name the multiplier: add 'multiplier: <name>' to constraint '{c.name}'"
+                else:
+                    path = c.where + ("multiplier",) + ((j,) if isinstance(written, list) else ())
+                    what, fix = f"the multiplier name '{name}'", "choose another name"
                 if name in seen:
-                    self.error(path, f"duplicate multiplier name '{name}' (also in constraint '{seen[name]}')",
-                               "give each constraint row its own multiplier name")
+                    first = "earlier in this constraint" if seen[name] == c.name else f"in constraint '{seen[name]}'"
+                    self.error(path, f"{what} is used twice (also {first})",
+                               fix if written is None else "give each constraint row its own multiplier name")
                 elif name in self.declared:
-                    self.error(path, f"the multiplier name '{name}' is taken by a {_KIND[self.declared[name]]}",
-                               "choose another name")
-                seen[name] = c.name
+                    self.error(path, f"{what} is taken by a {_KIND[self.declared[name]]}", fix)
+                elif name in made:
+                    self.error(path, f"{what} is taken by {made[name]}", fix)
+                seen.setdefault(name, c.name)
 
     def check_conservative(self, loads, dampers, constraints, frames):
-        """conserves_energy: nothing in the model may do work on it."""
-        workers = ([f"damper '{x.name}'" for x in dampers] + [f"{x.kind} '{x.name}'" for x in loads]
-                   + [f"constraint '{c.name}' (depends on t)" for c in constraints
-                      if any(TIME in r.free_symbols for r in c.rows)]
-                   + [f"frame '{f.name}' (its link depends on t)" for f in frames
-                      if any(TIME in _free(step) for step in f.transforms)])
+        """conserves_energy: nothing in the model may do work on it.
+
+        A holonomic constraint does work when it depends on t; a nonholonomic row J v + b = 0 when its
+        term without speeds, b, is not 0 (J may depend on t: its force is normal to every allowed velocity).
+        """
+        workers = [f"damper '{x.name}'" for x in dampers] + [f"{x.kind} '{x.name}'" for x in loads]
+        # (Rows without coordinates, or without speeds, are reported by constraint() already.)
+        for c in sorted(constraints, key=lambda c: c.where[1]):
+            if c.holonomic:
+                positions = {q.q for q in self.coords} | set(c.quantities)
+                if any(TIME in r.free_symbols and r.free_symbols & positions for r in c.rows):
+                    workers.append(f"constraint '{c.name}' (depends on t)")
+                continue
+            speeds = set(self.rate_names.values()) | {s for s, f in c.quantities.items() if f.kind != "position"}
+            texts = self.data["constraints"][c.where[1]]["nonholonomic"]
+            texts = texts if isinstance(texts, list) else [texts]
+            rest = [text for r, text in zip(c.rows, texts)
+                    if r.free_symbols & speeds and sp.expand(r.subs({s: 0 for s in speeds})) != 0]
+            if rest:
+                workers.append(f"constraint '{c.name}' ({rest[0]!r} has a term without speeds)")
+        workers += [f"frame '{f.name}' (its link depends on t)" for f in frames
+                    if any(TIME in _free(step) for step in f.transforms)]
+        for section, key in (("springs", "length"), ("potentials", "energy")):
+            for x in self.data.get(section) or []:
+                try:
+                    value = parse(x.get(key, 0), self.kin_names)
+                except ExpressionError:                 # reported already
+                    continue
+                if TIME in value.free_symbols:
+                    workers.append(f"{_KIND[section]} '{x['name']}' (depends on t)")
         if workers:
             self.error(("conserves_energy",), "the model declares energy conserved, but " + ", ".join(workers)
                        + (" does" if len(workers) == 1 else " do") + " work",
