@@ -428,5 +428,6 @@ def test_cli_check_ball_in_bowl_is_valid():
     result = check(BALL_IN_BOWL)
     assert result.exit_code == 0, result.stderr
     assert result.stderr == ""
-    assert re.match(rf"{re.escape(str(BALL_IN_BOWL))}: model 'ball_in_bowl' is valid: 6 degrees of freedom",
+    assert re.match(rf"{re.escape(str(BALL_IN_BOWL))}: model 'ball_in_bowl' is valid: 6 speeds "
+                    r"\(rho, alpha, beta, wx, wy, wz\) less 3 constraint rows \(1 holonomic\) in 2 constraints",
                     result.stdout)
