@@ -321,7 +321,7 @@ class _Builder:
         self.check_multipliers(constraints)
         conserves = bool(d.get("conserves_energy", False))
         if conserves:
-            self.check_conservative(loads, dampers, constraints, frames)
+            self.check_conservative(loads, dampers, springs, potentials, constraints, frames)
         gravity = (self.vector(d["gravity"], ("gravity",), self.param_names, "only parameters are allowed here")
                    if "gravity" in d else sp.zeros(3, 1))
         if self.problems:
@@ -831,7 +831,7 @@ class _Builder:
                     self.error(path, f"{what} is taken by {made[name]}", fix)
                 seen.setdefault(name, c.name)
 
-    def check_conservative(self, loads, dampers, constraints, frames):
+    def check_conservative(self, loads, dampers, springs, potentials, constraints, frames):
         """conserves_energy: nothing in the model may do work on it.
 
         A holonomic constraint does work when it depends on t; a nonholonomic row J v + b = 0 when its
@@ -854,14 +854,9 @@ class _Builder:
                 workers.append(f"constraint '{c.name}' ({rest[0]!r} has a term without speeds)")
         workers += [f"frame '{f.name}' (its link depends on t)" for f in frames
                     if any(TIME in _free(step) for step in f.transforms)]
-        for section, key in (("springs", "length"), ("potentials", "energy")):
-            for x in self.data.get(section) or []:
-                try:
-                    value = parse(x.get(key, 0), self.kin_names)
-                except ExpressionError:                 # reported already
-                    continue
-                if TIME in value.free_symbols:
-                    workers.append(f"{_KIND[section]} '{x['name']}' (depends on t)")
+        workers += [f"spring '{x.name}' (depends on t)" for x in springs
+                    if x.length is not None and TIME in x.length.free_symbols]
+        workers += [f"potential '{x.name}' (depends on t)" for x in potentials if TIME in x.energy.free_symbols]
         if workers:
             self.error(("conserves_energy",), "the model declares energy conserved, but " + ", ".join(workers)
                        + (" does" if len(workers) == 1 else " do") + " work",
