@@ -30,6 +30,11 @@ def _summary(file, spec, model) -> str:
                f"{model.dof} speeds ({speeds}) less {_plural(cons.nc, 'constraint row')} ({cons.nh} holonomic) "
                f"in {_plural(len(spec.constraints), 'constraint')}")
     signals = f" incl. {len(model.signals)} nonholonomic signals" if model.signals else ""
+    if spec.jumps:
+        flows = ", ".join(f"{f.name} ({_plural(sum(len(c.rows) for c in spec.constraints if c.name in f.constraints), 'row')})"
+                          for f in spec.flows)
+        freedom += (f"; hybrid: {_plural(len(spec.flows), 'flow')} ({flows}), {_plural(len(spec.jumps), 'jump')}, "
+                    f"{_plural(len(spec.discrete), 'discrete state')}")
     n_elements = len(spec.loads) + len(spec.dampers) + len(spec.springs) + len(spec.potentials)
     n_frames = len([f for f in spec.frames if not f.internal])
     return (f"{file}: model '{spec.name}' is valid: {freedom}, "
@@ -96,6 +101,21 @@ def build(file, out_dir, force):
         click.echo(f"{result.module_path}: built; derive {t['derive']:.2f} s, generate {t['generate']:.2f} s, "
                    f"compile {t['compile']:.2f} s; {ops} operations "
                    f"({', '.join(f'{k} {v}' for k, v in result.operations.items())})")
+    _report_jumps_file(result)
+
+
+def _report_jumps_file(result) -> None:
+    """Say what happened to the user's jump template."""
+    if result.jumps_path is None:
+        return
+    if not result.jumps_kept:
+        click.echo(f"{result.jumps_path}: written, one function per jump: edit it for resets beyond the model file")
+        return
+    click.echo(f"{result.jumps_path}: kept (yours; never overwritten; delete it to get a fresh template)")
+    for name in result.jumps_missing:
+        click.echo(f"{result.jumps_path}: warning: no function for jump '{name}' (added to the model since the file "
+                   f"was written): it gets no extra resets; add `def {name}(t, x, u, p, d)` with @njit, or delete "
+                   f"the file to regenerate it", err=True)
 
 
 def _parse_sets(values) -> dict:
@@ -131,23 +151,42 @@ def _parse_sets(values) -> dict:
                    "declares conserves_energy.")
 @click.option("--energy-tol", default=1e-6, show_default=True,
               help="Energy correction only where 2T exceeds this (Braun & Goldfarb eq. 6).")
+@click.option("--event-tol", default=1e-12, show_default=True,
+              help="Guard crossings are located to this many seconds (relative beyond t = 1 s).")
+@click.option("--max-instant-jumps", default=100, show_default=True,
+              help="Stop after this many jumps at one instant (a jump loop).")
+@click.option("--zeno-tol", default=1e-6, show_default=True,
+              help="Stop when jump times accumulate at a point less than this many seconds ahead (Zeno).")
+@click.option("--stop-after", "stop_after", multiple=True, metavar="JUMP=N",
+              help="End the run right after the N-th occurrence of JUMP.")
 @click.option("--rtol", default=1e-8, show_default=True, help="Relative tolerance (adaptive methods).")
 @click.option("--atol", default=1e-10, show_default=True, help="Absolute tolerance (adaptive methods).")
 @click.option("-o", "--out-dir", default="build", show_default=True, help="Build folder.")
 def sim(file, t_end, dt, method, sets, outs, every, frames, init, init_tol, energy_correction, energy_tol,
-        rtol, atol, out_dir):
+        event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, out_dir):
     """Build FILE if needed, simulate it and write run files."""
     overrides = _parse_sets(sets)
+    stops = {}
+    for item in stop_after:
+        name, sep, count = item.partition("=")
+        if not sep or not count.strip().isdigit():
+            raise click.BadParameter(f"'{item}' is not JUMP=N", param_hint="--stop-after")
+        stops[name.strip()] = int(count)
     try:
-        model, _ = andyc.compile_model(file, out_dir)
+        model, result = andyc.compile_model(file, out_dir)
     except SpecError as exc:
         _fail_spec(exc)
+    except SimulationError as exc:
+        raise click.UsageError(str(exc))
+    if not result.skipped:
+        _report_jumps_file(result)
     params = {k: v for k, v in overrides.items() if k not in model.input_names}
     inputs = {k: v for k, v in overrides.items() if k in model.input_names}
     try:
         run = andyc.simulate(model, t_end, dt=dt, method=method, parameters=params, inputs=inputs,
                              every=every, frames=frames, rtol=rtol, atol=atol, init=init, init_tol=init_tol,
-                             energy_correction=energy_correction, energy_tol=energy_tol)
+                             energy_correction=energy_correction, energy_tol=energy_tol, event_tol=event_tol,
+                             max_instant_jumps=max_instant_jumps, zeno_tol=zeno_tol, stop_after=stops)
     except SimulationError as exc:
         raise click.UsageError(str(exc))
     outs = outs or (f"runs/{model.name}.h5",)
@@ -163,6 +202,13 @@ def sim(file, t_end, dt, method, sets, outs, every, frames, init, init_tol, ener
                        f"velocity {_largest(run.residual_velocity):.3g}")
         if "initial_projection" in s:
             constraints += f" (initial state projected from {s['initial_projection']:.3g})"
+    if model.nj:
+        counts = {}
+        for name in run.event_names():
+            counts[name] = counts.get(name, 0) + 1
+        constraints += (f"; {_plural(len(run.events['time']), 'jump')}"
+                        + (f" ({', '.join(f'{k} {v}' for k, v in counts.items())})" if counts else "")
+                        + f", ending in flow {run.flow_names[run.flow[-1]]}")
     click.echo(f"{model.name}: {method}, t = 0 .. {run.time[-1]:.6g} s, {s['steps']} steps, "
                f"{s['rhs_evaluations']} rhs evaluations, {s['wall_seconds']:.3f} s wall; "
                f"energy {run.energy[0]:.10g} -> {run.energy[-1]:.10g} J (change {run.energy[-1] - run.energy[0]:.3g} J)"
@@ -180,13 +226,20 @@ def _largest(a) -> float:
 @click.argument("run_file", type=click.Path(exists=True, dir_okay=False))
 @click.option("-o", "--out", default=None, help="PNG file; default RUN.png beside the run.")
 def plot(run_file, out):
-    """Plot the states and the energy of a run against time."""
-    from andyc.plot import plot_run
+    """Plot the states and the energy of a run against time (and, for a hybrid run, its flows,
+    jumps and discrete states); when the run logged frames with their parents, also draw them as
+    stick figures, into RUN_sticks.png (or OUT_sticks.png beside OUT)."""
+    from andyc.plot import plot_run, plot_sticks, stick_edges
     from andyc.runtime.run import read_h5
 
+    run = read_h5(run_file)
     out = out or str(Path(run_file).with_suffix(".png"))
-    plot_run(read_h5(run_file), out)
+    plot_run(run, out)
     click.echo(f"wrote {out}")
+    if stick_edges(run):
+        sticks = Path(out).with_name(Path(out).stem + "_sticks.png")
+        plot_sticks(run, sticks)
+        click.echo(f"wrote {sticks} (stick figures of the frames)")
 
 
 if __name__ == "__main__":

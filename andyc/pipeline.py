@@ -8,7 +8,7 @@ and lets Numba compile (or load its cache).
 from __future__ import annotations
 
 import time
-from andyc.codegen.generate import BuildResult, build_key, existing_build_key, module_path
+from andyc.codegen.generate import BuildResult, build_key, existing_build_key, jumps_path, module_path
 from andyc.codegen.generate import generate as _generate
 from andyc.spec.load import load as _load
 from andyc.symbolic import derive as _derive
@@ -25,8 +25,9 @@ def build(path, out_dir="build", force: bool = False) -> BuildResult:
     t_load = time.perf_counter() - t0
     key = build_key(spec.sha256)
     target = module_path(out_dir, spec.name)
-    if not force and existing_build_key(target) == key:
-        return BuildResult(spec.name, target, True, key, {"load": t_load})
+    jumps = jumps_path(out_dir, spec.name) if spec.jumps else None
+    if not force and existing_build_key(target) == key and (jumps is None or jumps.exists()):
+        return BuildResult(spec.name, target, True, key, {"load": t_load}, jumps_path=jumps, jumps_kept=True)
     model = derive(spec)
     result = generate(model, out_dir)
     result.timings = {"load": t_load, "derive": model.derive_seconds, **result.timings}

@@ -8,11 +8,13 @@ generate + compile) in under 10 s and runs at least 1e6 RK4 steps/s, 40x
 ANDY's 2.4e4 steps/s. Issue 4: for the ball in a bowl, each constrained
 method at several steps against a DOP853 reference (rtol 1e-12), with
 residuals, energy drift, right-hand-side evaluations and wall time; the
-Fig. 2-style comparison is drawn into docs/ball_in_bowl_methods.png. Every
-ratio is measured in this one run.
+Fig. 2-style comparison is drawn into docs/ball_in_bowl_methods.png. Issue 5:
+the passive walker's RK4 steps per second with its jumps (target 5e5; ANDY
+ran jump and flow evaluation at 1.7e4), and the bouncing ball's run to its
+Zeno point. Every ratio is measured in this one run.
 
     python bench/run.py                      all sections (about 7 minutes)
-    python bench/run.py --only swing_bar     one section: chains, models, swing_bar, constraints
+    python bench/run.py --only swing_bar     one section: chains, models, swing_bar, constraints, hybrid
 """
 
 from __future__ import annotations
@@ -34,12 +36,12 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @njit(cache=False)
-def _rhs_loop(rhs_into, n, x, u, p, xdot, M, G):
+def _rhs_loop(rhs_into, n, x, u, p, d, xdot, M, G):
     """n right-hand-side evaluations at slowly moving states (so nothing is hoisted)."""
     acc = 0.0
     for i in range(n):
         x[0] += 1e-12
-        rhs_into(0.0, x, u, p, xdot, M, G)
+        rhs_into(0.0, x, u, p, d, 0, xdot, M, G)
         acc += xdot[-1]
     return acc
 
@@ -50,11 +52,12 @@ def rhs_microseconds(model, repeats=3, n=200_000) -> float:
     x = model.initial_state(p).copy()
     xdot = np.zeros(model.nx)
     M, G = np.zeros((model.nv, model.nv)), np.zeros(model.nv)
-    _rhs_loop(model.module.rhs_into, 10, x, u, p, xdot, M, G)
+    d = model.initial_discrete(p)
+    _rhs_loop(model.module.rhs_into, 10, x, u, p, d, xdot, M, G)
     best = np.inf
     for _ in range(repeats):
         tic = time.perf_counter()
-        _rhs_loop(model.module.rhs_into, n, x, u, p, xdot, M, G)
+        _rhs_loop(model.module.rhs_into, n, x, u, p, d, xdot, M, G)
         best = min(best, time.perf_counter() - tic)
     return 1e6 * best / n
 
@@ -244,7 +247,38 @@ def plot_ball_methods(runs: dict, ref, p: dict, path: Path) -> None:
     print(f"wrote {path.relative_to(ROOT)}")
 
 
-SECTIONS = ("chains", "models", "swing_bar", "constraints")
+ANDY_WALKER_STEPS_PER_SECOND = 1.7e4     # ANDY paper section 3.2: jump + flow evaluation
+
+
+def hybrid_benchmark(tmp: Path) -> None:
+    section("hybrid: passive walker (ANDY section 3.2) and bouncing ball")
+    model, result = andyc.compile_model(ROOT / "models" / "passive_walker.yaml", tmp / "hybrid_build", force=True)
+    t = result.timings
+    print(f"passive walker build: derive {t['derive']:.2f} s, generate {t['generate']:.2f} s, compile "
+          f"{t['compile']:.2f} s")
+    print(f"right-hand side (flow 1, 3 constraint rows): {rhs_microseconds(model):.3f} us per evaluation")
+    print("20 heel strikes (about 12.2 s at dt = 1e-3 s, 60 jumps); steps/s counts every RK4 step, the")
+    print("trial steps of event location included; best of 5:")
+    for method in ("rk4", "projection", "lagrange"):
+        andyc.simulate(model, 0.5, dt=1e-3, method=method, progress=False)
+        runs = [andyc.simulate(model, 30.0, dt=1e-3, method=method, every=1000, progress=False,
+                               stop_after={"strike_inner_foot": 10}) for _ in range(5)]
+        best = min(runs, key=lambda r: r.stats["wall_seconds"])
+        s = best.stats
+        steps = s["steps"] + s["event_trial_steps"]
+        sps = steps / s["wall_seconds"]
+        print(f"  {method:<10} {s['jumps']} jumps, {s['steps']} steps + {s['event_trial_steps']} trial steps in "
+              f"{s['wall_seconds'] * 1e3:.1f} ms: {sps:.3g} steps/s = {sps / ANDY_WALKER_STEPS_PER_SECOND:.1f}x "
+              f"ANDY's 1.7e4 (target >= 5e5)")
+    model, _ = andyc.compile_model(ROOT / "models" / "bouncing_ball.yaml", tmp / "hybrid_build")
+    andyc.simulate(model, 0.5, dt=1e-3, progress=False)
+    run = andyc.simulate(model, 10.0, dt=1e-3, progress=False)
+    t_inf = np.sqrt(2 / 9.81) * (1 + 2 * 0.8 / 0.2)
+    print(f"bouncing ball, rk4 dt = 1e-3 s: {run.stats['jumps']} bounces, stopped {t_inf - run.time[-1]:.2e} s "
+          f"before t_inf = {t_inf:.9f} s in {run.stats['wall_seconds'] * 1e3:.1f} ms: {run.status[:60]}...")
+
+
+SECTIONS = ("chains", "models", "swing_bar", "constraints", "hybrid")
 
 
 def main(argv=None):
@@ -264,6 +298,8 @@ def main(argv=None):
             swing_bar_benchmark(tmp)
         if "constraints" in only:
             constraints_benchmark(tmp)
+        if "hybrid" in only:
+            hybrid_benchmark(tmp)
 
 
 if __name__ == "__main__":

@@ -26,14 +26,14 @@ EPS = 1e-5
 def evaluate(model, t, x, p):
     u = model.input_defaults
     phi, c, A, kappa = np.empty(model.nh), np.empty(model.nc), np.zeros((model.nc, model.nv)), np.empty(model.nc)
-    model.module.constraints(t, x, u, p, phi, c, A, kappa)
+    model.module.constraints(t, x, u, p, model.initial_discrete(p), phi, c, A, kappa)
     return phi, c, A, kappa
 
 
 def path_rate(model, t, x, p):
     """dx/ds with the speeds held: coordinates move at v[:NQ], signals at their rates."""
     xdot = np.zeros(model.nx)
-    model.module.signal_rates(t, x, model.input_defaults, p, xdot)
+    model.module.signal_rates(t, x, model.input_defaults, p, model.initial_discrete(p), xdot)
     xdot[:model.nq] = x[model.nq:model.nq + model.nq]
     xdot[model.nq:model.nq + model.nv] = 0.0
     return xdot

@@ -73,7 +73,7 @@ def test_forces_and_torques_give_the_hand_derived_G(tmp_path, build_dir):
         expected = tau + L * F_across - L * np.sin(th) * P - m * g * L * np.cos(th)
         assert G[0] == pytest.approx(expected, rel=1e-12, abs=1e-12)
         # power of the loads = G_loads . v (gravity is in the energy, not the power)
-        assert model.module.power(0.0, x, u, model.parameter_defaults) == pytest.approx(
+        assert model.module.power(0.0, x, u, model.parameter_defaults, model.module.DISCRETE_DEFAULTS) == pytest.approx(
             (expected + m * g * L * np.cos(th)) * w, rel=1e-12, abs=1e-12)
 
 
@@ -88,11 +88,12 @@ def test_springs_and_potentials_are_minus_the_gradient_of_their_energy(tmp_path,
         q = rng.uniform(-1, 1, 2)
         x = np.concatenate([q, [0.0, 0.0]])
         G = model.module.generalized_force(0.0, x, u, p)
+        d = model.module.DISCRETE_DEFAULTS
         grad = np.zeros(2)
         for j in range(2):
             e = np.zeros(4)
             e[j] = h
-            grad[j] = (model.module.energy(0.0, x + e, u, p) - model.module.energy(0.0, x - e, u, p)) / (2 * h)
+            grad[j] = (model.module.energy(0.0, x + e, u, p, d) - model.module.energy(0.0, x - e, u, p, d)) / (2 * h)
         assert np.allclose(G, -grad, rtol=1e-7, atol=1e-7)
         assert np.linalg.norm(G) > 1e-3          # the springs do push here
 

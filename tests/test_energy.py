@@ -68,7 +68,7 @@ def frame_velocity(model, name, x, h=1e-6):
         for sign in (1, -1):
             xs = x.copy()
             xs[j] += sign * h
-            model.module.frame_positions(0.0, xs, u, p, out)
+            model.module.frame_positions(0.0, xs, u, p, model.initial_discrete(p), out)
             J[:, j] += sign * out[k] / (2 * h)
     return J @ x[nq:]
 
@@ -94,4 +94,4 @@ def test_generated_power_matches_independent_power(damped):
     model, run = damped
     p, u = model.parameter_defaults, model.input_defaults
     for x in run.state[::1000]:
-        assert model.module.power(0.0, x, u, p) == pytest.approx(damper_power(model, x), rel=1e-7)
+        assert model.module.power(0.0, x, u, p, model.initial_discrete(p)) == pytest.approx(damper_power(model, x), rel=1e-7)

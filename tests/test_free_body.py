@@ -60,7 +60,7 @@ def test_inertia_and_mass_are_what_the_test_assumes(model):
         x[model.state_names.index("block_qw")] = 1.0
         x[model.state_names.index(name)] = 1.0
         expected = I[k] / 2 if name in W else MASS / 2
-        assert model.module.energy(0.0, x, u, p) == pytest.approx(expected, rel=1e-14)
+        assert model.module.energy(0.0, x, u, p, model.initial_discrete(p)) == pytest.approx(expected, rel=1e-14)
     assert model.state_names == V + W + POS + QUAT           # no coordinates: speeds and signals only
     assert (model.nq, model.nv, model.ns) == (0, 6, 7)
 

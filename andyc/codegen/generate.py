@@ -36,6 +36,9 @@ class BuildResult:
     build_key: str
     timings: dict = field(default_factory=dict)     # seconds per stage
     operations: dict = field(default_factory=dict)  # function -> sympy op count
+    jumps_path: Path | None = None                  # the user's <name>_jumps.py, when the model has jumps
+    jumps_kept: bool = False                        # it existed and was left as it was
+    jumps_missing: list = field(default_factory=list)  # jumps without a function in a kept file
 
 
 def generator_fingerprint() -> str:
@@ -71,12 +74,10 @@ def existing_build_key(path: Path) -> str | None:
 def _unpack(model: SymbolicModel, used: set) -> list[str]:
     states = model.q + model.v + model.signals
     lines = [f"{s} = x[{i}]" for i, s in enumerate(states) if s in used]
-    for i, s in enumerate(model.parameters):
-        if s in used:
-            lines.append(f"{s} = p[{i}]")
-    for i, s in enumerate(model.inputs):
-        if s in used:
-            lines.append(f"{s} = u[{i}]")
+    for array, symbols in (("p", model.parameters), ("u", model.inputs), ("d", model.discrete)):
+        lines += [f"{s} = {array}[{i}]" for i, s in enumerate(symbols) if s in used]
+    nq = len(model.q)
+    lines += [f"{s} = xdot[{nq + i}]" for i, s in enumerate(model.hybrid.vdot) if s in used]
     return lines
 
 
@@ -84,6 +85,55 @@ def _function(model, pool, name, args, doc, outputs, returns=None):
     body = function_body(outputs, pool)
     return {"name": name, "args": args, "doc": doc, "unpack": _unpack(model, body.inputs),
             "lines": body.lines, "outputs": body.outputs, "returns": returns, "operations": body.operations}
+
+
+def _hybrid_functions(model: SymbolicModel, pool: dict) -> list:
+    """One guard, guard rate, enabling condition and reset function per jump; restitutions; flow inputs."""
+    nq, nv = len(model.q), model.dof
+    index = {**{c.name: f"x[{i}]" for i, c in enumerate(model.spec.coordinates)},
+             **{name: f"x[{nq + i}]" for i, name in enumerate(model.spec.speed_names)},
+             **{x.name: f"d[{i}]" for i, x in enumerate(model.spec.discrete)}}
+    out = []
+    for j in model.hybrid.jumps:
+        arrow = f"jump '{j.name}' ({model.hybrid.flows[j.source]} -> {model.hybrid.flows[j.target]})"
+        out += [
+            _function(model, pool, f"guard_{j.name}", "t, x, u, p, d", f"Guard of {arrow}.",
+                      [("g", j.guard)], returns="g"),
+            _function(model, pool, f"guard_rate_{j.name}", "t, x, u, p, d, xdot",
+                      f"d/dt of the guard of {arrow}, given xdot.", [("g", j.guard_rate)], returns="g"),
+            _function(model, pool, f"enabled_{j.name}", "t, x, u, p, d",
+                      f"Enabling condition of {arrow}: >= 0 where it may happen.", [("e", j.enabled)], returns="e"),
+            _function(model, pool, f"reset_{j.name}", "t, x, u, p, d",
+                      f"Resets of {arrow}, all from the values before the jump.",
+                      [(index[name], e) for name, e in j.resets], returns="None"),
+        ]
+    out.append(_function(model, pool, "restitution", "p, e", "Coefficient of restitution of each jump's impact.",
+                         [(f"e[{k}]", j.restitution) for k, j in enumerate(model.hybrid.jumps)]))
+    out.append(_function(model, pool, "flow_inputs", "p, U",
+                         "Input values a flow sets, into U (flows, inputs); other entries are left as they are.",
+                         [(f"U[{f}, {i}]", e) for f, inputs in enumerate(model.hybrid.flow_inputs)
+                          for i, e in inputs.items()]))
+    return out
+
+
+def _padded(rows: list[list[int]], width: int) -> str:
+    """A (len(rows), width) int64 array literal, -1 past each row's entries."""
+    return repr([r + [-1] * (width - len(r)) for r in rows])
+
+
+def _hybrid_context(model: SymbolicModel) -> dict:
+    h, nc = model.hybrid, model.constraints.nc
+    nh = model.constraints.nh
+    return {
+        "flows": h.flows, "initial_flow": h.initial,
+        "flow_rows": _padded(h.flow_rows, nc), "flow_nrows": repr([len(r) for r in h.flow_rows]),
+        "flow_nhrows": repr([sum(1 for i in r if i < nh) for r in h.flow_rows]),
+        "jumps": [{"name": j.name, "source": j.source, "target": j.target, "direction": j.direction,
+                   "priority": j.priority, "impact": bool(j.impact_rows),
+                   "source_name": h.flows[j.source], "target_name": h.flows[j.target]} for j in h.jumps],
+        "impact_rows": _padded([j.impact_rows for j in h.jumps], nc),
+        "impact_nrows": repr([len(j.impact_rows) for j in h.jumps]),
+    }
 
 
 def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
@@ -96,19 +146,19 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
     frames = list(model.frame_positions)
     cons = model.constraints
     functions = [
-        _function(model, pool, "dynamics", "t, x, u, p, M, G",
+        _function(model, pool, "dynamics", "t, x, u, p, d, M, G",
                   "Fill the mass matrix M (NV, NV) and generalized force G (NV,): M dv/dt = G (eq. 8).",
                   mass + [(f"G[{i}]", model.G[i]) for i in range(n)]),
-        _function(model, pool, "energy", "t, x, u, p",
+        _function(model, pool, "energy", "t, x, u, p, d",
                   "Total mechanical energy: kinetic + gravity + springs + potentials.",
                   [("e", model.energy)], returns="e"),
-        _function(model, pool, "power", "t, x, u, p",
+        _function(model, pool, "power", "t, x, u, p, d",
                   "Power of the non-conservative elements (forces, torques, dampers).",
                   [("w", model.power)], returns="w"),
-        _function(model, pool, "signal_rates", "t, x, u, p, xdot",
+        _function(model, pool, "signal_rates", "t, x, u, p, d, xdot",
                   "Rates of the nonholonomic signals (eq. 4) into xdot[NQ + NV:].",
                   [(f"xdot[{len(model.q) + n + i}]", r) for i, r in enumerate(model.signal_rates)]),
-        _function(model, pool, "constraints", "t, x, u, p, phi, c, A, kappa",
+        _function(model, pool, "constraints", "t, x, u, p, d, phi, c, A, kappa",
                   "Constraint residuals phi (NH,), velocity residuals c = A v + b (NC,), their Jacobian A "
                   "(NC, NV) and kappa (NC,), with dc/dt = A dv/dt + kappa (ANDY eq. 11).",
                   [(f"phi[{i}]", e) for i, e in enumerate(cons.phi)]
@@ -119,10 +169,10 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
                   "Soft-constraint gains K_s and K_d of each row (ANDY eq. 13-15), for the baumgarte method.",
                   [(f"ks[{i}]", e) for i, e in enumerate(cons.stiffness)]
                   + [(f"kd[{i}]", e) for i, e in enumerate(cons.damping)]),
-        _function(model, pool, "frame_positions", "t, x, u, p, out",
+        _function(model, pool, "frame_positions", "t, x, u, p, d, out",
                   "Origins of FRAMES in world coordinates into out (len(FRAMES), 3).",
                   [(f"out[{k}, {i}]", model.frame_positions[f][i]) for k, f in enumerate(frames) for i in range(3)]),
-    ]
+    ] + _hybrid_functions(model, pool)
     # M is symmetric: copy the upper triangle after it is written.
     functions[0]["outputs"] += [(t, str(src)) for t, src in mirror]
     initial = ([c.initial for c in spec.coordinates] + [c.velocity for c in spec.coordinates]
@@ -133,6 +183,8 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
     nx_before = len(model.q) + n
     quaternions = [nx_before + i for i, s in enumerate(spec.signals) if s.component == "qw"]
     unpack = [f"    {s} = p[{i}]" for i, s in enumerate(model.parameters) if s in init_syms]
+    discrete_syms = set().union(*(x.initial.free_symbols for x in spec.discrete))
+    discrete_unpack = [f"    {s} = p[{i}]" for i, s in enumerate(model.parameters) if s in discrete_syms]
     operations = {f["name"]: f["operations"] for f in functions}
     context = {
         "version": andyc.__version__, "source": Path(spec.file).name, "spec_sha256": spec.sha256,
@@ -147,26 +199,74 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         "inputs": list(spec.inputs),
         "input_defaults": repr([v for _, v in spec.inputs.values()]),
         "frames": frames, "operations": operations,
+        "frame_parents": [next(f.parent for f in spec.frames if f.name == name) for name in frames],
         "nh": cons.nh, "nc": cons.nc, "constraint_rows": cons.rows, "multipliers": cons.multipliers,
         "conserves_energy": spec.conserves_energy,
         "constraint_where": [[spec.source.line(w), format_path(w)] for c in spec.constraints for w in c.row_where],
         "initial": {"unpack": "\n".join(unpack), "state": values},
+        "initial_discrete": {"unpack": "\n".join(discrete_unpack),
+                             "values": [to_code(x.initial) for x in spec.discrete]},
+        "discrete": [x.name for x in spec.discrete],
+        **_hybrid_context(model),
         "functions": functions,
     }
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATES), keep_trailing_newline=True,
-                             undefined=jinja2.StrictUndefined)
-    return env.get_template("module.py.j2").render(**context), operations
+    return _environment().get_template("module.py.j2").render(**context), operations
+
+
+def _environment() -> jinja2.Environment:
+    return jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATES), keep_trailing_newline=True,
+                              undefined=jinja2.StrictUndefined)
+
+
+_DIRECTION = {-1: "falling", 0: "either way", 1: "rising"}
+
+
+def render_jumps(model: SymbolicModel) -> str:
+    """The user's jump template: one documented, empty function per jump."""
+    spec = model.spec
+    jumps = []
+    for j in spec.jumps:
+        w = j.written
+        resets = ", ".join(f"{k} := {v}" for k, v in (w.get("reset") or {}).items())
+        impact = w.get("impact", "none")
+        impact = impact if isinstance(impact, str) else f"restitution {impact['restitution']}"
+        enabled = w.get("enabled")
+        jumps.append({"name": j.name, "source_name": j.source, "target_name": j.target, "guard": w["guard"],
+                      "direction_name": _DIRECTION[j.direction],
+                      "enabled": " and ".join(enabled) if isinstance(enabled, list) else enabled,
+                      "applied": (f"resets {resets}" if resets else "no resets") + f"; impact {impact}"})
+    states = ([c.name for c in spec.coordinates] + spec.speed_names + [s.name for s in spec.signals])
+    return _environment().get_template("jumps.py.j2").render(
+        name=spec.name, version=andyc.__version__, source=Path(spec.file).name, jumps=jumps, states=states,
+        discrete=[x.name for x in spec.discrete], parameters=list(spec.parameters), inputs=list(spec.inputs))
+
+
+def jumps_path(out_dir, name: str) -> Path:
+    return Path(out_dir) / name / f"{name}_jumps.py"
+
+
+def _write(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".py.tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
 
 
 def generate(model: SymbolicModel, out_dir="build") -> BuildResult:
-    """Write the module for `model` into out_dir/<name>/ (always; see pipeline.build for skipping)."""
+    """Write the module for `model` into out_dir/<name>/ (always; see pipeline.build for skipping),
+    and the jump template <name>_jumps.py unless it exists (it is the user's)."""
     start = time.perf_counter()
     key = build_key(model.spec.sha256)
     source, operations = render(model, key)
     path = module_path(out_dir, model.spec.name)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".py.tmp")
-    tmp.write_text(source)
-    os.replace(tmp, path)
-    return BuildResult(model.spec.name, path, False, key,
-                       {"generate": time.perf_counter() - start}, operations)
+    _write(path, source)
+    result = BuildResult(model.spec.name, path, False, key, {"generate": time.perf_counter() - start}, operations)
+    if model.spec.jumps:
+        result.jumps_path = jumps_path(out_dir, model.spec.name)
+        if result.jumps_path.exists():
+            result.jumps_kept = True
+            text = result.jumps_path.read_text()
+            result.jumps_missing = [j.name for j in model.spec.jumps if f"def {j.name}(" not in text]
+        else:
+            _write(result.jumps_path, render_jumps(model))
+    return result

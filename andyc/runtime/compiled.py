@@ -43,6 +43,32 @@ class CompiledModel:
     conserves_energy: bool = False
     source: str = ""            # the model file's name
     constraint_where: tuple = ()  # (line, document path) of each row in the model file
+    discrete_names: tuple = ()
+    flow_names: tuple = ("default",)
+    initial_flow: int = 0
+    jump_names: tuple = ()
+    frame_parents: tuple = ()   # parent of each frame in frame_names
+
+    @property
+    def nd(self) -> int:
+        return len(self.discrete_names)
+
+    @property
+    def nf(self) -> int:
+        return len(self.flow_names)
+
+    @property
+    def nj(self) -> int:
+        return len(self.jump_names)
+
+    def initial_discrete(self, p: np.ndarray) -> np.ndarray:
+        return self.module.initial_discrete(p)
+
+    def flow_inputs(self, u: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """(flows, inputs): the run's inputs u, overridden where a flow sets its own."""
+        U = np.tile(np.asarray(u, dtype=np.float64), (self.nf, 1))
+        self.module.flow_inputs(p, U)
+        return U
 
     def parameters(self, overrides: dict | None = None) -> np.ndarray:
         return _with_overrides(self.parameter_names, self.parameter_defaults, overrides, "parameter")
@@ -70,15 +96,23 @@ def _with_overrides(names, defaults, overrides, kind) -> np.ndarray:
 
 @dataclass
 class Workspace:
-    """Arrays the integrators write into: M, G, stage derivatives, a scratch state."""
+    """Arrays the integrators write into: M, G, stage derivatives, scratch states, guard values."""
     M: np.ndarray
     G: np.ndarray
-    k: np.ndarray      # (4, nx) RK stages
-    x_tmp: np.ndarray  # (nx,)
+    k: np.ndarray        # (4, nx) RK stages
+    x_tmp: np.ndarray    # (nx,) stage state
+    x_step: np.ndarray   # (nx,) a step's end
+    x_far: np.ndarray    # (nx,) event location: the bracket's far end
+    x_trial: np.ndarray  # (nx,) event location: a trial state
+    x_event: np.ndarray  # (nx,) the state just before a jump
+    xdot: np.ndarray     # (nx,)
+    g0: np.ndarray       # (nj,) guard values at the current step's start
 
     @classmethod
     def for_model(cls, model: CompiledModel) -> "Workspace":
-        return cls(np.zeros((model.nv, model.nv)), np.zeros(model.nv), np.zeros((4, model.nx)), np.zeros(model.nx))
+        nx = model.nx
+        return cls(np.zeros((model.nv, model.nv)), np.zeros(model.nv), np.zeros((4, nx)),
+                   *(np.zeros(nx) for _ in range(6)), np.zeros(model.nj))
 
 
 def load_compiled(path) -> CompiledModel:
@@ -99,14 +133,19 @@ def load_compiled(path) -> CompiledModel:
         frame_names=tuple(module.FRAMES), nh=module.NH, nc=module.NC,
         multiplier_names=tuple(module.MULTIPLIERS), constraint_rows=tuple(module.CONSTRAINT_ROWS),
         conserves_energy=bool(module.CONSERVES_ENERGY), source=module.SOURCE,
-        constraint_where=tuple(tuple(w) for w in module.CONSTRAINT_WHERE))
+        constraint_where=tuple(tuple(w) for w in module.CONSTRAINT_WHERE),
+        discrete_names=tuple(module.DISCRETE_STATES), flow_names=tuple(module.FLOWS),
+        initial_flow=int(module.INITIAL_FLOW), jump_names=tuple(module.JUMPS),
+        frame_parents=tuple(module.FRAME_PARENTS))
     # Call each function once so Numba compiles now, not inside a timed run.
     p, u = model.parameter_defaults, model.input_defaults
     x = model.initial_state(p)
+    d = model.initial_discrete(p)
     ws = Workspace.for_model(model)
-    module.rhs_into(0.0, x, u, p, ws.k[0], ws.M, ws.G)
+    flow = model.initial_flow
+    module.rhs_into(0.0, x, u, p, d, flow, ws.k[0], ws.M, ws.G)
     module.normalize(x.copy())
-    module.energy(0.0, x, u, p)
-    module.power(0.0, x, u, p)
-    module.frame_positions(0.0, x, u, p, np.zeros((len(model.frame_names), 3)))
+    module.energy(0.0, x, u, p, d)
+    module.power(0.0, x, u, p, d)
+    module.frame_positions(0.0, x, u, p, d, np.zeros((len(model.frame_names), 3)))
     return model

@@ -36,11 +36,27 @@ class Run:
     residual_position: np.ndarray | None = None      # (N, nh)
     residual_velocity: np.ndarray | None = None      # (N, nc)
     energy_correction: bool = False
+    flow: np.ndarray | None = None                   # (N,) index of the active flow
+    flow_names: list = field(default_factory=lambda: ["default"])
+    discrete_names: list = field(default_factory=list)
+    discrete: np.ndarray | None = None               # (N, nd) discrete states
+    events: dict = field(default_factory=dict)       # EVENT_COLUMNS -> arrays, one entry per jump
+    jump_names: list = field(default_factory=list)
+    frame_parents: dict = field(default_factory=dict)  # logged frame -> its parent frame (stick figures)
     andyc_version: str = andyc.__version__
 
     def __post_init__(self):
         n = self.time.shape[0]
         nc = len(self.multiplier_names)
+        if self.flow is None:
+            self.flow = np.zeros(n, dtype=np.int64)
+        if self.discrete is None:
+            self.discrete = np.zeros((n, len(self.discrete_names)))
+        nx = self.state.shape[1]
+        empty = {"time": np.zeros(0), "jump": np.zeros(0, np.int32), "from_flow": np.zeros(0, np.int32),
+                 "to_flow": np.zeros(0, np.int32), "state_before": np.zeros((0, nx)),
+                 "state_after": np.zeros((0, nx)), "discrete_after": np.zeros((0, len(self.discrete_names)))}
+        self.events = {**empty, **self.events}
         if self.multipliers is None:
             self.multipliers = np.zeros((n, nc))
         if self.residual_velocity is None:
@@ -57,14 +73,21 @@ class Run:
         return self.status == "finished"
 
     def column(self, name: str) -> np.ndarray:
+        if name in self.discrete_names:
+            return self.discrete[:, self.discrete_names.index(name)]
         return self.state[:, self.state_names.index(name)]
+
+    def event_names(self) -> list:
+        """Name of the jump of each event."""
+        return [self.jump_names[k] for k in self.events["jump"]]
 
     def attributes(self) -> dict:
         return {"model": self.model, "spec_sha256": self.spec_sha256, "andyc_version": self.andyc_version,
                 "method": self.method, "dt": self.dt, "nq": self.nq, "nv": self.nv, "rtol": self.rtol, "atol": self.atol,
                 "parameters": json.dumps(self.parameters), "inputs": json.dumps(self.inputs),
                 "t_end": self.t_end, "status": self.status, "stats": json.dumps(self.stats),
-                "energy_correction": self.energy_correction}
+                "energy_correction": self.energy_correction, "flow_names": json.dumps(self.flow_names),
+                "jump_names": json.dumps(self.jump_names), "frame_parents": json.dumps(self.frame_parents)}
 
     def save(self, path) -> Path:
         path = Path(path)
@@ -88,7 +111,10 @@ def write_h5(run: Run, path: Path) -> None:
         f["time"] = run.time
         f["state"] = run.state
         f["state"].attrs["names"] = run.state_names
-        f["flow"] = np.zeros(n, dtype=np.int32)
+        f["flow"] = run.flow.astype(np.int32)
+        f["flow"].attrs["names"] = run.flow_names
+        f["discrete"] = run.discrete
+        f["discrete"].attrs["names"] = run.discrete_names
         f["multipliers"] = run.multipliers
         f["multipliers"].attrs["names"] = run.multiplier_names
         f["residual/position"] = run.residual_position
@@ -96,9 +122,14 @@ def write_h5(run: Run, path: Path) -> None:
         f["energy"] = run.energy
         for name, xyz in run.frames.items():
             f[f"frames/{name}"] = xyz
-        events = np.zeros(0, dtype=[("time", "f8"), ("jump", h5py.string_dtype()),
-                                    ("from_flow", "i4"), ("to_flow", "i4")])
-        f.create_dataset("events", data=events, maxshape=(None,))
+        ev = run.events
+        table = np.zeros(len(ev["time"]), dtype=[("time", "f8"), ("jump", h5py.string_dtype()),
+                                                 ("from_flow", "i4"), ("to_flow", "i4")])
+        table["time"], table["from_flow"], table["to_flow"] = ev["time"], ev["from_flow"], ev["to_flow"]
+        table["jump"] = run.event_names()
+        f.create_dataset("events", data=table, maxshape=(None,))
+        for key in ("state_before", "state_after", "discrete_after"):
+            f[f"event_states/{key}"] = ev[key]
 
 
 def read_h5(path) -> Run:
@@ -107,6 +138,13 @@ def read_h5(path) -> Run:
     with h5py.File(path, "r") as f:
         a = dict(f.attrs)
         frames = {name: f["frames"][name][()] for name in f["frames"]} if "frames" in f else {}
+        jump_names = json.loads(a.get("jump_names", "[]"))
+        table = f["events"][()]
+        events = {"time": table["time"], "jump": np.array([jump_names.index(j.decode() if isinstance(j, bytes) else j)
+                                                           for j in table["jump"]], dtype=np.int32),
+                  "from_flow": table["from_flow"], "to_flow": table["to_flow"]}
+        if "event_states" in f:
+            events.update({key: f["event_states"][key][()] for key in f["event_states"]})
         return Run(model=a["model"], spec_sha256=a["spec_sha256"], method=a["method"], dt=float(a["dt"]),
                    nq=int(a["nq"]), nv=int(a["nv"]),
                    rtol=float(a["rtol"]), atol=float(a["atol"]), t_end=float(a["t_end"]),
@@ -117,15 +155,20 @@ def read_h5(path) -> Run:
                    multiplier_names=[str(s) for s in f["multipliers"].attrs["names"]],
                    multipliers=f["multipliers"][()], residual_position=f["residual/position"][()],
                    residual_velocity=f["residual/velocity"][()],
-                   energy_correction=bool(a.get("energy_correction", False)))
+                   energy_correction=bool(a.get("energy_correction", False)),
+                   flow=f["flow"][()].astype(np.int64), flow_names=json.loads(a.get("flow_names", '["default"]')),
+                   discrete_names=[str(s) for s in f["discrete"].attrs["names"]] if "discrete" in f else [],
+                   discrete=f["discrete"][()] if "discrete" in f else None, events=events, jump_names=jump_names,
+                   frame_parents=json.loads(a.get("frame_parents", "{}")))
 
 
 def write_csv(run: Run, path: Path) -> None:
     header = [f"# {k}: {v}" for k, v in run.attributes().items()]
-    columns = (["time"] + list(run.state_names) + ["flow", "energy"] + list(run.multiplier_names)
+    columns = (["time"] + list(run.state_names) + list(run.discrete_names) + ["flow", "energy"]
+               + list(run.multiplier_names)
                + [f"phi_{m}" for m in run.multiplier_names[:run.residual_position.shape[1]]]
                + [f"c_{m}" for m in run.multiplier_names])
-    data = [run.time[:, None], run.state, np.zeros((run.time.shape[0], 1)), run.energy[:, None],
+    data = [run.time[:, None], run.state, run.discrete, run.flow[:, None], run.energy[:, None],
             run.multipliers, run.residual_position, run.residual_velocity]
     for name, xyz in run.frames.items():
         columns += [f"{name}.x", f"{name}.y", f"{name}.z"]
@@ -133,3 +176,24 @@ def write_csv(run: Run, path: Path) -> None:
     with open(path, "w") as fh:
         fh.write("\n".join(header) + "\n")
         np.savetxt(fh, np.hstack(data), delimiter=",", header=",".join(columns), comments="", fmt="%.17g")
+    if run.jump_names:
+        write_events_csv(run, events_csv_path(path))
+
+
+def events_csv_path(path) -> Path:
+    """The events table beside a CSV run file: run.csv -> run.events.csv."""
+    path = Path(path)
+    return path.with_name(path.stem + ".events.csv")
+
+
+def write_events_csv(run: Run, path: Path) -> None:
+    """One line per jump: time, jump, from, to, then the state and discrete states just after it."""
+    ev = run.events
+    with open(path, "w") as fh:
+        fh.write(",".join(["time", "jump", "from_flow", "to_flow"] + [f"{n}+" for n in run.state_names]
+                          + [f"{n}+" for n in run.discrete_names]) + "\n")
+        for r in range(len(ev["time"])):
+            values = [repr(float(ev["time"][r])), run.jump_names[ev["jump"][r]],
+                      run.flow_names[ev["from_flow"][r]], run.flow_names[ev["to_flow"][r]]]
+            values += [repr(float(v)) for v in ev["state_after"][r]] + [repr(float(v)) for v in ev["discrete_after"][r]]
+            fh.write(",".join(values) + "\n")

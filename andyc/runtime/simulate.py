@@ -1,6 +1,6 @@
 """simulate(): one entry point over every integrator.
 
-    rk4                fixed step, compiled loop (andyc.runtime.rk4); constraint
+    rk4                fixed step, the compiled loop of the generated module; constraint
                        forces from a pseudo-inverse, no drift correction
     projection         rk4, then the Braun & Goldfarb position and velocity
                        corrections after every step (and energy, when the model
@@ -23,22 +23,24 @@ from __future__ import annotations
 import math
 import sys
 import time
+import traceback
+from pathlib import Path
 
 import numpy as np
 from scipy import integrate
 
 from andyc.errors import SimulationError
-from andyc.runtime import rk4
 from andyc.runtime.compiled import CompiledModel, Workspace
 from andyc.runtime.run import Run
 
+OK, NONFINITE, SINGULAR_MASS, DEPENDENT = 0, 1, 2, 3     # statuses, as in the generated module
+IDEAL, LAGRANGE, BAUMGARTE = 0, 1, 2                   # how constraint forces are found, as there
 SCIPY_METHODS = {"DOP853": integrate.DOP853, "Radau": integrate.Radau, "LSODA": integrate.LSODA,
                  "RK45": integrate.RK45, "BDF": integrate.BDF}
 FIXED_STEP = ("rk4", "projection", "lagrange", "baumgarte")
 METHODS = FIXED_STEP + tuple(SCIPY_METHODS)
 INIT = ("check", "project", "as-is")
-_RHS = {"rk4": "rhs_into", "projection": "rhs_into", "lagrange": "rhs_lagrange_into",
-        "baumgarte": "rhs_baumgarte_into"}
+_MODE = {"rk4": IDEAL, "projection": IDEAL, "lagrange": LAGRANGE, "baumgarte": BAUMGARTE}
 
 
 class Progress:
@@ -69,7 +71,9 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
              parameters: dict | None = None, inputs: dict | None = None, x0=None, every: int = 1,
              frames=None, rtol: float = 1e-8, atol: float = 1e-10, progress: bool | None = None,
              normalize: bool = True, energy_correction: bool | None = None, energy_tol: float = 1e-6,
-             init: str = "check", init_tol: float = 1e-6) -> Run:
+             init: str = "check", init_tol: float = 1e-6, d0=None, flow0: str | int | None = None,
+             event_tol: float = 1e-12, max_instant_jumps: int = 100, zeno_tol: float = 1e-6,
+             stop_after: dict | None = None) -> Run:
     """Integrate `model` from t = 0 to t_end and return the logged Run.
 
     dt is the step of rk4 and the output spacing of the adaptive methods;
@@ -80,6 +84,15 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     energy_correction: the projection method's energy correction (Braun &
     Goldfarb eq. 5-6, applied when 2T > energy_tol); default on when the
     model declares energy conserved. init, init_tol: see the module docstring.
+
+    Hybrid models: x0, d0 and flow0 (a name or index) give the initial state,
+    discrete states and flow (default the model's). Guard crossings are located
+    to event_tol seconds relative; the run stops, keeping its samples, after
+    max_instant_jumps jumps at one instant or when the jump times accumulate
+    (Zeno: intervals shrinking geometrically, the accumulation point less than
+    zeno_tol seconds ahead). stop_after {jump name: n} ends the run (status
+    "finished") right after the n-th occurrence of that jump, with the state
+    just after it as the last sample.
     """
     if method not in METHODS:
         raise SimulationError(f"unknown method '{method}'; available: {', '.join(METHODS)}")
@@ -98,105 +111,250 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     x = np.array(model.initial_state(p) if x0 is None else x0, dtype=np.float64)
     if x.shape != (model.nx,):
         raise SimulationError(f"initial state has shape {x.shape}, expected ({model.nx},)")
+    d = np.array(model.initial_discrete(p) if d0 is None else d0, dtype=np.float64)
+    if d.shape != (model.nd,):
+        raise SimulationError(f"initial discrete states have shape {d.shape}, expected ({model.nd},)")
+    flow = _flow_index(model, flow0)
+    U = model.flow_inputs(u, p)
+    events = EventLog(model, event_tol, max_instant_jumps, zeno_tol, stop_after)
     frame_names = _frame_selection(model, frames)
-    initial = consistent_initial_state(model, x, u, p, init, init_tol) if model.nc else {}
+    initial = consistent_initial_state(model, x, U[flow], p, d, flow, init, init_tol) if model.nc else {}
     if method in ("lagrange", "baumgarte") and model.nc:
-        _require_independent_rows(model, method, x, u, p)
+        _require_independent_rows(model, method, x, U[flow], p, d, flow)
     bar = Progress(f"{model.name} {method}", t_end, progress)
     start = time.perf_counter()
     try:
         if method in FIXED_STEP:
-            rhs = getattr(model.module, _RHS[method] if model.nc else "rhs_into")
-            constrain = method == "projection" and model.nc > 0
-            etol = energy_tol if energy_correction else -1.0
-            e0 = model.module.energy(0.0, x, u, p)
-            project = constrain or etol >= 0 or (normalize and bool(model.quaternions))
-            t_log, x_log, status, stats = _run_rk4(model, rhs, x, u, p, t_end, dt, every, bar,
-                                                   (project, constrain, e0, etol))
+            log, status, stats = _run_rk4(model, method, x, U, p, d, flow, t_end, dt, every, bar, events,
+                                          energy_correction, energy_tol, normalize)
         else:
-            t_log, x_log, status, stats = _run_scipy(model, method, x, u, p, t_end, dt * every, rtol, atol, bar)
+            log, status, stats = _run_scipy(model, method, x, U, p, d, flow, t_end, dt * every, rtol, atol, bar,
+                                            events)
     finally:
         bar.close()
     stats["wall_seconds"] = time.perf_counter() - start
+    stats["jumps"] = len(events.times)
     stats.update(initial)
-    energy = np.empty(t_log.shape[0])
-    rk4.evaluate_energy(model.module.energy, t_log, x_log, u, p, energy)
+    t_log, x_log, f_log, d_log = log
     n = t_log.shape[0]
+    energy = np.empty(n)
+    model.module.evaluate_energy(t_log, x_log, U, p, d_log, f_log, energy)
     phi, c, lam = np.empty((n, model.nh)), np.empty((n, model.nc)), np.empty((n, model.nc))
     if model.nc:
-        rk4.evaluate_constraints(model.module.constraints, model.module.multipliers, t_log, x_log, u, p,
-                                 phi, c, lam, np.empty((model.nv, model.nv)), np.empty(model.nv))
+        model.module.evaluate_constraints(t_log, x_log, U, p, d_log, f_log, phi, c, lam,
+                                          np.empty((model.nv, model.nv)), np.empty(model.nv))
     frames_out = {}
     if frame_names:
-        xyz = np.empty((t_log.shape[0], len(model.frame_names), 3))
-        rk4.evaluate_frames(model.module.frame_positions, t_log, x_log, u, p, xyz)
+        xyz = np.empty((n, len(model.frame_names), 3))
+        model.module.evaluate_frames(t_log, x_log, U, p, d_log, f_log, xyz)
         frames_out = {name: xyz[:, model.frame_names.index(name)] for name in frame_names}
     return Run(model=model.name, spec_sha256=model.spec_sha256, method=method, dt=dt, nq=model.nq, nv=model.nv,
-               rtol=rtol if method != "rk4" else 0.0, atol=atol if method != "rk4" else 0.0, t_end=t_end,
-               parameters=dict(zip(model.parameter_names, map(float, p))),
+               rtol=rtol if method not in FIXED_STEP else 0.0, atol=atol if method not in FIXED_STEP else 0.0,
+               t_end=t_end, parameters=dict(zip(model.parameter_names, map(float, p))),
                inputs=dict(zip(model.input_names, map(float, u))), state_names=list(model.state_names),
                time=t_log, state=x_log, energy=energy, frames=frames_out, status=status, stats=stats,
                multiplier_names=list(model.multiplier_names), multipliers=lam, residual_position=phi,
-               residual_velocity=c, energy_correction=bool(energy_correction))
+               residual_velocity=c, energy_correction=bool(energy_correction),
+               flow=f_log, flow_names=list(model.flow_names), discrete_names=list(model.discrete_names),
+               discrete=d_log, events=events.table(), jump_names=list(model.jump_names),
+               frame_parents={name: model.frame_parents[model.frame_names.index(name)] for name in frame_names})
 
 
-def constraint_residuals(model: CompiledModel, t: float, x, u, p):
-    """(phi, c): holonomic residuals (NH,) and velocity-level residuals (NC,) at (t, x)."""
+def _flow_index(model: CompiledModel, flow) -> int:
+    if flow is None:
+        return model.initial_flow
+    if isinstance(flow, str):
+        if flow not in model.flow_names:
+            raise SimulationError(f"unknown flow '{flow}'; flows of {model.name}: {', '.join(model.flow_names)}")
+        return model.flow_names.index(flow)
+    if not 0 <= int(flow) < model.nf:
+        raise SimulationError(f"flow index {flow} out of range; {model.name} has {model.nf} flows")
+    return int(flow)
+
+
+def constraint_residuals(model: CompiledModel, t: float, x, u, p, d=None, flow=None):
+    """(phi, c) of the flow's active rows: holonomic residuals and velocity-level residuals at (t, x)."""
+    d = model.initial_discrete(p) if d is None else d
+    flow = model.initial_flow if flow is None else flow
     phi, c = np.empty(model.nh), np.empty(model.nc)
-    model.module.constraints(t, x, u, p, phi, c, np.empty((model.nc, model.nv)), np.empty(model.nc))
-    return phi, c
+    model.module.constraints(t, x, u, p, d, phi, c, np.empty((model.nc, model.nv)), np.empty(model.nc))
+    rows = list(model.module.FLOW_ROWS[flow, :model.module.FLOW_NROWS[flow]])
+    return phi[[r for r in rows if r < model.nh]], c[rows]
 
 
-def _require_independent_rows(model: CompiledModel, method: str, x, u, p) -> None:
+def _active_rows(model: CompiledModel, flow: int) -> list:
+    return [int(r) for r in model.module.FLOW_ROWS[flow, :model.module.FLOW_NROWS[flow]]]
+
+
+def _require_independent_rows(model: CompiledModel, method: str, x, u, p, d, flow) -> None:
     """Multipliers (ANDY eq. 12) need independent rows; name the first row that is not."""
     A = np.zeros((model.nc, model.nv))
-    model.module.constraints(0.0, x, u, p, np.empty(model.nh), np.empty(model.nc), A, np.empty(model.nc))
-    tol = 1e-8 * max(np.linalg.norm(A, 2), 1e-300)
-    for k in range(model.nc):
+    model.module.constraints(0.0, x, u, p, d, np.empty(model.nh), np.empty(model.nc), A, np.empty(model.nc))
+    rows = _active_rows(model, flow)
+    A = A[rows]
+    tol = 1e-8 * max(np.linalg.norm(A, 2) if A.size else 0.0, 1e-300)
+    for k in range(len(rows)):
         if np.linalg.matrix_rank(A[:k + 1], tol=tol) <= k:
-            earlier = sorted(set(model.constraint_rows[:k]))
+            row = rows[k]
+            earlier = sorted({model.constraint_rows[r] for r in rows[:k]})
             raise SimulationError(
-                f"{model.row_location(k)}: row {k} of the constraints (in '{model.constraint_rows[k]}') is a "
+                f"{model.row_location(row)}: row {row} of the constraints (in '{model.constraint_rows[row]}') is a "
                 f"combination of earlier rows (in {', '.join(repr(e) for e in earlier)}) at the initial state: the "
                 f"constraints are redundant or the pose is singular, so the {method} method's multipliers are not "
                 f"unique; remove the redundant constraint, or use --method projection, which allows them")
 
 
-def consistent_initial_state(model: CompiledModel, x, u, p, init: str, init_tol: float) -> dict:
+def consistent_initial_state(model: CompiledModel, x, u, p, d, flow, init: str, init_tol: float) -> dict:
     """Measure (and with init="project", remove) the initial state's constraint residuals.
 
     Projection repeats the Braun & Goldfarb position and velocity corrections
     (the smallest change in the mass-matrix metric) until the residuals are
     at round-off. x is changed in place; returns the figures for run stats.
     """
-    phi, c = constraint_residuals(model, 0.0, x, u, p)
+    phi, c = constraint_residuals(model, 0.0, x, u, p, d, flow)
     out = {"initial_position_residual": float(np.max(np.abs(phi), initial=0.0)),
            "initial_velocity_residual": float(np.max(np.abs(c), initial=0.0))}
     worst = max(out.values())
     if init == "as-is" or worst <= (init_tol if init == "check" else 0.0):
         return out
     if init == "check":
-        rows = np.concatenate([np.abs(phi), np.abs(c)])
-        k = int(np.argmax(rows))
-        row = k if k < model.nh else k - model.nh
-        level = "position" if k < model.nh else "velocity"
+        rows = _active_rows(model, flow)
+        values = np.concatenate([np.abs(phi), np.abs(c)])
+        k = int(np.argmax(values))
+        row = rows[k] if k < phi.shape[0] else rows[k - phi.shape[0]]
+        level = "position" if k < phi.shape[0] else "velocity"
         raise SimulationError(
             f"{model.row_location(row)}: the initial state is off the constraint manifold: largest residual "
-            f"{rows[k]:.3g} at the {level} level (constraint '{model.constraint_rows[row]}'; all rows: position "
+            f"{values[k]:.3g} at the {level} level (constraint '{model.constraint_rows[row]}'; all rows: position "
             f"{out['initial_position_residual']:.3g}, velocity {out['initial_velocity_residual']:.3g}), past the bound "
             f"{init_tol:g}; fix the initial values, or use --init project to move the state onto the manifold "
             f"(the smallest change in the mass-matrix metric), or --init as-is to start from it anyway")
     M, G = np.empty((model.nv, model.nv)), np.empty(model.nv)
     for _ in range(50):
-        if model.module.project(0.0, x, u, p, True, 0.0, -1.0, M, G) != rk4.OK:
+        if model.module.project(0.0, x, u, p, d, flow, True, 0.0, -1.0, M, G) != OK:
             raise SimulationError("cannot project the initial state: the mass matrix is not positive definite there")
-        phi, c = constraint_residuals(model, 0.0, x, u, p)
+        phi, c = constraint_residuals(model, 0.0, x, u, p, d, flow)
         if max(np.max(np.abs(phi), initial=0.0), np.max(np.abs(c), initial=0.0)) <= 1e-13 * max(1.0, np.abs(x).max()):
             out["initial_projection"] = float(worst)
             return out
     raise SimulationError(f"cannot project the initial state onto the constraint manifold (residuals still "
                           f"{np.max(np.abs(phi), initial=0.0):.3g}, {np.max(np.abs(c), initial=0.0):.3g} after 50 "
                           f"corrections); the constraints may have no solution near it: check the initial values")
+
+
+class EventLog:
+    """The jumps of a run, and the three reasons a run stops at one.
+
+    record() logs a jump and returns why the run must stop, or None:
+      - more than max_instant_jumps jumps at one instant (time not advancing
+        by more than the event tolerance), a loop such as a -> b -> a;
+      - Zeno: the last ZENO_WINDOW intervals between jumps each shrink, and
+        the geometric tail they predict, dt_last r / (1 - r) with r the last
+        ratio, puts the accumulation point less than zeno_tol ahead;
+      - stop_after: the n-th occurrence of a named jump (the run finishes).
+    """
+    ZENO_WINDOW = 8
+
+    def __init__(self, model: CompiledModel, event_tol: float, max_instant: int, zeno_tol: float,
+                 stop_after: dict | None):
+        self.model, self.event_tol, self.max_instant, self.zeno_tol = model, event_tol, max_instant, zeno_tol
+        self.stop_after = {}
+        for name, count in (stop_after or {}).items():
+            if name not in model.jump_names:
+                raise SimulationError(f"unknown jump '{name}' in stop_after; jumps of {model.name}: "
+                                      f"{', '.join(model.jump_names) or 'none'}")
+            self.stop_after[model.jump_names.index(name)] = int(count)
+        self.times, self.jumps, self.sources, self.targets = [], [], [], []
+        self.before, self.after, self.discrete = [], [], []
+        self.instant = 0
+        self.finished = False           # stopped by stop_after, not by a failure
+
+    def record(self, t, k, x_before, x_after, d_after) -> str | None:
+        jumps = self.model.jump_names
+        same = bool(self.times) and t - self.times[-1] <= self.event_tol * max(1.0, abs(t))
+        self.instant = self.instant + 1 if same else 1
+        self.times.append(float(t))
+        self.jumps.append(int(k))
+        self.sources.append(int(self.model.module.JUMP_SOURCE[k]))
+        self.targets.append(int(self.model.module.JUMP_TARGET[k]))
+        self.before.append(np.array(x_before))
+        self.after.append(np.array(x_after))
+        self.discrete.append(np.array(d_after))
+        if self.instant > self.max_instant:
+            loop = " -> ".join(jumps[j] for j in self.jumps[-min(6, len(self.jumps)):])
+            return (f"stopped: {self.instant} jumps at t = {t:.12g} s without time advancing (last: {loop}), past "
+                    f"the limit of {self.max_instant}: the guards of these jumps hold again right after each other; "
+                    f"check their directions, enabling conditions and resets")
+        zeno = self.zeno()
+        if zeno is not None:
+            t_inf, ratio = zeno
+            return (f"stopped: Zeno behaviour: the times of jump '{jumps[k]}' accumulate at t = {t_inf:.12g} s "
+                    f"(intervals shrinking by a factor {ratio:.6g} per jump over the last {self.ZENO_WINDOW}; "
+                    f"{len(self.times)} jumps, the last at t = {t:.12g} s, {t_inf - t:.3g} s before the "
+                    f"accumulation point)")
+        if self.stop_after.get(k) is not None and self.jumps.count(k) >= self.stop_after[k]:
+            self.finished = True
+            return "finished"
+        return None
+
+    def zeno(self):
+        """(accumulation time, ratio) when the last jump intervals shrink towards a point within zeno_tol."""
+        n = self.ZENO_WINDOW
+        if len(self.times) < n + 2:
+            return None
+        dts = np.diff(self.times[-(n + 2):])
+        if not np.all(dts > 0) or not np.all(dts[1:] < dts[:-1]):
+            return None
+        ratio = dts[-1] / dts[-2]
+        t_inf = self.times[-1] + dts[-1] * ratio / (1.0 - ratio)
+        return (t_inf, ratio) if t_inf - self.times[-1] < self.zeno_tol else None
+
+    def table(self) -> dict:
+        n, nx, nd = len(self.times), self.model.nx, self.model.nd
+        return {"time": np.array(self.times), "jump": np.array(self.jumps, dtype=np.int32),
+                "from_flow": np.array(self.sources, dtype=np.int32), "to_flow": np.array(self.targets, dtype=np.int32),
+                "state_before": np.array(self.before).reshape(n, nx), "state_after": np.array(self.after).reshape(n, nx),
+                "discrete_after": np.array(self.discrete).reshape(n, nd)}
+
+
+def user_jump(model: CompiledModel, k, t, x, u, p, d) -> str | None:
+    """Run the user's function of jump k (<name>_jumps.py); a stop message if it fails."""
+    try:
+        model.module.user_jump(k, t, x, u, p, d)
+    except Exception as exc:        # the user's code: report it, keep the run's data
+        path = Path(model.module.__file__).with_name(f"{model.name}_jumps.py")
+        line = next((f.lineno for f in reversed(traceback.extract_tb(exc.__traceback__))
+                     if Path(f.filename) == path), None)
+        return (f"stopped: {path}{f':{line}' if line else ''}: the function of jump '{model.jump_names[k]}' raised "
+                f"{type(exc).__name__}: {exc} at t = {t:.9g} s")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(d))):
+        return (f"stopped: the function of jump '{model.jump_names[k]}' in {model.name}_jumps.py left the state or "
+                f"the discrete states non-finite at t = {t:.9g} s")
+    return None
+
+
+def apply_jump(model: CompiledModel, k, t, x, U, p, d, source, ws: Workspace) -> str | None:
+    """Jump k at t from flow `source` (x, d in place): resets and impact, then the user's function."""
+    status = model.module.jump(k, t, x, U[source], p, d, ws.M, ws.G)
+    if status != OK:
+        return f"stopped: {_STOPPED[status]} in jump '{model.jump_names[k]}' at t = {t:.9g} s"
+    return user_jump(model, k, t, x, U[source], p, d)
+
+
+def follow_instant_jumps(model: CompiledModel, t, x, U, p, d, flow, events: EventLog, ws: Workspace, mode):
+    """Apply the jumps that happen at once at (t, x), in priority order. Returns (flow, stop message or None)."""
+    module = model.module
+    while model.nj:
+        k = module.instant(mode, t, x, U[flow], p, d, flow, ws.xdot, ws.M, ws.G)
+        if k < 0:
+            break
+        before = x.copy()
+        stop = apply_jump(model, k, t, x, U, p, d, flow, ws)
+        flow = int(module.JUMP_TARGET[k])
+        stop = stop or events.record(t, k, before, x, d)
+        if stop is not None:
+            return flow, stop
+    return flow, None
 
 
 def _frame_selection(model: CompiledModel, frames) -> list:
@@ -211,53 +369,85 @@ def _frame_selection(model: CompiledModel, frames) -> list:
     return names
 
 
-_STOPPED = {rk4.NONFINITE: "the state became non-finite (NaN or Inf)",
-            rk4.SINGULAR_MASS: "the mass matrix is not positive definite",
-            rk4.DEPENDENT: "the constraint rows are linearly dependent (redundant constraints, or a singular "
+_STOPPED = {NONFINITE: "the state became non-finite (NaN or Inf)",
+            SINGULAR_MASS: "the mass matrix is not positive definite",
+            DEPENDENT: "the constraint rows are linearly dependent (redundant constraints, or a singular "
                            "configuration); the multipliers are not unique, use --method projection"}
 
 
-def _run_rk4(model, rhs, x, u, p, t_end, dt, every, bar, projection):
+def _run_rk4(model, method, x, U, p, d, flow, t_end, dt, every, bar, events, energy_correction, energy_tol,
+             normalize):
     n_steps = int(round(t_end / dt))
     if abs(n_steps * dt - t_end) > 1e-9 * max(1.0, t_end):
         raise SimulationError(f"t_end = {t_end} is not a whole number of steps dt = {dt}; "
                               f"use t_end = {n_steps * dt:g} or another dt")
-    rows = n_steps // every + 1
-    out_t = np.empty(rows)
-    out_x = np.empty((rows, model.nx))
-    out_t[0], out_x[0] = 0.0, x
+    module = model.module
+    mode = _MODE[method]
+    constrain = method == "projection" and model.nc > 0
+    etol = energy_tol if energy_correction else -1.0
+    do_project = constrain or etol >= 0 or (normalize and bool(model.quaternions))
+    rows = n_steps // every + 2             # the grid, and a last sample where a run stops between grid points
+    log = (np.empty(rows), np.empty((rows, model.nx)), np.empty(rows, dtype=np.int64), np.empty((rows, model.nd)))
+    out_t, out_x, out_f, out_d = log
+    out_t[0], out_x[0], out_f[0], out_d[0] = 0.0, x, flow, d
     ws = Workspace.for_model(model)
-    done, row, chunk, status = 0, 1, 1000, rk4.OK
-    while done < n_steps and status == rk4.OK:
-        n = min(chunk, n_steps - done)
+    i, row, chunk, status, t = 0, 1, 1000, OK, 0.0
+    counts = np.zeros(2, dtype=np.int64)
+    e0 = module.energy(0.0, x, U[flow], p, d)
+    flow, message = follow_instant_jumps(model, t, x, U, p, d, flow, events, ws, mode)
+    while i < n_steps and status == OK and message is None:
+        i_end = min(i + chunk, n_steps)
         tic = time.perf_counter()
-        steps, row, status = rk4.rk4_chunk(rhs, model.module.project, *projection, 0.0, dt, done, n, every,
-                                           x, u, p, out_t, out_x, row, ws.M, ws.G, ws.k, ws.x_tmp)
-        done += steps
-        elapsed = time.perf_counter() - tic
-        chunk = int(min(max(chunk * 0.25 / max(elapsed, 1e-6), 1000), 10_000_000))
-        bar(done * dt)
-    message = "finished"
-    if status != rk4.OK:
-        message = (f"stopped: {_STOPPED[status]} at t = {done * dt:.9g} s, step {done}; "
-                   f"the {row} samples before it are kept")
-    projections = done if projection[1] else 0
-    return out_t[:row], out_x[:row], message, {"steps": done, "rhs_evaluations": 4 * done, "projections": projections}
+        i0 = i
+        source = flow
+        i, row, status, t, flow, k = module.advance(
+            mode, do_project, constrain, e0, etol, events.event_tol, 0.0, dt, i, i_end, every, t, flow, x, U, p, d,
+            out_t, out_x, out_f, out_d, row, ws.g0, ws.x_event, ws.M, ws.G, ws.k, ws.x_tmp, ws.x_step, ws.x_far,
+            ws.x_trial, counts)
+        if k >= 0:
+            if status != OK:
+                message = f"stopped: {_STOPPED[status]} in jump '{model.jump_names[k]}' at t = {t:.9g} s"
+                break
+            message = user_jump(model, k, t, x, U[source], p, d) or events.record(t, k, ws.x_event, x, d)
+            if message is None:
+                flow, message = follow_instant_jumps(model, t, x, U, p, d, flow, events, ws, mode)
+            e0 = module.energy(t, x, U[flow], p, d)
+        elif i > i0:
+            elapsed = time.perf_counter() - tic
+            chunk = int(min(max(chunk * 0.25 / max(elapsed, 1e-6) * (i_end - i0) / (i - i0), 1000), 10_000_000))
+        bar(t)
+    if status != OK:
+        message = (f"stopped: {_STOPPED[status]} at t = {t:.9g} s, step {i}; the {row} samples before it are kept")
+    elif message is not None and out_t[row - 1] != t:
+        out_t[row], out_x[row], out_f[row], out_d[row] = t, x, flow, d
+        row += 1
+    if message is not None and not events.finished and status == OK:
+        message += f"; the {row} samples before it are kept"
+    status_text = "finished" if message is None or events.finished else message
+    steps, trials = int(counts[0]), int(counts[1])
+    stats = {"steps": steps, "event_trial_steps": trials, "rhs_evaluations": 4 * (steps + trials),
+             "projections": steps + trials if do_project and constrain else 0}
+    return tuple(a[:row] for a in log), status_text, stats
 
 
 class _Stopped(Exception):
     pass
 
 
-def _run_scipy(model, method, x0, u, p, t_end, dt_out, rtol, atol, bar):
+def _run_scipy(model, method, x, U, p, d, flow, t_end, dt_out, rtol, atol, bar, events):
+    """scipy's solver stepped one step at a time; after each step the guards are checked, a crossing
+    is located on the step's dense output (Illinois, to the event tolerance) and the solver restarts
+    after the jump."""
+    module = model.module
     ws = Workspace.for_model(model)
     xdot = np.empty(model.nx)
     calls = [0]
+    current = [flow]
 
-    def fun(t, x):
+    def fun(t, y):
         calls[0] += 1
-        status = model.module.rhs_into(t, x, u, p, xdot, ws.M, ws.G)
-        if status != rk4.OK:
+        status = module.rhs_into(t, y, U[current[0]], p, d, current[0], xdot, ws.M, ws.G)
+        if status != OK:
             raise _Stopped(t, status)
         return xdot.copy()
 
@@ -265,30 +455,100 @@ def _run_scipy(model, method, x0, u, p, t_end, dt_out, rtol, atol, bar):
     grid = np.arange(n_out) * dt_out
     if grid[-1] < t_end - 1e-12 * t_end:
         grid = np.append(grid, t_end)
-    out_x = np.empty((grid.shape[0], model.nx))
-    out_x[0] = x0
-    row = 1
-    solver = SCIPY_METHODS[method](fun, 0.0, x0, t_end, rtol=rtol, atol=atol)
-    status = "finished"
-    steps = 0
+    out_t, out_x, out_f, out_d = [0.0], [x.copy()], [flow], [d.copy()]
+    row, steps, t = 1, 0, 0.0
+    flow, message = follow_instant_jumps(model, t, x, U, p, d, flow, events, ws, IDEAL)
     try:
-        while solver.status == "running":
-            message = solver.step()
-            steps += 1
-            if solver.status == "failed":
-                status = f"stopped: {method} failed at t = {solver.t:.9g} s: {message}"
-                break
-            if not np.all(np.isfinite(solver.y)):
-                status = f"stopped: the state became non-finite (NaN or Inf) at t = {solver.t:.9g} s"
-                break
-            if row < grid.shape[0] and grid[row] <= solver.t:
+        while message is None and t < t_end:
+            current[0] = flow
+            solver = SCIPY_METHODS[method](fun, t, x, t_end, rtol=rtol, atol=atol)
+            watched = [m for m in range(model.nj) if module.JUMP_SOURCE[m] == flow]
+            g0 = {m: module.guard(m, t, x, U[flow], p, d) for m in watched}
+            while solver.status == "running":
+                t_old = solver.t
+                text = solver.step()
+                steps += 1
+                if solver.status == "failed":
+                    message = f"stopped: {method} failed at t = {solver.t:.9g} s: {text}"
+                    break
+                if not np.all(np.isfinite(solver.y)):
+                    message = f"stopped: the state became non-finite (NaN or Inf) at t = {solver.t:.9g} s"
+                    break
                 dense = solver.dense_output()
-                while row < grid.shape[0] and grid[row] <= solver.t:
-                    out_x[row] = dense(grid[row])
+                hit = _first_crossing(model, dense, watched, g0, t_old, solver.t, U[flow], p, d, events.event_tol)
+                t_stop = solver.t if hit is None else hit[1]
+                while row < grid.shape[0] and grid[row] <= t_stop:
+                    out_t.append(grid[row]), out_x.append(dense(grid[row])), out_f.append(flow)
+                    out_d.append(d.copy())
                     row += 1
-            bar(solver.t)
+                bar(t_stop)
+                if hit is None:
+                    t, x = solver.t, solver.y.copy()
+                    continue
+                k, t, x_before = hit
+                x = x_before.copy()
+                message = apply_jump(model, k, t, x, U, p, d, flow, ws)
+                flow = int(module.JUMP_TARGET[k])
+                message = message or events.record(t, k, x_before, x, d)
+                if message is None:
+                    flow, message = follow_instant_jumps(model, t, x, U, p, d, flow, events, ws, IDEAL)
+                break
+            else:
+                t, x = solver.t, solver.y.copy()
     except _Stopped as exc:
-        status = f"stopped: {_STOPPED[exc.args[1]]} at t = {exc.args[0]:.9g} s"
-    if status != "finished":
-        status += f"; the {row} samples before it are kept"
-    return grid[:row], out_x[:row], status, {"steps": steps, "rhs_evaluations": calls[0]}
+        message = f"stopped: {_STOPPED[exc.args[1]]} at t = {exc.args[0]:.9g} s"
+    if message is not None and out_t[-1] != t:
+        out_t.append(t), out_x.append(x.copy()), out_f.append(flow), out_d.append(d.copy())
+    if message is not None and not events.finished:
+        message += f"; the {len(out_t)} samples before it are kept"
+    status = "finished" if message is None or events.finished else message
+    n = len(out_t)
+    log = (np.array(out_t), np.array(out_x).reshape(n, model.nx), np.array(out_f, dtype=np.int64),
+           np.array(out_d).reshape(n, model.nd))
+    return log, status, {"steps": steps, "rhs_evaluations": calls[0]}
+
+
+def _first_crossing(model, dense, watched, g0, t0, t1, u, p, d, event_tol):
+    """(jump, time, state) of the earliest enabled guard crossing on [t0, t1] along `dense`, or None.
+
+    g0 (jump -> guard value at t0) is updated to the values at t1.
+    """
+    module = model.module
+    best = None
+    for m in watched:
+        x1 = dense(t1)
+        g1 = module.guard(m, t1, x1, u, p, d)
+        if module.crosses(module.JUMP_DIRECTION[m], g0[m], g1):
+            tau, x_far = _illinois(lambda s: module.guard(m, s, dense(s), u, p, d), dense, t0, t1, g0[m], g1,
+                                   event_tol * max(1.0, abs(t0)))
+            tol = event_tol * max(1.0, abs(t0))
+            earlier = best is None or tau < best[1] - tol or (
+                tau <= best[1] + tol and module.JUMP_PRIORITY[m] < module.JUMP_PRIORITY[best[0]])
+            if earlier and module.enabled(m, tau, x_far, u, p, d) >= 0.0:
+                best = (m, tau, x_far)
+        g0[m] = g1
+    return best
+
+
+def _illinois(g, dense, a, b, ga, gb, tol):
+    """The near end of a bracket of g's root on [a, b] no wider than tol, and the state there
+    (as the generated module's `locate`)."""
+    s = 1.0 if ga > 0 else -1.0
+    side, width = 0, b - a
+    for _ in range(200):
+        if b - a <= tol:
+            break
+        c = b - gb * (b - a) / (gb - ga)
+        if not (a < c < b) or (b - a) > 0.5 * width:
+            c = 0.5 * (a + b)
+        width = b - a
+        gc = g(c)
+        if s * gc <= 0.0:
+            b, gb = c, gc
+            ga = ga * 0.5 if side == 1 else ga
+            side = 1
+        else:
+            a, ga = c, gc
+            gb = gb * 0.5 if side == -1 else gb
+            side = -1
+    return a, dense(a)

@@ -148,3 +148,41 @@ class _Builder:
             self.fail(f"{node.func.id} takes {want or 'two or more'} argument(s), got {len(args)}",
                       f"write {node.func.id}({', '.join(['x', 'y'][:want or 2])})")
         return FUNCTIONS[node.func.id](*args)
+
+
+_COMPARE = {ast.Gt: 1, ast.GtE: 1, ast.Lt: -1, ast.LtE: -1}     # a > b: a - b >= 0; a < b: b - a >= 0
+
+
+def parse_condition(text, names: dict[str, sp.Symbol], allow_time: bool = True, dotted=None) -> list[sp.Expr]:
+    """Parse a comparison such as `foot.x > fx` (or a chain `0 < x < L`) into expressions s >= 0.
+
+    Each returned s holds where its comparison does (a > b gives a - b; a < b
+    gives b - a). Strict and non-strict comparisons are not told apart: the
+    condition is checked at a located event, where equality has no meaning.
+    """
+    if not isinstance(text, str) or not text.strip():
+        raise ExpressionError(f"expected a comparison, got {text!r}", 'write a comparison such as "x > 0"')
+    equality = ("a condition is an inequality, checked where the guard crosses 0: write <, <=, > or >=; "
+                "to jump where a = b, make 'a - b' the guard")
+    try:
+        tree = ast.parse(text.strip(), mode="eval").body
+    except SyntaxError as exc:
+        alone = text
+        for op in ("==", "!=", "<=", ">="):
+            alone = alone.replace(op, "")
+        if isinstance(exc, IndentationError) or "=" not in alone:      # no lone '=' written for '=='
+            raise ExpressionError(f"cannot parse {text!r}: {exc.msg}", 'write a comparison such as "x > 0"')
+        raise ExpressionError(f"in {text!r}: '=' is not a comparison", equality)
+    if isinstance(tree, ast.Compare) and any(isinstance(op, (ast.Eq, ast.NotEq)) for op in tree.ops):
+        op = next("==" if isinstance(op, ast.Eq) else "!="
+                  for op in tree.ops if isinstance(op, (ast.Eq, ast.NotEq)))
+        raise ExpressionError(f"in {text!r}: '{op}' cannot be a condition", equality)
+    if not isinstance(tree, ast.Compare) or not all(type(op) in _COMPARE for op in tree.ops):
+        raise ExpressionError(f"{text!r} is not a comparison", "write a comparison with <, <=, > or >=, such as "
+                              '"foot.x > fx"; give several as a list (all must hold)')
+    builder = _Builder(text, names, allow_time, dotted)
+    sides = [builder.visit(tree.left)] + [builder.visit(c) for c in tree.comparators]
+    out = []
+    for op, a, b in zip(tree.ops, sides, sides[1:]):
+        out.append(a - b if _COMPARE[type(op)] > 0 else b - a)
+    return out

@@ -19,9 +19,10 @@ import numpy as np
 import sympy as sp
 
 from andyc.errors import Diagnostic, SpecError, format_path
-from andyc.spec.expressions import RESERVED, TIME, ExpressionError, parse
-from andyc.spec.model import (Body, Constraint, Coordinate, Damper, Frame, FrameQuantity, Load, Nonholonomic,
-                              Potential, Rotate, Signal, Spec, Speed, Spring, Translate)
+from andyc.spec.expressions import RESERVED, TIME, ExpressionError, parse, parse_condition
+from andyc.spec.model import (EITHER, FALLING, RISING, Body, Constraint, Coordinate, Damper, DiscreteState, Flow,
+                              Frame, FrameQuantity, Jump, Load, Nonholonomic, Potential, Rotate, Signal, Spec, Speed,
+                              Spring, Translate)
 from andyc.spec.yamlpos import SourceMap, load_yaml
 
 SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "andyc-model.schema.json"
@@ -32,7 +33,8 @@ JOINTS = ("dh", "revolute", "prismatic", "ball", "floating", "nonholonomic")
 _KIND = {"parameters": "parameter", "inputs": "input", "coordinates": "coordinate", "speeds": "speed",
          "frames": "frame",
          "bodies": "body", "forces": "force", "torques": "torque", "dampers": "damper",
-         "springs": "spring", "potentials": "potential", "constraints": "constraint"}
+         "springs": "spring", "potentials": "potential", "constraints": "constraint",
+         "discrete": "discrete state"}
 # Frame quantities in constraint expressions: F.<attribute> -> (kind, axis).
 FRAME_QUANTITIES = {**{a: ("position", i) for i, a in enumerate("xyz")},
                     **{"v" + a: ("velocity", i) for i, a in enumerate("xyz")},
@@ -132,6 +134,8 @@ _ALTERNATIVES = {
     "spring": ("a spring", "give either 'length: <expression>' or 'between: [frameA, frameB]'"),
     "constraint": ("a constraint", "give either 'holonomic: <expressions>' or 'nonholonomic: <expressions>'"),
     "constraint_rows": ("constraint expression", 'write one expression such as "x - L", or a non-empty list of them'),
+    "impact": ("impact", "write plastic, none, or {restitution: e} (optionally with 'constraints: [names]')"),
+    "condition": ("condition", 'write a comparison such as "foot.x > fx", or a list of them (all must hold)'),
     "axis": ("axis", "write x, y, z, -x, -y, -z or three numbers such as [0, 0.6, 0.8]"),
     "inertia": ("inertia", "write [Ixx, Iyy, Izz], [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] "
                            "or a 3x3 matrix [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]]"),
@@ -298,7 +302,17 @@ class _Builder:
                              self.constant((entry or {}).get("initial", 0), ("speeds", name, "initial"))[0],
                              ("speeds", name))
                        for name, entry in (d.get("speeds") or {}).items()]
-        self.kin_names = {**self.param_names, **{c.name: c.q for c in coords}}
+        self.discrete = []
+        for name, value in (d.get("discrete") or {}).items():
+            initial = self.constant(value, ("discrete", name))[0]
+            if TIME in initial.free_symbols:        # (the initial values are computed before t exists)
+                self.error(("discrete", name), f"the initial value {value!r} of discrete state '{name}' depends on t",
+                           "give a number or an expression of parameters")
+            self.discrete.append(DiscreteState(name, sp.Symbol(f"d_{name}", real=True), initial,
+                                               ("discrete", name)))
+        # A discrete state whose name is taken (reported by check_names) does not shadow the first owner.
+        self.discrete_names = {x.name: x.symbol for x in self.discrete if self.declared.get(x.name) == "discrete"}
+        self.kin_names = {**self.param_names, **{c.name: c.q for c in coords}, **self.discrete_names}
         self.load_names = {**self.kin_names, **{n: s for n, (s, _) in self.inputs.items()}}
         # Nonholonomic velocities may also use every speed: coordinate rates as <name>_dot.
         self.rate_names = {**{f"{c.name}_dot": c.v for c in coords}, **{s.name: s.v for s in self.speeds}}
@@ -319,6 +333,7 @@ class _Builder:
         constraints = [self.constraint(i, x) for i, x in enumerate(d.get("constraints") or [])]
         constraints.sort(key=lambda c: not c.holonomic)     # holonomic rows first (DESIGN.md run layout)
         self.check_multipliers(constraints)
+        flows, jumps, initial_flow = self.hybrid(constraints)
         conserves = bool(d.get("conserves_energy", False))
         if conserves:
             self.check_conservative(loads, dampers, springs, potentials, constraints, frames)
@@ -330,11 +345,16 @@ class _Builder:
             if sym not in self.used:
                 self.warnings.append(self.smap.diag(("parameters", name), f"parameter '{name}' is not used",
                                                     "remove it or use it in an expression"))
+        for x in self.discrete:
+            if x.symbol not in self.used:
+                self.warnings.append(self.smap.diag(x.where, f"discrete state '{x.name}' is not used",
+                                                    "remove it, or use it in a constraint, guard or reset"))
         return Spec(name=d["name"], description=d.get("description", ""), file=self.smap.file,
                     sha256=self.sha, source=self.smap, parameters=self.parameters, inputs=self.inputs,
                     coordinates=coords, speeds=self.speeds, signals=self.signals, gravity=gravity, frames=frames + extra_frames, bodies=bodies,
                     loads=loads, dampers=dampers, springs=springs, potentials=potentials,
-                    constraints=constraints, conserves_energy=conserves, warnings=self.warnings)
+                    constraints=constraints, conserves_energy=conserves, discrete=self.discrete, flows=flows,
+                    jumps=jumps, initial_flow=initial_flow, warnings=self.warnings)
 
     def check_names(self):
         """Every name is unique across the model and not reserved."""
@@ -345,6 +365,7 @@ class _Builder:
         entries += [(("inputs", n), n) for n in (d.get("inputs") or {})]
         entries += [(("coordinates", n), n) for n in (d.get("coordinates") or {})]
         entries += [(("speeds", n), n) for n in (d.get("speeds") or {})]
+        entries += [(("discrete", n), n) for n in (d.get("discrete") or {})]
         for section in ("frames",) + ELEMENT_SECTIONS + ("constraints",):
             entries += [((section, i, "name"), x["name"]) for i, x in enumerate(d.get(section) or [])]
         # Names andyc makes: coordinate rates and signal states.
@@ -686,41 +707,7 @@ class _Builder:
         quantities = {}
 
         def quantity(owner: str, attribute: str) -> sp.Symbol:
-            written = f"{owner}.{attribute}"
-            known = sorted(self.frame_names)
-            if owner not in self.frame_names:
-                if owner in self.declared:          # a body, a parameter, ... written as a frame
-                    frame = next((b["frame"] for b in self.data.get("bodies") or [] if b["name"] == owner), None)
-                    raise ExpressionError(f"'{owner}' is a {_KIND[self.declared[owner]]}, not a frame",
-                                          (f"use the frame it is on: '{frame}.{attribute}'" if frame else
-                                           "frame quantities belong to frames") + "; known frames: " + ", ".join(known))
-                close = difflib.get_close_matches(owner, known, n=1)
-                raise ExpressionError(f"frame '{owner}' does not exist",
-                                      (f"did you mean '{close[0]}'? " if close else "")
-                                      + "known frames: " + ", ".join(known))
-            if attribute not in FRAME_QUANTITIES:
-                close = ([attribute.lower()] if attribute.lower() in FRAME_QUANTITIES
-                         else difflib.get_close_matches(attribute, list(FRAME_QUANTITIES), n=1))
-                raise ExpressionError(f"'{written}' is not a frame quantity",
-                                      (f"did you mean '{owner}.{close[0]}'? " if close else "") + QUANTITY_HINT)
-            kind, axis = FRAME_QUANTITIES[attribute]
-            if holonomic and kind != "position":
-                what = "a velocity" if kind == "velocity" else "an angular velocity"
-                raise ExpressionError(f"'{written}' is {what}; a holonomic constraint depends on positions only",
-                                      "write velocity constraints under 'nonholonomic:'; holonomic rows use "
-                                      "F.x, F.y, F.z")
-            if kind == "position" and owner == in_frame:
-                raise ExpressionError(f"'{written}' is always 0: positions are measured from the origin of the "
-                                      f"'in' frame, here '{in_frame}' itself",
-                                      "use the position of another frame"
-                                      + (f", or remove 'in: {in_frame}' to measure from world"
-                                         if in_frame != "world" else ""))
-            if kind != "position" and owner == "world":
-                raise ExpressionError(f"'{written}' is always 0: the world frame does not move",
-                                      "use the velocity of a moving frame")
-            sym = sp.Symbol(f"fq_{owner}_{attribute}" + ("" if in_frame == "world" else f"_in_{in_frame}"), real=True)
-            quantities[sym] = FrameQuantity(owner, kind, axis, in_frame)
-            return sym
+            return self.frame_quantity(owner, attribute, in_frame, quantities, holonomic)
 
         if holonomic:
             names = self.kin_names
@@ -789,6 +776,215 @@ class _Builder:
         damping = self.gain(gains, "damping", where)
         return Constraint(c["name"], holonomic, rows, tuple(multipliers), stiffness, damping,
                           quantities, where, tuple(paths))
+
+    def frame_quantity(self, owner: str, attribute: str, in_frame: str, quantities: dict,
+                       holonomic: bool = False) -> sp.Symbol:
+        """The symbol of `owner.attribute` (a FrameQuantity, recorded in `quantities`), or ExpressionError."""
+        written = f"{owner}.{attribute}"
+        known = sorted(self.frame_names)
+        if owner not in self.frame_names:
+            if owner in self.declared:          # a body, a parameter, ... written as a frame
+                frame = next((b["frame"] for b in self.data.get("bodies") or [] if b["name"] == owner), None)
+                raise ExpressionError(f"'{owner}' is a {_KIND[self.declared[owner]]}, not a frame",
+                                      (f"use the frame it is on: '{frame}.{attribute}'" if frame else
+                                       "frame quantities belong to frames") + "; known frames: " + ", ".join(known))
+            close = difflib.get_close_matches(owner, known, n=1)
+            raise ExpressionError(f"frame '{owner}' does not exist",
+                                  (f"did you mean '{close[0]}'? " if close else "")
+                                  + "known frames: " + ", ".join(known))
+        if attribute not in FRAME_QUANTITIES:
+            close = ([attribute.lower()] if attribute.lower() in FRAME_QUANTITIES
+                     else difflib.get_close_matches(attribute, list(FRAME_QUANTITIES), n=1))
+            raise ExpressionError(f"'{written}' is not a frame quantity",
+                                  (f"did you mean '{owner}.{close[0]}'? " if close else "") + QUANTITY_HINT)
+        kind, axis = FRAME_QUANTITIES[attribute]
+        if holonomic and kind != "position":
+            what = "a velocity" if kind == "velocity" else "an angular velocity"
+            raise ExpressionError(f"'{written}' is {what}; a holonomic constraint depends on positions only",
+                                  "write velocity constraints under 'nonholonomic:'; holonomic rows use "
+                                  "F.x, F.y, F.z")
+        if kind == "position" and owner == in_frame:
+            raise ExpressionError(f"'{written}' is always 0: positions are measured from the origin of the "
+                                  f"'in' frame, here '{in_frame}' itself",
+                                  "use the position of another frame"
+                                  + (f", or remove 'in: {in_frame}' to measure from world"
+                                     if in_frame != "world" else ""))
+        if kind != "position" and owner == "world":
+            raise ExpressionError(f"'{written}' is always 0: the world frame does not move",
+                                  "use the velocity of a moving frame")
+        sym = sp.Symbol(f"fq_{owner}_{attribute}" + ("" if in_frame == "world" else f"_in_{in_frame}"), real=True)
+        quantities[sym] = FrameQuantity(owner, kind, axis, in_frame)
+        return sym
+
+    # hybrid automaton -----------------------------------------------------
+    def hybrid(self, constraints) -> tuple[list, list, int]:
+        """Flows, jumps and the initial flow's index; without a hybrid section, one flow with every constraint."""
+        h = self.data.get("hybrid")
+        names = [c.name for c in constraints]
+        if h is None:
+            return [Flow("default", tuple(names), {}, ())], [], 0
+        flows, impacted = [], set()
+        for i, f in enumerate(h["flows"]):
+            where = ("hybrid", "flows", i)
+            first = next((g.where for g in flows if g.name == f["name"]), None)
+            if first is not None:
+                self.error(where + ("name",), f"duplicate flow name '{f['name']}' (first defined at line "
+                           f"{self.smap.line(first + ('name',))}, {format_path(first + ('name',))})",
+                           "give each flow its own name")
+            active = f.get("constraints", [])
+            for j, name in enumerate(active):
+                self.known(name, names, where + ("constraints", j), "constraint")
+                if name in active[:j]:
+                    self.error(where + ("constraints", j), f"constraint '{name}' is listed twice", "list it once")
+            inputs = {}
+            for name, value in (f.get("inputs") or {}).items():
+                if self.known(name, list(self.inputs), where + ("inputs", name), "input"):
+                    inputs[name] = self.constant(value, where + ("inputs", name))[0]
+                    if TIME in inputs[name].free_symbols:
+                        self.error(where + ("inputs", name), f"the value {value!r} of input '{name}' in flow "
+                                   f"'{f['name']}' depends on t", "a flow sets its inputs to constants: a number "
+                                   "or an expression of parameters")
+            flows.append(Flow(f["name"], tuple(n for n in names if n in active), inputs, where))
+        flow_names = [f.name for f in flows]
+        initial = h.get("initial", flow_names[0])
+        initial_index = flow_names.index(initial) if self.known(initial, flow_names, ("hybrid", "initial"),
+                                                                "flow") else 0
+        jumps = []
+        for i, j in enumerate(h.get("jumps") or []):
+            jump = self.jump(i, j, flows, names)
+            if jump is not None:
+                jumps.append(jump)
+                impacted |= set(jump.impact_constraints)
+        used = {n for f in flows for n in f.constraints} | impacted
+        for c in constraints:
+            if c.name not in used:
+                self.warnings.append(self.smap.diag(c.where, f"constraint '{c.name}' is active in no flow and "
+                                                    "takes no impact", "list it in a flow's 'constraints', or remove it"))
+        return flows, jumps, initial_index
+
+    def known(self, name, known: list, where, kind: str) -> bool:
+        """Report `name` (a reference to a {kind}) unless it is in `known`."""
+        if name in known:
+            return True
+        known = list(dict.fromkeys(known))
+        close = difflib.get_close_matches(str(name), known, n=1)
+        self.error(where, f"{kind} '{name}' does not exist",
+                   (f"did you mean '{close[0]}'? " if close else "")
+                   + (f"{kind}s: {', '.join(known)}" if known else f"the model has no {kind}s"))
+        return False
+
+    def jump(self, i, j, flows, constraint_names) -> Jump | None:
+        where = ("hybrid", "jumps", i)
+        flow_names = [f.name for f in flows]
+        ok = self.known(j["from"], flow_names, where + ("from",), "flow")
+        ok = self.known(j["to"], flow_names, where + ("to",), "flow") and ok
+        earlier = [k for k, x in enumerate(self.data["hybrid"]["jumps"][:i]) if x["name"] == j["name"]]
+        if earlier:
+            first = ("hybrid", "jumps", earlier[0], "name")
+            self.error(where + ("name",), f"duplicate jump name '{j['name']}' (first defined at line "
+                       f"{self.smap.line(first)}, {format_path(first)})", "give each jump its own name")
+        quantities = {}
+
+        def quantity(owner, attribute):
+            return self.frame_quantity(owner, attribute, "world", quantities)
+
+        states = {**{c.name: c.q for c in self.coords}, **self.rate_names}
+        discrete = self.discrete_names
+        names = {**self.load_names, **self.rate_names, **discrete}
+        context = ("guards, conditions and resets use parameters, inputs, coordinates, speeds (<coordinate>_dot "
+                   "and declared speeds), discrete states, t and " + QUANTITY_HINT)
+        before = len(self.problems)
+        written = j["guard"] if isinstance(j["guard"], str) else ""
+        op = next((op for op in (">=", "<=", "==", ">", "<") if op in written), None)
+        if op is not None:              # a guard is a signed expression, not a condition
+            a, b = (side.strip() for side in written.split(op, 1))
+            b = f"({b})" if any(c in b for c in "+-") else b
+            turn = {">": "rising", "<": "falling"}.get(op[0], "either")
+            self.error(where + ("guard",), f"the guard {written!r} is a comparison",
+                       f"a guard is a signed expression that crosses 0 where the jump happens: write "
+                       f"'guard: {a} - {b}' with 'direction: {turn}'; conditions that must also hold go "
+                       "under 'enabled:'")
+        guard = (sp.Integer(0) if op is not None
+                 else self.expr(j["guard"], where + ("guard",), names, context, dotted=quantity))
+        moving = set(states.values()) | set(quantities) | {TIME}
+        if len(self.problems) == before and not guard.free_symbols & moving:
+            self.error(where + ("guard",), f"the guard {j['guard']!r} does not change during a flow",
+                       "a guard is a signed expression of the coordinates, speeds, frame quantities or t "
+                       "that crosses 0 where the jump happens")
+        enabled = []
+        texts = j.get("enabled", [])
+        for k, text in enumerate(texts if isinstance(texts, list) else [texts]):
+            path = where + ("enabled",) + ((k,) if isinstance(texts, list) else ())
+            try:
+                found = parse_condition(text, names, True, quantity)
+            except ExpressionError as exc:
+                message = str(exc)
+                if exc.name in self.declared:   # a frame, body, ... written as a value
+                    message = f"in {text!r}: {_KIND[self.declared[exc.name]]} '{exc.name}' cannot be used here"
+                self.error(path, message, exc.hint + (f" ({context})" if exc.name else ""))
+                continue
+            self.used |= set().union(*(e.free_symbols for e in found))
+            enabled += found
+        resets = []
+        for name, value in (j.get("reset") or {}).items():
+            path = where + ("reset", name)
+            if name in states or name in discrete:
+                resets.append((name, self.expr(value, path, names, context, dotted=quantity)))
+            else:
+                close = difflib.get_close_matches(str(name), list(states) + list(discrete), n=1)
+                kind = _KIND.get(self.declared.get(name))
+                why = {"parameter": "parameters keep their value for the whole run",
+                       "input": "inputs are set by the run or by a flow's 'inputs'"}.get(
+                    kind, "it is not a coordinate, speed or discrete state")
+                fix = {"parameter": "for a value that changes at jumps, declare a discrete state under "
+                                    "'discrete:' and reset that; ",
+                       "input": f"set it in flow '{j['to']}' with 'inputs: {{{name}: <value>}}'; "}.get(kind, "")
+                self.error(path, f"cannot reset {kind + ' ' if kind else ''}'{name}': {why}",
+                           (f"did you mean '{close[0]}'? " if close else "") + fix + "resets assign coordinates, "
+                           "speeds (<coordinate>_dot and declared speeds) and discrete states: "
+                           + ", ".join(list(states) + list(discrete)))
+        impact, restitution, impact_constraints = self.impact(j, where, flows, constraint_names)
+        if not ok:
+            return None
+        direction = {"falling": FALLING, "rising": RISING, "either": EITHER}[j["direction"]]
+        return Jump(j["name"], j["from"], j["to"], guard, direction, tuple(enabled), impact, restitution,
+                    impact_constraints, tuple(resets), int(j.get("priority", i)), quantities, where, dict(j))
+
+    def impact(self, j, where, flows, constraint_names):
+        """(kind, restitution e, constraint names) of a jump's impact map."""
+        spec = j.get("impact", "none")
+        target = next((f for f in flows if f.name == j["to"]), None)
+        if spec == "none":
+            return "none", sp.Integer(0), ()
+        if spec == "plastic":
+            restitution, named = sp.Integer(0), None
+        else:
+            path = where + ("impact", "restitution")
+            before = len(self.problems)
+            restitution, e = self.constant(spec["restitution"], path)
+            if len(self.problems) > before:         # a bad expression is reported already
+                pass
+            elif TIME in restitution.free_symbols:
+                self.error(path, f"the coefficient of restitution {spec['restitution']!r} depends on t",
+                           "give a constant from 0 (plastic) to 1 (elastic): a number or an expression of parameters")
+            elif not 0 <= e <= 1:
+                shown = f"{e:g}" if restitution.is_number else f"{spec['restitution']} = {e:g}"
+                self.error(path, f"the coefficient of restitution is {shown}, outside [0, 1]",
+                           "give 0 (plastic) to 1 (elastic); more than 1 would add energy at every impact")
+            named = spec.get("constraints")
+            for k, name in enumerate(named or []):
+                if self.known(name, constraint_names, where + ("impact", "constraints", k), "constraint") \
+                        and name in named[:k]:
+                    self.error(where + ("impact", "constraints", k), f"constraint '{name}' is listed twice",
+                               "list it once")
+        chosen = named if named is not None else (target.constraints if target else ())
+        if target is not None and not chosen:
+            self.error(where + ("impact",), f"the impact has no constraint rows to act on: the target flow "
+                       f"'{target.name}' has no constraints",
+                       "name the constraints that take the impact: impact: {restitution: e, constraints: [names]}, "
+                       "or write the velocity change as a reset")
+        return ("plastic" if spec == "plastic" else "restitution"), restitution, \
+            tuple(n for n in constraint_names if n in chosen)
 
     def gain(self, gains: dict, key: str, where) -> sp.Expr:
         path = where + ("gains", key)

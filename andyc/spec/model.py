@@ -169,6 +169,54 @@ class Constraint:
     row_where: tuple = ()       # document path of each row
 
 
+@dataclass(frozen=True)
+class DiscreteState:
+    """A value constant during a flow that jumps may reset (ANDY's sigma, e.g. a foot's contact point)."""
+    name: str
+    symbol: sp.Symbol
+    initial: sp.Expr            # expression of parameters
+    where: tuple
+
+
+@dataclass(frozen=True)
+class Flow:
+    """A node of the hybrid automaton: the constraints active in it and its own input values."""
+    name: str
+    constraints: tuple          # names, in the order of Spec.constraints
+    inputs: dict                # input name -> expression of parameters
+    where: tuple
+
+
+FALLING, EITHER, RISING = -1, 0, 1
+
+
+@dataclass(frozen=True)
+class Jump:
+    """An edge of the hybrid automaton (ANDY eq. 16): guard, impact map and resets.
+
+    The jump happens where `guard` crosses zero in `direction` (FALLING: from
+    positive to zero or below) while every `enabled` expression is >= 0.
+    Then, in this order: the resets (simultaneous, from the values before the
+    jump), the impact map over the rows of `impact_constraints` with
+    restitution e (J v+ = -e J v-; e = 0 is ANDY eq. 19), the user's function
+    in <name>_jumps.py.
+    """
+    name: str
+    source: str                 # flow names
+    target: str
+    guard: sp.Expr
+    direction: int              # FALLING, EITHER or RISING
+    enabled: tuple              # of sp.Expr, each must be >= 0
+    impact: str                 # "none" | "plastic" | "restitution"
+    restitution: sp.Expr        # e, expression of parameters (0 when plastic)
+    impact_constraints: tuple   # constraint names whose rows take the impact
+    resets: tuple               # of (state or discrete-state name, sp.Expr)
+    priority: int
+    quantities: dict            # symbol -> FrameQuantity used by guard, enabled and resets
+    where: tuple
+    written: dict = field(default_factory=dict)     # the entry as written in the model file (for docs)
+
+
 @dataclass
 class Spec:
     name: str
@@ -190,6 +238,10 @@ class Spec:
     potentials: list = field(default_factory=list)
     constraints: list = field(default_factory=list)  # of Constraint, holonomic ones first
     conserves_energy: bool = False
+    discrete: list = field(default_factory=list)       # of DiscreteState
+    flows: list = field(default_factory=list)          # of Flow; one "default" flow without a hybrid section
+    jumps: list = field(default_factory=list)          # of Jump, in document order
+    initial_flow: int = 0
     warnings: list = field(default_factory=list)   # of Diagnostic
 
     @property

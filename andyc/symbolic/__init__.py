@@ -6,9 +6,10 @@ import time
 
 from andyc.spec.expressions import TIME
 from andyc.spec.model import Spec
-from andyc.symbolic.constraints import constraint_terms
+from andyc.symbolic.constraints import FrameQuantities, constraint_terms
 from andyc.symbolic.dynamics import assemble, element_terms
 from andyc.symbolic.emitter import Emitter
+from andyc.symbolic.hybrid import hybrid_terms
 from andyc.symbolic.kinematics import frame_kinematics
 from andyc.symbolic.model import SymbolicModel
 
@@ -17,24 +18,27 @@ def derive(spec: Spec) -> SymbolicModel:
     """Derive the equations of motion of `spec`.
 
     Stages: frame kinematics (eq. 1-3) -> element terms (eq. 5-7) -> sums (eq. 8)
-    -> constraint residuals, Jacobian and velocity-product term (eq. 10-12).
+    -> constraint residuals, Jacobian and velocity-product term (eq. 10-12)
+    -> the hybrid automaton's guards, resets and impact rows (eq. 16-19).
     """
     start = time.perf_counter()
     emit = Emitter()
     kin = frame_kinematics(spec, emit)
     terms = element_terms(spec, kin, emit)
     M, G, energy, power = assemble(spec, terms)
-    constraints = constraint_terms(spec, kin, emit)
+    quantities = FrameQuantities(spec, kin, emit)
+    constraints = constraint_terms(spec, quantities)
+    hybrid = hybrid_terms(spec, quantities, constraints)
     rates = {sym: rate for K in kin.values() for sym, rate in K.signal_rates.items()}
     return SymbolicModel(
         spec=spec, t=TIME,
         q=[c.q for c in spec.coordinates], v=spec.speed_symbols,
         signals=[s.symbol for s in spec.signals], signal_rates=[rates[s.symbol] for s in spec.signals],
-        parameters=[s for s, _ in spec.parameters.values()],
+        parameters=[s for s, _ in spec.parameters.values()], discrete=[x.symbol for x in spec.discrete],
         inputs=[s for s, _ in spec.inputs.values()],
         assignments=emit.assignments, M=M, G=G, energy=energy, power=power,
         frame_positions={f.name: kin[f.name].r for f in spec.frames if not f.internal},
-        elements=terms, constraints=constraints, derive_seconds=time.perf_counter() - start)
+        elements=terms, constraints=constraints, hybrid=hybrid, derive_seconds=time.perf_counter() - start)
 
 
 __all__ = ["derive", "SymbolicModel"]

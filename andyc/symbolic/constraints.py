@@ -70,14 +70,36 @@ class _Rate:
     kappa: sp.Expr
 
 
-class _Quantities:
-    """Frame quantities as emitted symbols, each defined once from the frame kinematics."""
+class FrameQuantities:
+    """Frame quantities as emitted symbols, each defined once from the frame kinematics,
+    and the rate and speed Jacobian of expressions that use them (see the module docstring)."""
 
-    def __init__(self, kin: dict[str, FrameKinematics], emit: Emitter, n: int):
-        self.kin, self.emit, self.n = kin, emit, n
+    def __init__(self, spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter):
+        self.kin, self.emit = kin, emit
+        self.q = [c.q for c in spec.coordinates]
+        self.v = spec.speed_symbols
+        self.n = len(self.v)
         self.rates: dict[sp.Symbol, _Rate] = {}     # velocity-like symbol -> rate
         self.position_rate: dict[sp.Symbol, sp.Symbol] = {}   # position symbol -> its Pdot symbol
         self.vectors: dict = {}
+
+    def rate(self, f) -> sp.Expr:
+        """df/dt at dv/dt = 0."""
+        out = sp.diff(f, TIME) + sum((sp.diff(f, qi) * vi for qi, vi in zip(self.q, self.v)), sp.Integer(0))
+        for sym in f.free_symbols:
+            if sym in self.position_rate:
+                out += sp.diff(f, sym) * self.position_rate[sym]
+            elif sym in self.rates:
+                out += sp.diff(f, sym) * self.rates[sym].kappa
+        return out
+
+    def jac(self, f) -> list:
+        """df/dv: with rate(f), df/dt = rate(f) + jac(f) dv/dt."""
+        row = [sp.diff(f, vi) for vi in self.v]
+        for sym in f.free_symbols & set(self.rates):
+            df = sp.diff(f, sym)
+            row = [r + df * J for r, J in zip(row, self.rates[sym].J)]
+        return row
 
     def define(self, sym: sp.Symbol, fq) -> None:
         if sym in self.rates or sym in self.position_rate:
@@ -116,31 +138,13 @@ class _Quantities:
         return self.vectors[key]
 
 
-def constraint_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) -> ConstraintTerms:
+def constraint_terms(spec: Spec, quantities: FrameQuantities) -> ConstraintTerms:
     """phi, c, A and kappa of every constraint of `spec` (holonomic rows first)."""
-    q = [c.q for c in spec.coordinates]
-    v = spec.speed_symbols
-    n = len(v)
-    quantities = _Quantities(kin, emit, n)
+    n = quantities.n
+    rate, jac = quantities.rate, quantities.jac
     for con in spec.constraints:
         for sym, fq in con.quantities.items():
             quantities.define(sym, fq)
-
-    def rate(f):
-        out = sp.diff(f, TIME) + sum((sp.diff(f, qi) * vi for qi, vi in zip(q, v)), sp.Integer(0))
-        for sym in f.free_symbols:
-            if sym in quantities.position_rate:
-                out += sp.diff(f, sym) * quantities.position_rate[sym]
-            elif sym in quantities.rates:
-                out += sp.diff(f, sym) * quantities.rates[sym].kappa
-        return out
-
-    def jac(f):
-        row = [sp.diff(f, vi) for vi in v]
-        for sym in f.free_symbols & set(quantities.rates):
-            df = sp.diff(f, sym)
-            row = [r + df * J for r, J in zip(row, quantities.rates[sym].J)]
-        return row
 
     phi, c, A, kappa, names, lams, ks, kd = [], [], [], [], [], [], [], []
     for con in spec.constraints:

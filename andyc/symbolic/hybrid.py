@@ -1,0 +1,66 @@
+"""The hybrid automaton's terms (ANDY eq. 16-19): active rows per flow, guards, resets, impacts.
+
+For each jump, with the guard g(t, q, v, d) (frame quantities allowed):
+
+    dg/dt = rate(g) + jac(g) dv/dt        (dv/dt given: the flow's acceleration)
+
+which the runtime uses to tell, at an instant, whether a guard already past
+zero is moving further (the jump happens) or back (it does not). Resets are
+kept as (target name, expression); the impact map acts on the velocity-level
+rows of the jump's impact constraints (see the generated `impact`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from andyc.spec.model import Spec
+from andyc.symbolic.constraints import ConstraintTerms, FrameQuantities
+
+
+@dataclass
+class JumpTerms:
+    name: str
+    source: int                 # flow index
+    target: int
+    direction: int              # FALLING -1, EITHER 0, RISING 1
+    priority: int
+    guard: sp.Expr
+    guard_rate: sp.Expr         # in terms of the symbols HybridTerms.vdot
+    enabled: sp.Expr            # >= 0 where the jump may happen (1 without conditions)
+    resets: list                # [(target name, expression)], simultaneous
+    impact_rows: list           # velocity-level constraint rows that take the impact
+    restitution: sp.Expr        # e, of parameters
+
+
+@dataclass
+class HybridTerms:
+    flows: list                 # flow names
+    initial: int
+    flow_rows: list             # per flow: the active velocity-level constraint rows
+    flow_inputs: list           # per flow: {input index: expression of parameters}
+    jumps: list                 # of JumpTerms, in document order
+    vdot: list                  # symbols standing for dv/dt in guard rates
+
+
+def hybrid_terms(spec: Spec, quantities: FrameQuantities, constraints: ConstraintTerms) -> HybridTerms:
+    flow_index = {f.name: i for i, f in enumerate(spec.flows)}
+    inputs = list(spec.inputs)
+    vdot = [sp.Symbol(f"vdot_{i}", real=True) for i in range(quantities.n)]
+    jumps = []
+    for j in spec.jumps:
+        for sym, fq in j.quantities.items():
+            quantities.define(sym, fq)
+        rate = quantities.rate(j.guard) + sum((a * b for a, b in zip(quantities.jac(j.guard), vdot)), sp.Integer(0))
+        enabled = sp.Min(*j.enabled) if len(j.enabled) > 1 else (j.enabled[0] if j.enabled else sp.Integer(1))
+        jumps.append(JumpTerms(
+            j.name, flow_index[j.source], flow_index[j.target], j.direction, j.priority, j.guard, rate, enabled,
+            list(j.resets), [r for r, name in enumerate(constraints.rows) if name in j.impact_constraints],
+            j.restitution))
+    return HybridTerms(
+        flows=[f.name for f in spec.flows], initial=spec.initial_flow,
+        flow_rows=[[r for r, name in enumerate(constraints.rows) if name in f.constraints] for f in spec.flows],
+        flow_inputs=[{inputs.index(k): e for k, e in f.inputs.items()} for f in spec.flows],
+        jumps=jumps, vdot=vdot)

@@ -1,0 +1,232 @@
+# -- the integrator ---------------------------------------------------------------
+# (andyc's templates/integrator.py, included verbatim: a fixed-step RK4 loop with
+# event location over this module's functions, compiled and cached with them.)
+#
+# advance() steps along the grid t0 + i dt and returns after a block of steps or
+# after a jump. Each step is classical RK4 on rhs_mode_into (mode IDEAL, LAGRANGE
+# or BAUMGARTE), followed, with do_project, by `project` (quaternion norms; with
+# constrain and energy_tol, the Braun & Goldfarb corrections).
+#
+# Events: after each step, the guards of the current flow's jumps are compared
+# with their values at the step's start. A sign change in a jump's direction is
+# located by root finding on the step, each trial time tau being a step of size
+# tau from the step's start (so the located state is the method's own solution),
+# to event_tol seconds (relative beyond 1 s). The earliest crossing whose
+# enabling condition holds wins, ties going to the lower priority number; the
+# jump (resets, impact) is applied at the near side of the final bracket, and
+# the rest of the step is integrated by the next call, so the grid stays
+# t0 + i dt. The caller applies the user's jump function and follows jumps
+# that happen at once (instant).
+
+
+@njit(cache=True, error_model="numpy")
+def rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, u, p, d, flow, out, M, G, k, xt):
+    """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status."""
+    nx = x.shape[0]
+    status = rhs_mode_into(t, x, u, p, d, flow, k[0], M, G, mode)
+    if status != OK:
+        return status
+    for j in range(nx):
+        xt[j] = x[j] + 0.5 * h * k[0, j]
+    status = rhs_mode_into(t + 0.5 * h, xt, u, p, d, flow, k[1], M, G, mode)
+    if status != OK:
+        return status
+    for j in range(nx):
+        xt[j] = x[j] + 0.5 * h * k[1, j]
+    status = rhs_mode_into(t + 0.5 * h, xt, u, p, d, flow, k[2], M, G, mode)
+    if status != OK:
+        return status
+    for j in range(nx):
+        xt[j] = x[j] + h * k[2, j]
+    status = rhs_mode_into(t + h, xt, u, p, d, flow, k[3], M, G, mode)
+    if status != OK:
+        return status
+    total = 0.0
+    for j in range(nx):
+        out[j] = x[j] + h / 6.0 * (k[0, j] + 2.0 * k[1, j] + 2.0 * k[2, j] + k[3, j])
+        total += out[j]
+    if not math.isfinite(total):
+        return NONFINITE
+    if do_project:
+        return project(t + h, out, u, p, d, flow, constrain, e0, energy_tol, M, G)
+    return OK
+
+
+@njit(cache=True, error_model="numpy")
+def crosses(direction, g_start, g_end):
+    """Whether a guard going from g_start to g_end over a step crosses zero in `direction`."""
+    if g_start > 0.0:
+        return direction != RISING and g_end <= 0.0
+    if g_start < 0.0:
+        return direction != FALLING and g_end >= 0.0
+    return False            # starting on zero: the instant check (see `instant`) decides
+
+
+@njit(cache=True, error_model="numpy")
+def locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, u, p, d, flow,
+           g_start, g_end, xb, xc, M, G, k, xt, counts):
+    """Root of guard m on the step (t, x) -> t + h, as a bracket [a, b] no wider than tol.
+
+    Illinois (modified regula falsi) with a bisection whenever the bracket
+    does not halve. Returns (a, status) with xb the state at t + a: the near
+    side of zero, so that a guard reset to move back (a bounce) starts the
+    next step on the side from which it can cross again.
+    """
+    s = 1.0 if g_start > 0.0 else -1.0
+    a, ga, b, gb = 0.0, g_start, h, g_end
+    xb[:] = x
+    side = 0
+    width = h
+    for _ in range(200):
+        if b - a <= tol:
+            break
+        c = b - gb * (b - a) / (gb - ga)
+        if not (a < c < b) or (b - a) > 0.5 * width:
+            c = 0.5 * (a + b)
+        width = b - a
+        counts[1] += 1
+        status = rk4_step(mode, do_project, constrain, e0, energy_tol, t, c, x, u, p, d, flow, xc, M, G, k, xt)
+        if status != OK:
+            return c, status
+        gc = guard(m, t + c, xc, u, p, d)
+        if s * gc <= 0.0:
+            b, gb = c, gc
+            if side == 1:
+                ga *= 0.5
+            side = 1
+        else:
+            a, ga = c, gc
+            xb[:] = xc
+            if side == -1:
+                gb *= 0.5
+            side = -1
+    return a, OK
+
+
+@njit(cache=True, error_model="numpy")
+def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i_end, every, t, flow, x, U, p, d,
+            out_t, out_x, out_flow, out_d, row, g0, x_event, M, G, k, xt, x1, xb, xc, counts):
+    """Integrate from time t (on step i: t0 + i dt <= t < t0 + (i + 1) dt) to the grid point i_end,
+    stopping early at a jump or a failure. x, d, g0 and the logs are updated in place; every
+    `every`-th grid point is logged at out_*[row]. counts[0] += steps taken (a step cut by a jump
+    counts twice), counts[1] += trial steps of event location.
+
+    Returns (i, row, status, t, flow, jump): jump is the index of the jump applied at t (x_event
+    holds the state just before it), or -1.
+    """
+    u = U[flow]
+    for m in range(NJ):
+        if JUMP_SOURCE[m] == flow:
+            g0[m] = guard(m, t, x, u, p, d)
+    while i < i_end:
+        t_next = t0 + (i + 1) * dt
+        h = t_next - t
+        if h > 1e-14 * max(1.0, abs(t_next)):
+            counts[0] += 1
+            status = rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, u, p, d, flow, x1, M, G, k, xt)
+            if status != OK:
+                return i, row, status, t, flow, -1
+            best, best_tau = -1, h
+            tol = event_tol * max(1.0, abs(t))
+            for m in range(NJ):
+                if JUMP_SOURCE[m] != flow:
+                    continue
+                g1 = guard(m, t_next, x1, u, p, d)
+                if crosses(JUMP_DIRECTION[m], g0[m], g1):
+                    tau, status = locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, u, p, d, flow,
+                                         g0[m], g1, xb, xc, M, G, k, xt, counts)
+                    if status != OK:
+                        return i, row, status, t, flow, -1
+                    earlier = tau < best_tau - tol or (best >= 0 and tau <= best_tau + tol
+                                                        and JUMP_PRIORITY[m] < JUMP_PRIORITY[best])
+                    if (best < 0 or earlier) and enabled(m, t + tau, xb, u, p, d) >= 0.0:
+                        best, best_tau = m, tau
+                        x_event[:] = xb
+                g0[m] = g1
+            if best >= 0:
+                x[:] = x_event
+                t = t + best_tau
+                status = jump(best, t, x, u, p, d, M, G)
+                return i, row, status, t, JUMP_TARGET[best], best
+            x[:] = x1
+        t = t_next
+        i += 1
+        if i % every == 0:
+            out_t[row] = t
+            out_x[row] = x
+            out_flow[row] = flow
+            out_d[row] = d
+            row += 1
+    return i, row, OK, t, flow, -1
+
+
+@njit(cache=True, error_model="numpy")
+def instant(mode, t, x, u, p, d, flow, xdot, M, G):
+    """The first jump (in priority order) out of `flow` that happens at once at (t, x), or -1.
+
+    A guard already past zero happens at once when it is moving further
+    (falling: g < 0 and dg/dt <= 0, or g = 0 and dg/dt < 0; rising mirrored;
+    either: g = 0 and dg/dt != 0) and its enabling condition holds. A guard
+    past zero but moving back, such as a bouncing ball's height just after
+    the bounce, does not.
+    """
+    have_rate = False
+    for n in range(NJ):
+        m = JUMP_ORDER[n]
+        if JUMP_SOURCE[m] != flow:
+            continue
+        g = guard(m, t, x, u, p, d)
+        if g != 0.0 and (JUMP_DIRECTION[m] == EITHER or (g > 0.0) != (JUMP_DIRECTION[m] == RISING)):
+            continue
+        if not have_rate:
+            status = rhs_mode_into(t, x, u, p, d, flow, xdot, M, G, mode)
+            if status != OK:
+                return -1
+            have_rate = True
+        rate = guard_rate(m, t, x, u, p, d, xdot)
+        if JUMP_DIRECTION[m] == EITHER:
+            moving = rate != 0.0
+        elif JUMP_DIRECTION[m] == FALLING:
+            moving = rate < 0.0 or (g < 0.0 and rate == 0.0)
+        else:
+            moving = rate > 0.0 or (g > 0.0 and rate == 0.0)
+        if moving and enabled(m, t, x, u, p, d) >= 0.0:
+            return m
+    return -1
+
+
+@njit(cache=True, error_model="numpy")
+def evaluate_energy(t, X, U, p, D, F, out):
+    """Energy at the logged samples (time t, state X, discrete states D, flow F)."""
+    for r in range(t.shape[0]):
+        out[r] = energy(t[r], X[r], U[F[r]], p, D[r])
+
+
+@njit(cache=True, error_model="numpy")
+def evaluate_frames(t, X, U, p, D, F, out):
+    for r in range(t.shape[0]):
+        frame_positions(t[r], X[r], U[F[r]], p, D[r], out[r])
+
+
+@njit(cache=True, error_model="numpy")
+def evaluate_constraints(t, X, U, p, D, F, phi, c, lam, M, G):
+    """Residuals phi (N, NH), c (N, NC) and multipliers lam (N, NC) at the logged samples;
+    NaN for the rows not active in the sample's flow F[r]."""
+    nh = phi.shape[1]
+    nc = c.shape[1]
+    A = np.empty((nc, M.shape[0]))
+    kappa = np.empty(nc)
+    phi_all = np.empty(nh)
+    c_all = np.empty(nc)
+    for r in range(t.shape[0]):
+        u = U[F[r]]
+        constraints(t[r], X[r], u, p, D[r], phi_all, c_all, A, kappa)
+        phi[r, :] = np.nan
+        c[r, :] = np.nan
+        for n in range(FLOW_NROWS[F[r]]):
+            i = FLOW_ROWS[F[r], n]
+            c[r, i] = c_all[i]
+            if i < nh:
+                phi[r, i] = phi_all[i]
+        if multipliers(t[r], X[r], u, p, D[r], F[r], lam[r], M, G) != OK:
+            lam[r, :] = np.nan

@@ -1,0 +1,143 @@
+"""Hybrid models against closed forms and published numbers (REFERENCE-CASES §6-8).
+
+The step maps of the walkers are computed from simulated steps: a run from
+a state just after an impact, stopped right after the next one (stop_after).
+Fixed points come from Newton's method on those maps, eigenvalues from
+central differences of them.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+import andyc
+
+G = 9.81
+
+
+# -- bouncing ball (§6) -----------------------------------------------------------
+
+H0, E = 1.0, 0.8
+T1 = math.sqrt(2 * H0 / G)
+T_INF = T1 * (1 + 2 * E / (1 - E))
+
+
+def impact_times(n):
+    """t_1 = sqrt(2 h0 / g), t_(k+1) = t_k + 2 e^k t_1."""
+    return T1 + np.concatenate([[0.0], np.cumsum(2 * E ** np.arange(1, n) * T1)])
+
+
+@pytest.mark.parametrize("method", ["rk4", "projection", "DOP853"])
+def test_bouncing_ball_impacts_and_zeno(compiled, method):
+    model = compiled("bouncing_ball")
+    andyc.simulate(model, 0.5, dt=1e-3, method=method, progress=False)      # compile outside the timing
+    run = andyc.simulate(model, 10.0, dt=1e-3, method=method, rtol=1e-12, atol=1e-12, progress=False)
+    times = run.events["time"]
+    # Free fall is a parabola: RK4 integrates it exactly, so the impact times are exact to the event tolerance.
+    assert np.max(np.abs(times[:20] - impact_times(20))) < 1e-9
+    assert set(run.event_names()) == {"bounce"}
+    assert run.status.startswith("stopped: Zeno behaviour")
+    stated = float(run.status.split("accumulate at t = ")[1].split(" s")[0])
+    assert abs(stated - T_INF) < 1e-6                      # the accumulation point the message names
+    assert 0 < T_INF - run.time[-1] < 1e-6                 # where the run stopped
+    # It stops instead of grinding towards t_inf: few steps, and (compiled rk4) a small fraction of a second.
+    assert run.stats["steps"] < 5000
+    if method == "rk4":
+        assert run.stats["wall_seconds"] < 0.25
+    assert np.all(run.column("y") > -1e-12)                # never through the ground
+    # each impact keeps e of the speed
+    before, after = run.events["state_before"][:, 1], run.events["state_after"][:, 1]
+    assert np.allclose(after, -E * before, rtol=1e-12, atol=0)
+
+
+# -- rimless wheel (§7) -------------------------------------------------------------
+
+ALPHA, GAMMA = 0.3, 0.04
+
+
+def wheel_step(model, w, method):
+    """Angular speed just after the next impact, from w just after one (the hub alpha behind its foot)."""
+    x0 = np.array([-math.sin(ALPHA), math.cos(ALPHA), w * math.cos(ALPHA), w * math.sin(ALPHA)])
+    run = andyc.simulate(model, 50.0, dt=1e-3, method=method, x0=x0, d0=np.zeros(1),
+                         stop_after={"next_spoke": 1}, progress=False)
+    assert run.status == "finished" and len(run.events["time"]) == 1
+    x = run.events["state_after"][0]
+    fx = run.events["discrete_after"][0][0]
+    assert fx == pytest.approx(2 * math.sin(ALPHA), rel=1e-14)
+    assert x[0] - fx == pytest.approx(-math.sin(ALPHA), abs=1e-9)     # alpha behind the new foot
+    return math.hypot(x[2], x[3])
+
+
+@pytest.mark.parametrize("method", ["projection", "rk4"])
+def test_rimless_wheel_fixed_point_and_eigenvalue(compiled, method):
+    model = compiled("rimless_wheel")
+    w_star = math.sqrt(4 * G / G * math.sin(ALPHA) * math.sin(GAMMA) / math.tan(2 * ALPHA) ** 2)
+    assert w_star == pytest.approx(0.317799, abs=5e-7)          # REFERENCE-CASES §7 (g = l = 1)
+    w, h = 0.5, 1e-5
+    for _ in range(8):
+        f = wheel_step(model, w, method) - w
+        slope = (wheel_step(model, w + h, method) - wheel_step(model, w - h, method)) / (2 * h)
+        w -= f / (slope - 1)
+        if abs(f) < 1e-13:
+            break
+    assert abs(w - w_star) < 1e-6
+    assert abs(slope - math.cos(2 * ALPHA) ** 2) < 1e-6
+    assert math.cos(2 * ALPHA) ** 2 == pytest.approx(0.681179, abs=5e-7)
+
+
+# -- compass gait (§8) --------------------------------------------------------------
+
+PHI, W_STANCE, W_SWING, STEP_TIME = 0.2710286805, 1.0923835899, 0.3773739489, 0.7343464
+EIGENVALUES = np.array([-0.19973 + 0.54448j, -0.19973 - 0.54448j, 0.13157])
+
+
+def gait_state(z):
+    """The state just after a heel strike of leg 1 at the origin, from z = (half inter-leg angle,
+    stance speed, swing speed) with the signs of walking downhill (+x)."""
+    phi, w_st, w_sw = z
+    return np.array([-math.sin(phi), math.cos(phi), phi, -phi,
+                     math.cos(phi) * w_st, math.sin(phi) * w_st, -w_st, -w_sw])
+
+
+def gait_step(model, z):
+    """(z after the next heel strike, step time); roles swap: leg 2 stands after it."""
+    run = andyc.simulate(model, 5.0, dt=1e-3, method="projection", x0=gait_state(z), d0=np.zeros(1),
+                         flow0="stance1", stop_after={"strike2": 1}, progress=False)
+    assert run.status == "finished" and run.event_names() == ["strike2"]
+    x = run.events["state_after"][0]
+    th1, th2, w1, w2 = x[2], x[3], x[6], x[7]
+    assert th1 == pytest.approx(-th2, abs=1e-9)            # both feet on the slope
+    return np.array([th2, -w2, -w1]), run.events["time"][0]
+
+
+def test_compass_gait_period_one_fixed_point_and_eigenvalues(compiled):
+    model = compiled("compass_gait")
+    z = np.array([0.25, 1.0, 0.3])
+    h = 1e-6
+    for _ in range(10):
+        f = gait_step(model, z)[0] - z
+        J = np.empty((3, 3))
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = h
+            J[:, k] = (gait_step(model, z + e)[0] - gait_step(model, z - e)[0]) / (2 * h)
+        z = z - np.linalg.solve(J - np.eye(3), f)
+        if np.max(np.abs(f)) < 1e-12:
+            break
+    assert np.max(np.abs(z - [PHI, W_STANCE, W_SWING])) < 1e-6
+    assert gait_step(model, z)[1] == pytest.approx(STEP_TIME, abs=1e-6)
+    eig = np.linalg.eigvals(J)
+    eig = eig[np.argsort(eig.imag)]
+    assert np.max(np.abs(eig - EIGENVALUES[np.argsort(EIGENVALUES.imag)])) < 1e-4
+
+
+def test_compass_gait_walks_from_the_shipped_state(compiled):
+    """The model's own initial state is the period-1 gait: every step takes the same time."""
+    model = compiled("compass_gait")
+    run = andyc.simulate(model, 8.0, dt=1e-3, method="projection", progress=False)
+    assert run.finished
+    assert len(run.events["time"]) == 10
+    assert np.allclose(np.diff(run.events["time"]), STEP_TIME, atol=1e-6)
+    assert run.event_names()[:2] == ["strike2", "strike1"]
+    assert np.max(np.abs(run.residual_position[~np.isnan(run.residual_position)])) < 1e-10
