@@ -14,8 +14,10 @@ import sys
 from pathlib import Path
 
 import pytest
+from click.testing import CliRunner
 
 import andyc
+from andyc import cli
 from andyc.errors import SpecError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -83,6 +85,29 @@ def one_problem(tmp_path, text: str, derive: bool = False):
 
 def assert_at(d, line: int, path: str):
     assert (d.line, d.path) == (line, path), f"expected line {line}, path {path!r}: {d}"
+
+
+def check(*files):
+    """`andyc check FILES` in process; stderr kept apart from stdout."""
+    try:
+        runner = CliRunner(mix_stderr=False)          # click 8.1
+    except TypeError:
+        runner = CliRunner()                          # click >= 8.2 always keeps stderr apart
+    return runner.invoke(cli.main, ["check", *map(str, files)])
+
+
+def check_all_at_once(tmp_path, monkeypatch, text: str, total: int) -> list:
+    """`andyc check` on a model with `total` problems: exit 1, one FILE:LINE: PATH line each, a count.
+    Returns the regex matches of the lines, in the order printed."""
+    (tmp_path / "bad.yaml").write_text(text)
+    monkeypatch.chdir(tmp_path)
+    result = check("bad.yaml")
+    assert result.exit_code == 1 and result.stdout == ""
+    *lines, last = result.stderr.splitlines()
+    assert last == f"{total} problems found"
+    found = [LINE_FORMAT.match(x) for x in lines]
+    assert all(found), lines
+    return found
 
 
 def test_base_model_is_valid(tmp_path):

@@ -11,11 +11,9 @@ import re
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
 
 import andyc
-from andyc import cli
-from tests.test_check_errors import LINE_FORMAT, assert_at, edit, line_of, one_problem, problems
+from tests.test_check_errors import assert_at, check, check_all_at_once, edit, line_of, one_problem, problems
 
 ROOT = Path(__file__).resolve().parents[1]
 BALL_IN_BOWL = ROOT / "models" / "ball_in_bowl.yaml"
@@ -384,15 +382,6 @@ def test_elements_that_do_work_are_fine_without_conserves_energy(tmp_path):
 
 # -- 8. the command line (click's CliRunner, in process) --------------------------------
 
-def check(*files):
-    """`andyc check FILES` in process; stderr kept apart from stdout."""
-    try:
-        runner = CliRunner(mix_stderr=False)          # click 8.1
-    except TypeError:
-        runner = CliRunner()                          # click >= 8.2 always keeps stderr apart
-    return runner.invoke(cli.main, ["check", *map(str, files)])
-
-
 def test_cli_check_one_bad_constraint_prints_one_line(tmp_path, monkeypatch):
     text = with_rod("tipp.x**2 + tip.y**2 - L**2")
     (tmp_path / "bad.yaml").write_text(text)
@@ -409,14 +398,7 @@ def test_cli_check_one_bad_constraint_prints_one_line(tmp_path, monkeypatch):
 def test_cli_check_reports_every_constraint_problem_at_once(tmp_path, monkeypatch):
     text = edit(with_skate("[tip.vz - tip.vx*tip.vy]"), "{stiffness: k, damping: b}", "{stiffness: -k, damping: b}")
     text = edit(text, "constraints:\n", "dampers:\n  - {name: drag, speed: x, coefficient: b}\nconstraints:\n")
-    (tmp_path / "bad.yaml").write_text(text)
-    monkeypatch.chdir(tmp_path)
-    result = check("bad.yaml")
-    assert result.exit_code == 1 and result.stdout == ""
-    *lines, total = result.stderr.splitlines()
-    assert total == "3 problems found"
-    found = [LINE_FORMAT.match(x) for x in lines]
-    assert all(found), lines
+    found = check_all_at_once(tmp_path, monkeypatch, text, 3)
     assert [(m["file"], int(m["line"]), m["path"]) for m in found] == [
         ("bad.yaml", line_of(text, "conserves_energy: true"), "conserves_energy"),
         ("bad.yaml", line_of(text, "stiffness: -k"), "constraints[0].gains.stiffness"),

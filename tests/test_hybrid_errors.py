@@ -11,12 +11,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
 
 import andyc
-from andyc import cli
 from andyc.errors import SimulationError
-from tests.test_check_errors import LINE_FORMAT, assert_at, edit, line_of, one_problem, problems
+from tests.test_check_errors import LINE_FORMAT, assert_at, check, check_all_at_once, edit, line_of, one_problem, problems
 
 ROOT = Path(__file__).resolve().parents[1]
 HYBRID_MODELS = ["bouncing_ball", "rimless_wheel", "compass_gait"]
@@ -537,15 +535,6 @@ def test_discrete_state_used_only_in_a_reset_counts_as_used(tmp_path):
 
 # -- 9. the command line (click's CliRunner, in process) --------------------------------
 
-def check(*files):
-    """`andyc check FILES` in process; stderr kept apart from stdout."""
-    try:
-        runner = CliRunner(mix_stderr=False)          # click 8.1
-    except TypeError:
-        runner = CliRunner()                          # click >= 8.2 always keeps stderr apart
-    return runner.invoke(cli.main, ["check", *map(str, files)])
-
-
 def test_cli_check_one_bad_jump_prints_one_line(tmp_path, monkeypatch):
     text = edit(HOPPER, "      to: stance\n", "      to: stanse\n")
     (tmp_path / "bad.yaml").write_text(text)
@@ -564,14 +553,7 @@ def test_cli_check_reports_every_hybrid_problem_at_once(tmp_path, monkeypatch):
     text = edit(text, RESET, "reset: {L: 2}")
     text = edit(text, "restitution: e,", "restitution: 1.5,")
     text = edit(text, "constraints: [ground, pin]", "constraints: [ground, pinn]")
-    (tmp_path / "bad.yaml").write_text(text)
-    monkeypatch.chdir(tmp_path)
-    result = check("bad.yaml")
-    assert result.exit_code == 1 and result.stdout == ""
-    *lines, total = result.stderr.splitlines()
-    assert total == "4 problems found"
-    found = [LINE_FORMAT.match(x) for x in lines]
-    assert all(found), lines
+    found = check_all_at_once(tmp_path, monkeypatch, text, 4)
     assert [(m["file"], int(m["line"]), m["path"]) for m in found] == [
         ("bad.yaml", line_of(text, "[ground, pinn]"), "hybrid.flows[1].constraints[1]"),
         ("bad.yaml", line_of(text, "guard: fot.y"), "hybrid.jumps[0].guard"),

@@ -81,6 +81,12 @@ def _unpack(model: SymbolicModel, used: set) -> list[str]:
     return lines
 
 
+def _parameter_unpack(model: SymbolicModel, exprs: list) -> str:
+    """Lines reading from p the parameters `exprs` use (for the initial-value functions)."""
+    used = set().union(*(e.free_symbols for e in exprs))
+    return "\n".join(f"    {s} = p[{i}]" for i, s in enumerate(model.parameters) if s in used)
+
+
 def _function(model, pool, name, args, doc, outputs, returns=None):
     body = function_body(outputs, pool)
     return {"name": name, "args": args, "doc": doc, "unpack": _unpack(model, body.inputs),
@@ -89,7 +95,7 @@ def _function(model, pool, name, args, doc, outputs, returns=None):
 
 def _hybrid_functions(model: SymbolicModel, pool: dict) -> list:
     """One guard, guard rate, enabling condition and reset function per jump; restitutions; flow inputs."""
-    nq, nv = len(model.q), model.dof
+    nq = len(model.q)
     index = {**{c.name: f"x[{i}]" for i, c in enumerate(model.spec.coordinates)},
              **{name: f"x[{nq + i}]" for i, name in enumerate(model.spec.speed_names)},
              **{x.name: f"d[{i}]" for i, x in enumerate(model.spec.discrete)}}
@@ -177,14 +183,11 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
     functions[0]["outputs"] += [(t, str(src)) for t, src in mirror]
     initial = ([c.initial for c in spec.coordinates] + [c.velocity for c in spec.coordinates]
                + [s.initial for s in spec.speeds] + [s.initial for s in spec.signals])
-    init_syms = set().union(*(e.free_symbols for e in initial))
     values = [to_code(e) for e in initial]
     # Each quaternion signal: the index of its w component in x.
     nx_before = len(model.q) + n
     quaternions = [nx_before + i for i, s in enumerate(spec.signals) if s.component == "qw"]
-    unpack = [f"    {s} = p[{i}]" for i, s in enumerate(model.parameters) if s in init_syms]
-    discrete_syms = set().union(*(x.initial.free_symbols for x in spec.discrete))
-    discrete_unpack = [f"    {s} = p[{i}]" for i, s in enumerate(model.parameters) if s in discrete_syms]
+    discrete = [x.initial for x in spec.discrete]
     operations = {f["name"]: f["operations"] for f in functions}
     context = {
         "version": andyc.__version__, "source": Path(spec.file).name, "spec_sha256": spec.sha256,
@@ -203,9 +206,8 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         "nh": cons.nh, "nc": cons.nc, "constraint_rows": cons.rows, "multipliers": cons.multipliers,
         "conserves_energy": spec.conserves_energy,
         "constraint_where": [[spec.source.line(w), format_path(w)] for c in spec.constraints for w in c.row_where],
-        "initial": {"unpack": "\n".join(unpack), "state": values},
-        "initial_discrete": {"unpack": "\n".join(discrete_unpack),
-                             "values": [to_code(x.initial) for x in spec.discrete]},
+        "initial": {"unpack": _parameter_unpack(model, initial), "state": values},
+        "initial_discrete": {"unpack": _parameter_unpack(model, discrete), "values": [to_code(e) for e in discrete]},
         "discrete": [x.name for x in spec.discrete],
         **_hybrid_context(model),
         "functions": functions,

@@ -102,7 +102,7 @@ class Workspace:
     k: np.ndarray        # (4, nx) RK stages
     x_tmp: np.ndarray    # (nx,) stage state
     x_step: np.ndarray   # (nx,) a step's end
-    x_far: np.ndarray    # (nx,) event location: the bracket's far end
+    x_near: np.ndarray   # (nx,) event location: the state at the bracket's near end
     x_trial: np.ndarray  # (nx,) event location: a trial state
     x_event: np.ndarray  # (nx,) the state just before a jump
     xdot: np.ndarray     # (nx,)

@@ -178,7 +178,7 @@ def constraint_residuals(model: CompiledModel, t: float, x, u, p, d=None, flow=N
     flow = model.initial_flow if flow is None else flow
     phi, c = np.empty(model.nh), np.empty(model.nc)
     model.module.constraints(t, x, u, p, d, phi, c, np.empty((model.nc, model.nv)), np.empty(model.nc))
-    rows = list(model.module.FLOW_ROWS[flow, :model.module.FLOW_NROWS[flow]])
+    rows = _active_rows(model, flow)
     return phi[[r for r in rows if r < model.nh]], c[rows]
 
 
@@ -266,6 +266,7 @@ class EventLog:
             self.stop_after[model.jump_names.index(name)] = int(count)
         self.times, self.jumps, self.sources, self.targets = [], [], [], []
         self.before, self.after, self.discrete = [], [], []
+        self.counts = [0] * model.nj     # occurrences of each jump
         self.instant = 0
         self.finished = False           # stopped by stop_after, not by a failure
 
@@ -280,6 +281,7 @@ class EventLog:
         self.before.append(np.array(x_before))
         self.after.append(np.array(x_after))
         self.discrete.append(np.array(d_after))
+        self.counts[k] += 1
         if self.instant > self.max_instant:
             loop = " -> ".join(jumps[j] for j in self.jumps[-min(6, len(self.jumps)):])
             return (f"stopped: {self.instant} jumps at t = {t:.12g} s without time advancing (last: {loop}), past "
@@ -292,7 +294,7 @@ class EventLog:
                     f"(intervals shrinking by a factor {ratio:.6g} per jump over the last {self.ZENO_WINDOW}; "
                     f"{len(self.times)} jumps, the last at t = {t:.12g} s, {t_inf - t:.3g} s before the "
                     f"accumulation point)")
-        if self.stop_after.get(k) is not None and self.jumps.count(k) >= self.stop_after[k]:
+        if k in self.stop_after and self.counts[k] >= self.stop_after[k]:
             self.finished = True
             return "finished"
         return None
@@ -402,7 +404,7 @@ def _run_rk4(model, method, x, U, p, d, flow, t_end, dt, every, bar, events, ene
         source = flow
         i, row, status, t, flow, k = module.advance(
             mode, do_project, constrain, e0, etol, events.event_tol, 0.0, dt, i, i_end, every, t, flow, x, U, p, d,
-            out_t, out_x, out_f, out_d, row, ws.g0, ws.x_event, ws.M, ws.G, ws.k, ws.x_tmp, ws.x_step, ws.x_far,
+            out_t, out_x, out_f, out_d, row, ws.g0, ws.x_event, ws.M, ws.G, ws.k, ws.x_tmp, ws.x_step, ws.x_near,
             ws.x_trial, counts)
         if k >= 0:
             if status != OK:
@@ -426,7 +428,7 @@ def _run_rk4(model, method, x, U, p, d, flow, t_end, dt, every, bar, events, ene
     status_text = "finished" if message is None or events.finished else message
     steps, trials = int(counts[0]), int(counts[1])
     stats = {"steps": steps, "event_trial_steps": trials, "rhs_evaluations": 4 * (steps + trials),
-             "projections": steps + trials if do_project and constrain else 0}
+             "projections": steps + trials if constrain else 0}
     return tuple(a[:row] for a in log), status_text, stats
 
 
@@ -515,17 +517,16 @@ def _first_crossing(model, dense, watched, g0, t0, t1, u, p, d, event_tol):
     """
     module = model.module
     best = None
+    x1 = dense(t1)
+    tol = event_tol * max(1.0, abs(t0))
     for m in watched:
-        x1 = dense(t1)
         g1 = module.guard(m, t1, x1, u, p, d)
         if module.crosses(module.JUMP_DIRECTION[m], g0[m], g1):
-            tau, x_far = _illinois(lambda s: module.guard(m, s, dense(s), u, p, d), dense, t0, t1, g0[m], g1,
-                                   event_tol * max(1.0, abs(t0)))
-            tol = event_tol * max(1.0, abs(t0))
+            tau, x_near = _illinois(lambda s: module.guard(m, s, dense(s), u, p, d), dense, t0, t1, g0[m], g1, tol)
             earlier = best is None or tau < best[1] - tol or (
                 tau <= best[1] + tol and module.JUMP_PRIORITY[m] < module.JUMP_PRIORITY[best[0]])
-            if earlier and module.enabled(m, tau, x_far, u, p, d) >= 0.0:
-                best = (m, tau, x_far)
+            if earlier and module.enabled(m, tau, x_near, u, p, d) >= 0.0:
+                best = (m, tau, x_near)
         g0[m] = g1
     return best
 
