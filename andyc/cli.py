@@ -12,6 +12,7 @@ import click
 
 import andyc
 from andyc.errors import SimulationError, SpecError
+from andyc.runtime.compiled import compile_integrator, integrator_compiled
 from andyc.runtime.simulate import METHODS
 
 
@@ -180,6 +181,9 @@ def sim(file, t_end, dt, method, sets, outs, every, frames, init, init_tol, ener
         raise click.UsageError(str(exc))
     if not result.skipped:
         _report_jumps_file(result)
+    if not integrator_compiled(model):
+        click.echo(f"{model.name}: compiling the integrator (once per build; Numba caches it) ...", err=True)
+        compile_integrator(model)
     params = {k: v for k, v in overrides.items() if k not in model.input_names}
     inputs = {k: v for k, v in overrides.items() if k in model.input_names}
     try:

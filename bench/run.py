@@ -36,12 +36,12 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @njit(cache=False)
-def _rhs_loop(rhs_into, n, x, u, p, d, xdot, M, G):
+def _rhs_loop(rhs_into, n, x, u, p, d, xdot, M, G, S):
     """n right-hand-side evaluations at slowly moving states (so nothing is hoisted)."""
     acc = 0.0
     for i in range(n):
         x[0] += 1e-12
-        rhs_into(0.0, x, u, p, d, 0, xdot, M, G)
+        rhs_into(0.0, x, u, p, d, 0, xdot, M, G, S)
         acc += xdot[-1]
     return acc
 
@@ -51,13 +51,13 @@ def rhs_microseconds(model, repeats=3, n=200_000) -> float:
     p, u = model.parameter_defaults, model.input_defaults
     x = model.initial_state(p).copy()
     xdot = np.zeros(model.nx)
-    M, G = np.zeros((model.nv, model.nv)), np.zeros(model.nv)
+    M, G, S = np.zeros((model.nv, model.nv)), np.zeros(model.nv), np.zeros((model.module.S_ROWS, model.module.S_WIDTH))
     d = model.initial_discrete(p)
-    _rhs_loop(model.module.rhs_into, 10, x, u, p, d, xdot, M, G)
+    _rhs_loop(model.module.rhs_into, 10, x, u, p, d, xdot, M, G, S)
     best = np.inf
     for _ in range(repeats):
         tic = time.perf_counter()
-        _rhs_loop(model.module.rhs_into, n, x, u, p, d, xdot, M, G)
+        _rhs_loop(model.module.rhs_into, n, x, u, p, d, xdot, M, G, S)
         best = min(best, time.perf_counter() - tic)
     return 1e6 * best / n
 

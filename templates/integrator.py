@@ -20,25 +20,25 @@
 
 
 @njit(cache=True, error_model="numpy")
-def rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, u, p, d, flow, out, M, G, k, xt):
+def rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, u, p, d, flow, out, M, G, S, k, xt):
     """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status."""
     nx = x.shape[0]
-    status = rhs_mode_into(t, x, u, p, d, flow, k[0], M, G, mode)
+    status = rhs_mode_into(t, x, u, p, d, flow, k[0], M, G, S, mode)
     if status != OK:
         return status
     for j in range(nx):
         xt[j] = x[j] + 0.5 * h * k[0, j]
-    status = rhs_mode_into(t + 0.5 * h, xt, u, p, d, flow, k[1], M, G, mode)
+    status = rhs_mode_into(t + 0.5 * h, xt, u, p, d, flow, k[1], M, G, S, mode)
     if status != OK:
         return status
     for j in range(nx):
         xt[j] = x[j] + 0.5 * h * k[1, j]
-    status = rhs_mode_into(t + 0.5 * h, xt, u, p, d, flow, k[2], M, G, mode)
+    status = rhs_mode_into(t + 0.5 * h, xt, u, p, d, flow, k[2], M, G, S, mode)
     if status != OK:
         return status
     for j in range(nx):
         xt[j] = x[j] + h * k[2, j]
-    status = rhs_mode_into(t + h, xt, u, p, d, flow, k[3], M, G, mode)
+    status = rhs_mode_into(t + h, xt, u, p, d, flow, k[3], M, G, S, mode)
     if status != OK:
         return status
     total = 0.0
@@ -48,7 +48,7 @@ def rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, u, p, d, flow
     if not math.isfinite(total):
         return NONFINITE
     if do_project:
-        return project(t + h, out, u, p, d, flow, constrain, e0, energy_tol, M, G)
+        return project(t + h, out, u, p, d, flow, constrain, e0, energy_tol, M, G, S)
     return OK
 
 
@@ -64,7 +64,7 @@ def crosses(direction, g_start, g_end):
 
 @njit(cache=True, error_model="numpy")
 def locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, u, p, d, flow,
-           g_start, g_end, xb, xc, M, G, k, xt, counts):
+           g_start, g_end, xb, xc, M, G, S, k, xt, counts):
     """Root of guard m on the step (t, x) -> t + h, as a bracket [a, b] no wider than tol.
 
     Illinois (modified regula falsi) with a bisection whenever the bracket
@@ -85,7 +85,7 @@ def locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, u, p, d
             c = 0.5 * (a + b)
         width = b - a
         counts[1] += 1
-        status = rk4_step(mode, do_project, constrain, e0, energy_tol, t, c, x, u, p, d, flow, xc, M, G, k, xt)
+        status = rk4_step(mode, do_project, constrain, e0, energy_tol, t, c, x, u, p, d, flow, xc, M, G, S, k, xt)
         if status != OK:
             return c, status
         gc = guard(m, t + c, xc, u, p, d)
@@ -105,7 +105,7 @@ def locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, u, p, d
 
 @njit(cache=True, error_model="numpy")
 def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i_end, every, t, flow, x, U, p, d,
-            out_t, out_x, out_flow, out_d, row, g0, x_event, M, G, k, xt, x1, xb, xc, counts):
+            out_t, out_x, out_flow, out_d, row, g0, x_event, M, G, S, k, xt, x1, xb, xc, counts):
     """Integrate from time t (on step i: t0 + i dt <= t < t0 + (i + 1) dt) to the grid point i_end,
     stopping early at a jump or a failure. x, d, g0 and the logs are updated in place; every
     `every`-th grid point is logged at out_*[row]. counts[0] += steps taken (a step cut by a jump
@@ -123,7 +123,7 @@ def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i
         h = t_next - t
         if h > 1e-14 * max(1.0, abs(t_next)):
             counts[0] += 1
-            status = rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, u, p, d, flow, x1, M, G, k, xt)
+            status = rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, u, p, d, flow, x1, M, G, S, k, xt)
             if status != OK:
                 return i, row, status, t, flow, -1
             best, best_tau = -1, h
@@ -134,7 +134,7 @@ def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i
                 g1 = guard(m, t_next, x1, u, p, d)
                 if crosses(JUMP_DIRECTION[m], g0[m], g1):
                     tau, status = locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, u, p, d, flow,
-                                         g0[m], g1, xb, xc, M, G, k, xt, counts)
+                                         g0[m], g1, xb, xc, M, G, S, k, xt, counts)
                     if status != OK:
                         return i, row, status, t, flow, -1
                     earlier = tau < best_tau - tol or (best >= 0 and tau <= best_tau + tol
@@ -146,7 +146,7 @@ def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i
             if best >= 0:
                 x[:] = x_event
                 t = t + best_tau
-                status = jump(best, t, x, u, p, d, M, G)
+                status = jump(best, t, x, u, p, d, M, G, S)
                 return i, row, status, t, JUMP_TARGET[best], best
             x[:] = x1
         t = t_next
@@ -161,7 +161,7 @@ def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i
 
 
 @njit(cache=True, error_model="numpy")
-def instant(mode, t, x, u, p, d, flow, xdot, M, G):
+def instant(mode, t, x, u, p, d, flow, xdot, M, G, S):
     """The first jump (in priority order) out of `flow` that happens at once at (t, x), or -1.
 
     A guard already past zero happens at once when it is moving further
@@ -179,7 +179,7 @@ def instant(mode, t, x, u, p, d, flow, xdot, M, G):
         if g != 0.0 and (JUMP_DIRECTION[m] == EITHER or (g > 0.0) != (JUMP_DIRECTION[m] == RISING)):
             continue
         if not have_rate:
-            status = rhs_mode_into(t, x, u, p, d, flow, xdot, M, G, mode)
+            status = rhs_mode_into(t, x, u, p, d, flow, xdot, M, G, S, mode)
             if status != OK:
                 return -1
             have_rate = True
@@ -209,24 +209,18 @@ def evaluate_frames(t, X, U, p, D, F, out):
 
 
 @njit(cache=True, error_model="numpy")
-def evaluate_constraints(t, X, U, p, D, F, phi, c, lam, M, G):
+def evaluate_constraints(t, X, U, p, D, F, phi, c, lam, M, G, S):
     """Residuals phi (N, NH), c (N, NC) and multipliers lam (N, NC) at the logged samples;
     NaN for the rows not active in the sample's flow F[r]."""
-    nh = phi.shape[1]
-    nc = c.shape[1]
-    A = np.empty((nc, M.shape[0]))
-    kappa = np.empty(nc)
-    phi_all = np.empty(nh)
-    c_all = np.empty(nc)
     for r in range(t.shape[0]):
         u = U[F[r]]
-        constraints(t[r], X[r], u, p, D[r], phi_all, c_all, A, kappa)
+        phi_all, c_all, A, kappa = constraint_terms(t[r], X[r], u, p, D[r], S)
         phi[r, :] = np.nan
         c[r, :] = np.nan
         for n in range(FLOW_NROWS[F[r]]):
             i = FLOW_ROWS[F[r], n]
             c[r, i] = c_all[i]
-            if i < nh:
+            if i < NH:
                 phi[r, i] = phi_all[i]
-        if multipliers(t[r], X[r], u, p, D[r], F[r], lam[r], M, G) != OK:
+        if multipliers(t[r], X[r], u, p, D[r], F[r], lam[r], M, G, S) != OK:
             lam[r, :] = np.nan

@@ -187,7 +187,9 @@ def test_redundant_closure_gives_the_same_trajectory(compiled, fourbar_run, redu
     assert model.nc == 4
     run = andyc.simulate(model, 20.0, dt=1e-3, method="projection")
     assert run.finished
-    np.testing.assert_allclose(run.state, fourbar_run.state, rtol=0, atol=1e-12)
+    # Identical but for rounding where the pseudo-inverse is ill-conditioned: measured 0 at all
+    # but 4 of 20001 samples, 8.3e-12 (1.3e-12 relative) next to the flat pose at t = 3.305 s.
+    np.testing.assert_allclose(run.state, fourbar_run.state, rtol=1e-11, atol=1e-12)
     # The force splits evenly between the two copies (least-norm multipliers).
     np.testing.assert_allclose(run.multipliers[:, :2] + run.multipliers[:, 2:], fourbar_run.multipliers, atol=1e-6)
     np.testing.assert_allclose(run.multipliers[:, :2], run.multipliers[:, 2:], atol=1e-6)

@@ -151,6 +151,10 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
     mirror = [(f"M[{j}, {i}]", sp.Symbol(f"M[{i}, {j}]")) for i in range(n) for j in range(i + 1, n)]
     frames = list(model.frame_positions)
     cons = model.constraints
+    constraint_outputs = ([(f"phi[{i}]", e) for i, e in enumerate(cons.phi)]
+                          + [(f"c[{i}]", e) for i, e in enumerate(cons.c)]
+                          + [(f"A[{i}, {j}]", cons.A[i, j]) for i in range(cons.nc) for j in range(n)]
+                          + [(f"kappa[{i}]", e) for i, e in enumerate(cons.kappa)])
     functions = [
         _function(model, pool, "dynamics", "t, x, u, p, d, M, G",
                   "Fill the mass matrix M (NV, NV) and generalized force G (NV,): M dv/dt = G (eq. 8).",
@@ -167,10 +171,7 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         _function(model, pool, "constraints", "t, x, u, p, d, phi, c, A, kappa",
                   "Constraint residuals phi (NH,), velocity residuals c = A v + b (NC,), their Jacobian A "
                   "(NC, NV) and kappa (NC,), with dc/dt = A dv/dt + kappa (ANDY eq. 11).",
-                  [(f"phi[{i}]", e) for i, e in enumerate(cons.phi)]
-                  + [(f"c[{i}]", e) for i, e in enumerate(cons.c)]
-                  + [(f"A[{i}, {j}]", cons.A[i, j]) for i in range(cons.nc) for j in range(n)]
-                  + [(f"kappa[{i}]", e) for i, e in enumerate(cons.kappa)]),
+                  constraint_outputs),
         _function(model, pool, "constraint_gains", "p, ks, kd",
                   "Soft-constraint gains K_s and K_d of each row (ANDY eq. 13-15), for the baumgarte method.",
                   [(f"ks[{i}]", e) for i, e in enumerate(cons.stiffness)]
@@ -179,8 +180,15 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
                   "Origins of FRAMES in world coordinates into out (len(FRAMES), 3).",
                   [(f"out[{k}, {i}]", model.frame_positions[f][i]) for k, f in enumerate(frames) for i in range(3)]),
     ] + _hybrid_functions(model, pool)
+    if cons.nc:
+        functions.append(_function(
+            model, pool, "dynamics_constraints", "t, x, u, p, d, M, G, phi, c, A, kappa",
+            "`dynamics` and `constraints` in one pass that shares their subexpressions (the flows with rows).",
+            mass + [(f"G[{i}]", model.G[i]) for i in range(n)] + constraint_outputs))
     # M is symmetric: copy the upper triangle after it is written.
-    functions[0]["outputs"] += [(t, str(src)) for t, src in mirror]
+    for f in functions:
+        if f["name"] in ("dynamics", "dynamics_constraints"):
+            f["outputs"] += [(t, str(src)) for t, src in mirror]
     initial = ([c.initial for c in spec.coordinates] + [c.velocity for c in spec.coordinates]
                + [s.initial for s in spec.speeds] + [s.initial for s in spec.signals])
     values = [to_code(e) for e in initial]

@@ -96,9 +96,10 @@ def _with_overrides(names, defaults, overrides, kind) -> np.ndarray:
 
 @dataclass
 class Workspace:
-    """Arrays the integrators write into: M, G, stage derivatives, scratch states, guard values."""
+    """Arrays the integrators write into: M, G, the solver scratch, stage derivatives, scratch states, guard values."""
     M: np.ndarray
     G: np.ndarray
+    S: np.ndarray        # (S_ROWS, S_WIDTH) scratch of the constrained solve, projection and impacts (the module's S_*)
     k: np.ndarray        # (4, nx) RK stages
     x_tmp: np.ndarray    # (nx,) stage state
     x_step: np.ndarray   # (nx,) a step's end
@@ -111,7 +112,7 @@ class Workspace:
     @classmethod
     def for_model(cls, model: CompiledModel) -> "Workspace":
         nx = model.nx
-        return cls(np.zeros((model.nv, model.nv)), np.zeros(model.nv), np.zeros((4, nx)),
+        return cls(np.zeros((model.nv, model.nv)), np.zeros(model.nv), np.zeros((model.module.S_ROWS, model.module.S_WIDTH)), np.zeros((4, nx)),
                    *(np.zeros(nx) for _ in range(6)), np.zeros(model.nj))
 
 
@@ -143,9 +144,39 @@ def load_compiled(path) -> CompiledModel:
     d = model.initial_discrete(p)
     ws = Workspace.for_model(model)
     flow = model.initial_flow
-    module.rhs_into(0.0, x, u, p, d, flow, ws.k[0], ws.M, ws.G)
+    module.rhs_into(0.0, x, u, p, d, flow, ws.k[0], ws.M, ws.G, ws.S)
     module.normalize(x.copy())
     module.energy(0.0, x, u, p, d)
     module.power(0.0, x, u, p, d)
     module.frame_positions(0.0, x, u, p, d, np.zeros((len(model.frame_names), 3)))
     return model
+
+
+def integrator_compiled(model: CompiledModel) -> bool:
+    """Whether the module's integrator is compiled (or plain Python: Numba absent)."""
+    signatures = getattr(model.module.advance, "signatures", None)
+    return signatures is None or bool(signatures)
+
+
+def compile_integrator(model: CompiledModel) -> None:
+    """Compile the module's integrator and log evaluations (or load them from Numba's cache) once,
+    with the argument types simulate() passes: a block of no steps and one-sample logs. simulate()
+    calls this before it starts its clock, so a run's wall time never includes compilation."""
+    module = model.module
+    if integrator_compiled(model):
+        return
+    p, u = model.parameter_defaults, model.input_defaults
+    x = model.initial_state(p)
+    d = model.initial_discrete(p)
+    ws = Workspace.for_model(model)
+    flow = model.initial_flow
+    U = model.flow_inputs(u, p)
+    t_log, x_log, f_log, d_log = np.zeros(1), x[None, :].copy(), np.full(1, flow, dtype=np.int64), d[None, :].copy()
+    module.advance(0, False, False, 0.0, -1.0, 1e-12, 0.0, 1e-3, 0, 0, 1, 0.0, flow, x.copy(), U, p, d.copy(),
+                   t_log.copy(), x_log.copy(), f_log.copy(), d_log.copy(), 1, ws.g0, ws.x_event, ws.M, ws.G, ws.S,
+                   ws.k, ws.x_tmp, ws.x_step, ws.x_near, ws.x_trial, np.zeros(2, dtype=np.int64))
+    module.instant(0, 0.0, x.copy(), U[flow], p, d.copy(), flow, ws.xdot, ws.M, ws.G, ws.S)
+    module.evaluate_energy(t_log, x_log, U, p, d_log, f_log, np.zeros(1))
+    if model.nc:
+        module.evaluate_constraints(t_log, x_log, U, p, d_log, f_log, np.zeros((1, model.nh)),
+                                    np.zeros((1, model.nc)), np.zeros((1, model.nc)), ws.M, ws.G, ws.S)

@@ -30,7 +30,7 @@ import numpy as np
 from scipy import integrate
 
 from andyc.errors import SimulationError
-from andyc.runtime.compiled import CompiledModel, Workspace
+from andyc.runtime.compiled import CompiledModel, Workspace, compile_integrator
 from andyc.runtime.run import Run
 
 OK, NONFINITE, SINGULAR_MASS, DEPENDENT = 0, 1, 2, 3     # statuses, as in the generated module
@@ -121,6 +121,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     initial = consistent_initial_state(model, x, U[flow], p, d, flow, init, init_tol) if model.nc else {}
     if method in ("lagrange", "baumgarte") and model.nc:
         _require_independent_rows(model, method, x, U[flow], p, d, flow)
+    compile_integrator(model)
     bar = Progress(f"{model.name} {method}", t_end, progress)
     start = time.perf_counter()
     try:
@@ -142,7 +143,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     phi, c, lam = np.empty((n, model.nh)), np.empty((n, model.nc)), np.empty((n, model.nc))
     if model.nc:
         model.module.evaluate_constraints(t_log, x_log, U, p, d_log, f_log, phi, c, lam,
-                                          np.empty((model.nv, model.nv)), np.empty(model.nv))
+                                          np.empty((model.nv, model.nv)), np.empty(model.nv),
+                                          np.empty((model.module.S_ROWS, model.module.S_WIDTH)))
     frames_out = {}
     if frame_names:
         xyz = np.empty((n, len(model.frame_names), 3))
@@ -229,9 +231,9 @@ def consistent_initial_state(model: CompiledModel, x, u, p, d, flow, init: str, 
             f"{out['initial_position_residual']:.3g}, velocity {out['initial_velocity_residual']:.3g}), past the bound "
             f"{init_tol:g}; fix the initial values, or use --init project to move the state onto the manifold "
             f"(the smallest change in the mass-matrix metric), or --init as-is to start from it anyway")
-    M, G = np.empty((model.nv, model.nv)), np.empty(model.nv)
+    ws = Workspace.for_model(model)
     for _ in range(50):
-        if model.module.project(0.0, x, u, p, d, flow, True, 0.0, -1.0, M, G) != OK:
+        if model.module.project(0.0, x, u, p, d, flow, True, 0.0, -1.0, ws.M, ws.G, ws.S) != OK:
             raise SimulationError("cannot project the initial state: the mass matrix is not positive definite there")
         phi, c = constraint_residuals(model, 0.0, x, u, p, d, flow)
         if max(np.max(np.abs(phi), initial=0.0), np.max(np.abs(c), initial=0.0)) <= 1e-13 * max(1.0, np.abs(x).max()):
@@ -337,7 +339,7 @@ def user_jump(model: CompiledModel, k, t, x, u, p, d) -> str | None:
 
 def apply_jump(model: CompiledModel, k, t, x, U, p, d, source, ws: Workspace) -> str | None:
     """Jump k at t from flow `source` (x, d in place): resets and impact, then the user's function."""
-    status = model.module.jump(k, t, x, U[source], p, d, ws.M, ws.G)
+    status = model.module.jump(k, t, x, U[source], p, d, ws.M, ws.G, ws.S)
     if status != OK:
         return f"stopped: {_STOPPED[status]} in jump '{model.jump_names[k]}' at t = {t:.9g} s"
     return user_jump(model, k, t, x, U[source], p, d)
@@ -347,7 +349,7 @@ def follow_instant_jumps(model: CompiledModel, t, x, U, p, d, flow, events: Even
     """Apply the jumps that happen at once at (t, x), in priority order. Returns (flow, stop message or None)."""
     module = model.module
     while model.nj:
-        k = module.instant(mode, t, x, U[flow], p, d, flow, ws.xdot, ws.M, ws.G)
+        k = module.instant(mode, t, x, U[flow], p, d, flow, ws.xdot, ws.M, ws.G, ws.S)
         if k < 0:
             break
         before = x.copy()
@@ -404,7 +406,7 @@ def _run_rk4(model, method, x, U, p, d, flow, t_end, dt, every, bar, events, ene
         source = flow
         i, row, status, t, flow, k = module.advance(
             mode, do_project, constrain, e0, etol, events.event_tol, 0.0, dt, i, i_end, every, t, flow, x, U, p, d,
-            out_t, out_x, out_f, out_d, row, ws.g0, ws.x_event, ws.M, ws.G, ws.k, ws.x_tmp, ws.x_step, ws.x_near,
+            out_t, out_x, out_f, out_d, row, ws.g0, ws.x_event, ws.M, ws.G, ws.S, ws.k, ws.x_tmp, ws.x_step, ws.x_near,
             ws.x_trial, counts)
         if k >= 0:
             if status != OK:
@@ -448,7 +450,7 @@ def _run_scipy(model, method, x, U, p, d, flow, t_end, dt_out, rtol, atol, bar, 
 
     def fun(t, y):
         calls[0] += 1
-        status = module.rhs_into(t, y, U[current[0]], p, d, current[0], xdot, ws.M, ws.G)
+        status = module.rhs_into(t, y, U[current[0]], p, d, current[0], xdot, ws.M, ws.G, ws.S)
         if status != OK:
             raise _Stopped(t, status)
         return xdot.copy()
