@@ -45,6 +45,21 @@ def _summary(file, spec, model) -> str:
             f"{_plural(n_elements, 'force element')}; {len(model.assignments)} intermediate expressions.")
 
 
+def _reduction(spec, model) -> str:
+    """What merging the bodies fixed to one moving frame saved (a URDF's fixed and locked joints)."""
+    from dataclasses import replace
+
+    from andyc.codegen.generate import render
+
+    full = render(andyc.derive(replace(spec, reduce=False)), "")[1]
+    reduced = render(model, "")[1]
+    bodies = _plural(len(spec.bodies), "body").replace("bodys", "bodies")
+    merged = (f"{bodies} merged into {len(model.spec.bodies)} (one per moving frame)"
+              if len(model.spec.bodies) < len(spec.bodies) else f"{bodies}, none fixed to another's frame")
+    return (f"  reduced: {model.dof} degrees of freedom; {merged}; dynamics {full['dynamics']} -> "
+            f"{reduced['dynamics']} operations, all functions {sum(full.values())} -> {sum(reduced.values())}")
+
+
 def _plural(n: int, word: str) -> str:
     return f"{n} {word}{'' if n == 1 else 's'}"
 
@@ -52,10 +67,10 @@ def _plural(n: int, word: str) -> str:
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(andyc.__version__, prog_name="andyc")
 def main():
-    """andyc: compile multibody models (YAML) into fast simulation code.
+    """andyc: compile multibody models (YAML or URDF) into fast simulation code.
 
     \b
-    andyc check model.yaml      validate, print a summary
+    andyc check model.yaml      validate, print a summary (also robot.urdf)
     andyc build model.yaml      write build/<name>/<name>.py
     andyc sim model.yaml        build if needed, simulate, write run files
     andyc plot run.h5           plot states and energy
@@ -65,7 +80,7 @@ def main():
 @main.command()
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
 def check(files):
-    """Validate model FILES; print every problem as FILE:LINE: PATH: what; fix."""
+    """Validate model FILES (YAML or URDF); print every problem as FILE:LINE: PATH: what; fix."""
     problems = 0
     for file in files:
         try:
@@ -79,6 +94,8 @@ def check(files):
         for w in spec.warnings:
             click.echo(f"{w} (warning)", err=True)
         click.echo(_summary(file, spec, model))
+        if spec.reduce:
+            click.echo(_reduction(spec, model))
     if problems:
         click.echo(f"{_plural(problems, 'problem')} found", err=True)
     sys.exit(1 if problems else 0)

@@ -1,4 +1,7 @@
-"""YAML model -> Spec: read, check against the JSON Schema, check meaning.
+"""YAML model (or URDF) -> Spec: read, check against the JSON Schema, check meaning.
+
+A `.urdf` file, or a YAML model with a `urdf:` key, is first turned into the
+same model dictionary by andyc.spec.urdf.
 
 Every problem is collected with its line and document path; the loader raises
 one SpecError carrying all of them, so `andyc check` can print them at once.
@@ -19,6 +22,7 @@ import numpy as np
 import sympy as sp
 
 from andyc.errors import Diagnostic, SpecError, format_path
+from andyc.spec import urdf
 from andyc.spec.expressions import RESERVED, TIME, ExpressionError, parse, parse_condition
 from andyc.spec.model import (EITHER, FALLING, RISING, Body, Constraint, Coordinate, Damper, DiscreteState, Flow,
                               Frame, FrameQuantity, Jump, Load, Nonholonomic, Potential, Rotate, Signal, Spec, Speed,
@@ -62,6 +66,10 @@ def load(path) -> Spec:
     except OSError as exc:
         raise SpecError([Diagnostic(file, 1, "", f"cannot read the file ({exc.strerror})",
                                     "check the path")])
+    if path.suffix.lower() == ".urdf":              # a URDF: its own reader, the same builder
+        robot = urdf.read(path, raw=raw)
+        return _with_urdf(_Builder(robot.data, robot.source, hashlib.sha256(raw).hexdigest(),
+                                   len(robot.data.get("bodies", []))).build(), robot)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
@@ -73,7 +81,23 @@ def load(path) -> Spec:
     problems = _schema_problems(data, smap) + duplicates
     if problems:
         raise SpecError(sorted(problems, key=lambda d: d.line))
+    if "urdf" in data:                              # start from a URDF, then the YAML's own keys
+        data, smap, robot = urdf.merge(data, smap, path)
+        problems = _schema_problems(data, smap)
+        if problems:
+            raise SpecError(sorted(problems, key=lambda d: (d.file, d.line)))
+        return _with_urdf(_Builder(data, smap, hashlib.sha256(raw + robot.raw).hexdigest(),
+                                   len(robot.data.get("bodies", []))).build(), robot)
     return _Builder(data, smap, hashlib.sha256(raw).hexdigest()).build()
+
+
+def _with_urdf(spec: Spec, robot) -> Spec:
+    """The URDF's visual references and warnings (unused elements) on the Spec; its fixed and locked
+    joints' bodies are merged before deriving (reduce)."""
+    spec.visuals = robot.visuals
+    spec.reduce = True
+    spec.warnings = robot.warnings + spec.warnings
+    return spec
 
 
 def _signal_names(frame: dict) -> dict:
@@ -240,10 +264,13 @@ def _explain(error, path) -> tuple[str, str]:
 class _Builder:
     """Semantic checks and lowering to the Spec; collects every problem."""
 
-    def __init__(self, data: dict, smap: SourceMap, sha: str):
+    def __init__(self, data: dict, smap: SourceMap, sha: str, urdf_bodies: int = 0):
         self.data = data
         self.smap = smap
         self.sha = sha
+        # The first urdf_bodies bodies come from a URDF, whose reader checked (and warned about) their mass and
+        # inertia: like Pinocchio, andyc simulates them as written (massless inertia, broken triangle inequality).
+        self.urdf_bodies = urdf_bodies
         self.problems: list[Diagnostic] = []
         self.warnings: list[Diagnostic] = []
         self.used: set[sp.Symbol] = set()
@@ -380,7 +407,7 @@ class _Builder:
                 self.error(where, f"'{name}' is a reserved name", "choose another name (reserved: t, pi, world, "
                            "the function names and Python keywords)")
             elif name in seen:
-                first = f"line {self.smap.line(seen[name])}, {format_path(seen[name])}"
+                first = self.smap.describe(seen[name])
                 self.error(where, f"duplicate name '{name}' (first defined at {first})",
                            "rename one (names are unique across parameters, inputs, coordinates, frames and elements)")
             else:
@@ -602,7 +629,7 @@ class _Builder:
         where = ("bodies", i)
         before = len(self.problems)
         mass, m = self.constant(b["mass"], where + ("mass",))
-        if len(self.problems) == before and not m > 0:   # (a bad expression is reported already)
+        if len(self.problems) == before and not m > 0 and i >= self.urdf_bodies:   # (a bad expression: reported)
             value = f"{m:g}" if mass.is_number else f"{b['mass']} = {m:g}"
             self.error(where + ("mass",), f"mass must be positive, got {value}", "give a positive mass in kg")
         inertia = self.inertia(b.get("inertia", [0, 0, 0]), where + ("inertia",))
@@ -621,7 +648,7 @@ class _Builder:
         else:
             xx, yy, zz, xy, xz, yz = (self.constant(x, where + (i,))[0] for i, x in enumerate(value))
             mat = sp.Matrix([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
-        if len(self.problems) > before:     # a bad entry is reported already
+        if len(self.problems) > before or where[1] < self.urdf_bodies:     # reported already, or a URDF's
             return mat
         try:
             num = np.array(mat.subs(self.defaults), dtype=float)

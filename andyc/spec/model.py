@@ -243,6 +243,8 @@ class Spec:
     jumps: list = field(default_factory=list)          # of Jump, in document order
     initial_flow: int = 0
     warnings: list = field(default_factory=list)   # of Diagnostic
+    visuals: list = field(default_factory=list)    # URDF visual geometry, for later display (andyc.spec.urdf)
+    reduce: bool = False        # merge the bodies fixed to one moving frame before deriving (andyc.symbolic.reduce)
 
     @property
     def speed_symbols(self) -> list:

@@ -33,6 +33,10 @@ class SourceMap:
     def diag(self, path, message: str, hint: str = "") -> Diagnostic:
         return Diagnostic(self.file, self.line(path), format_path(path), message, hint)
 
+    def describe(self, path) -> str:
+        """Where `path` is, for messages that point at a second place: 'line 12, frames[3].name'."""
+        return f"line {self.line(path)}, {format_path(path)}"
+
 
 class _Loader(yaml.SafeLoader):
     """SafeLoader that also reads 1e6 and 2.5e-3 as numbers.

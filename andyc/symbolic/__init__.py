@@ -12,6 +12,7 @@ from andyc.symbolic.emitter import Emitter
 from andyc.symbolic.hybrid import hybrid_terms
 from andyc.symbolic.kinematics import frame_kinematics
 from andyc.symbolic.model import SymbolicModel
+from andyc.symbolic.reduce import merge_rigid_bodies
 
 
 def derive(spec: Spec) -> SymbolicModel:
@@ -22,6 +23,8 @@ def derive(spec: Spec) -> SymbolicModel:
     -> the hybrid automaton's guards, resets and impact rows (eq. 16-19).
     """
     start = time.perf_counter()
+    if spec.reduce:
+        spec = merge_rigid_bodies(spec)
     emit = Emitter()
     kin = frame_kinematics(spec, emit)
     terms = element_terms(spec, kin, emit)

@@ -1,0 +1,92 @@
+"""Model reduction: bodies fixed to one moving frame merged into one (andyc.symbolic.reduce).
+
+The merged model must have the same M(q) and G(q, v) as the original: compared
+at random states, and the merged dynamics must need fewer operations.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import andyc
+from andyc.codegen.generate import generate
+from andyc.runtime.compiled import load_compiled
+from andyc.spec.load import load
+from andyc.symbolic import derive
+from andyc.symbolic.reduce import merge_rigid_bodies, rigid_groups
+
+ARM = """
+name: rigid_arm
+parameters: {g: 9.81}
+coordinates:
+  q1: {initial: 0.3, velocity: 0.5}
+  q2: {initial: -0.6, velocity: 1.2}
+gravity: [0, -g*0.6, -g*0.8]
+frames:
+  - {name: link1, parent: world, revolute: q1, axis: [0, 0.6, 0.8]}
+  - {name: tip1, parent: link1, translation: [0.5, 0.1, 0], rotation: {rpy: [0.3, -0.2, 0.7]}}
+  - {name: sensor, parent: tip1, translation: [0, 0.05, 0.02], rotation: {rpy: [1.1, 0.4, 0]}}
+  - {name: link2, parent: tip1, revolute: q2, axis: y}
+  - {name: tool, parent: link2, translation: [0.3, 0, 0.1], rotation: {rpy: [0, 0.5, 0]}}
+  - {name: stand, parent: world, translation: [0, 0, -1]}
+bodies:
+  - {name: arm1, frame: link1, mass: 2.0, com: [0.25, 0.01, 0], inertia: [0.003, 0.04, 0.041, 0.001, 0.0002, 0.0001]}
+  - {name: flange, frame: tip1, mass: 0.7, com: [0.02, 0, 0.01], inertia: [0.001, 0.002, 0.0015, 0.0001, 0, 0.0002]}
+  - {name: camera, frame: sensor, mass: 0.4, com: [0, 0.03, 0], inertia: [0.0005, 0.0004, 0.0003, 0.00002, 0.00001, 0.00003]}
+  - {name: arm2, frame: link2, mass: 1.2, com: [0.15, 0, 0.02], inertia: [0.002, 0.012, 0.011, 0.0003, 0.0001, 0.0002]}
+  - {name: gripper, frame: tool, mass: 0.5, com: [0.02, 0, 0], inertia: [0.0004, 0.0005, 0.0006, 0, 0.00002, 0]}
+  - {name: base_plate, frame: stand, mass: 5.0}
+"""
+
+
+@pytest.fixture(scope="module")
+def arms(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("reduce")
+    path = tmp / "rigid_arm.yaml"
+    path.write_text(ARM)
+    spec = load(path)
+    full = generate(derive(spec), tmp / "full")
+    merged = generate(derive(merge_rigid_bodies(spec)), tmp / "merged")
+    return spec, load_compiled(full.module_path), load_compiled(merged.module_path), full, merged
+
+
+def test_groups_are_the_moving_frames(arms):
+    spec = arms[0]
+    roots = {name: root for name, (root, _, _) in rigid_groups(spec).items()}
+    assert roots == {"world": "world", "link1": "link1", "tip1": "link1", "sensor": "link1", "link2": "link2",
+                     "tool": "link2", "stand": "world", **{f.name: roots[f.name] for f in spec.frames if f.internal}}
+    merged = merge_rigid_bodies(spec)
+    assert sorted(b.name for b in merged.bodies) == ["arm1+flange+camera", "arm2+gripper", "base_plate"]
+
+
+def test_merged_model_has_the_same_dynamics_and_fewer_operations(arms):
+    _, full, merged, full_result, merged_result = arms
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        x = rng.uniform(-3, 3, full.nx)
+        M1, M2 = full.module.mass_matrix(0.0, x), merged.module.mass_matrix(0.0, x)
+        G1, G2 = full.module.generalized_force(0.0, x), merged.module.generalized_force(0.0, x)
+        np.testing.assert_allclose(M2, M1, rtol=1e-12, atol=1e-12 * np.abs(M1).max())
+        np.testing.assert_allclose(G2, G1, rtol=1e-12, atol=1e-12 * np.abs(G1).max())
+    assert merged_result.operations["dynamics"] < full_result.operations["dynamics"]
+
+
+def test_check_prints_the_operations_before_and_after_for_a_urdf():
+    """A URDF's fixed joints (panda: the hand and finger links on the flange) merge their bodies;
+    `andyc check` prints both counts, and the merged dynamics need fewer operations."""
+    import importlib.metadata
+    import re
+
+    from click.testing import CliRunner
+
+    from andyc.cli import main
+    robots = Path(importlib.metadata.distribution("example-robot-data").locate_file(
+        "cmeel.prefix/share/example-robot-data/robots"))
+    result = CliRunner().invoke(main, ["check", str(robots / "panda_description/urdf/panda.urdf")])
+    assert result.exit_code == 0, result.output
+    found = re.search(r"reduced: 8 degrees of freedom; 11 bodies merged into (\d+) .*dynamics (\d+) -> (\d+) operations",
+                      result.output)
+    assert found, result.output
+    merged, before, after = map(int, found.groups())
+    assert merged < 11 and after < before
