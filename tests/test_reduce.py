@@ -4,17 +4,20 @@ The merged model must have the same M(q) and G(q, v) as the original: compared
 at random states, and the merged dynamics must need fewer operations.
 """
 
-from pathlib import Path
+import re
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
-import andyc
+from andyc.cli import main
 from andyc.codegen.generate import generate
 from andyc.runtime.compiled import load_compiled
 from andyc.spec.load import load
 from andyc.symbolic import derive
-from andyc.symbolic.reduce import merge_rigid_bodies, rigid_groups
+from andyc.symbolic.kinematics import rigid_groups
+from andyc.symbolic.reduce import merge_rigid_bodies
+from tests.test_urdf_errors import ROBOTS_DIR
 
 ARM = """
 name: rigid_arm
@@ -75,15 +78,7 @@ def test_merged_model_has_the_same_dynamics_and_fewer_operations(arms):
 def test_check_prints_the_operations_before_and_after_for_a_urdf():
     """A URDF's fixed joints (panda: the hand and finger links on the flange) merge their bodies;
     `andyc check` prints both counts, and the merged dynamics need fewer operations."""
-    import importlib.metadata
-    import re
-
-    from click.testing import CliRunner
-
-    from andyc.cli import main
-    robots = Path(importlib.metadata.distribution("example-robot-data").locate_file(
-        "cmeel.prefix/share/example-robot-data/robots"))
-    result = CliRunner().invoke(main, ["check", str(robots / "panda_description/urdf/panda.urdf")])
+    result = CliRunner().invoke(main, ["check", str(ROBOTS_DIR / "panda_description/urdf/panda.urdf")])
     assert result.exit_code == 0, result.output
     found = re.search(r"reduced: 8 degrees of freedom; 11 bodies merged into (\d+) .*dynamics (\d+) -> (\d+) operations",
                       result.output)

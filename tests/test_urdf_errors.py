@@ -14,8 +14,9 @@ import pytest
 
 import andyc
 from andyc.errors import SpecError
-from tests.test_check_errors import LINE_FORMAT, check, line_of
+from tests.test_check_errors import LINE_FORMAT, check, edit, line_of
 
+# The URDFs that ship in example-robot-data (also used by test_urdf_pinocchio and test_reduce).
 ROBOTS_DIR = Path(importlib.metadata.distribution("example-robot-data").locate_file(
     "cmeel.prefix/share/example-robot-data/robots"))
 
@@ -47,11 +48,6 @@ ARM = f"""<?xml version="1.0"?>
   </joint>
 </robot>
 """
-
-
-def edit(text: str, old: str, new: str) -> str:
-    assert text.count(old) == 1, f"{old!r} must occur once"
-    return text.replace(old, new)
 
 
 def problems(tmp_path, text: str, name: str = "robot.urdf") -> list:

@@ -21,11 +21,7 @@ inertials; about 50 s to build and compile).
 
 from __future__ import annotations
 
-import importlib.metadata
-import importlib.util
 import os
-import sys
-import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -34,11 +30,10 @@ import pytest
 
 import andyc
 from andyc.spec.urdf import identifier
+from tests.test_urdf_errors import ROBOTS_DIR
 
 pin = pytest.importorskip("pinocchio")
 
-ROBOTS_DIR = Path(importlib.metadata.distribution("example-robot-data").locate_file(
-    "cmeel.prefix/share/example-robot-data/robots"))
 # name: (URDF inside example-robot-data, base)
 ROBOTS = {
     "ur5": ("ur_description/urdf/ur5_robot.urdf", "fixed"),                   # 6 revolute, origins with rpy
@@ -127,16 +122,6 @@ FEATURES_URDF = """<?xml version="1.0"?>
   <gazebo reference="arm"><material>Gazebo/Blue</material></gazebo>
 </robot>
 """
-
-
-def import_module(path: Path):
-    """The generated module, importable by name (Numba's cache re-imports it)."""
-    name = f"urdf_test_{path.stem}_{abs(hash(str(path)))}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def root_link(urdf: Path) -> str:
@@ -249,15 +234,10 @@ def relative(a, b) -> float:
 
 
 def build(source: Path, out_dir: Path):
-    """andyc build + import + Numba compile of the three functions used; returns (module, seconds)."""
-    t0 = time.perf_counter()
-    result = andyc.build(source, out_dir)
-    t_build = time.perf_counter() - t0
-    module = import_module(result.module_path)
-    x = module.initial_state()
-    t1 = time.perf_counter()
-    module.mass_matrix(0.0, x), module.generalized_force(0.0, x), module.rhs(0.0, x)
-    return module, {"build": t_build, "numba": time.perf_counter() - t1}
+    """andyc build, then import and Numba compile; returns (module, seconds)."""
+    model, result = andyc.compile_model(source, out_dir)
+    t = result.timings
+    return model.module, {"build": t["load"] + t.get("derive", 0.0) + t.get("generate", 0.0), "numba": t["compile"]}
 
 
 def compare(module, model, urdf: Path, base_link, seed: int) -> dict:

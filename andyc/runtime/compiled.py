@@ -139,17 +139,19 @@ def load_compiled(path) -> CompiledModel:
         initial_flow=int(module.INITIAL_FLOW), jump_names=tuple(module.JUMPS),
         frame_parents=tuple(module.FRAME_PARENTS))
     # Call each function once so Numba compiles now, not inside a timed run.
-    p, u = model.parameter_defaults, model.input_defaults
-    x = model.initial_state(p)
-    d = model.initial_discrete(p)
-    ws = Workspace.for_model(model)
-    flow = model.initial_flow
+    p, u, x, d, ws, flow = _sample_arguments(model)
     module.rhs_into(0.0, x, u, p, d, flow, ws.k[0], ws.M, ws.G, ws.S)
     module.normalize(x.copy())
     module.energy(0.0, x, u, p, d)
     module.power(0.0, x, u, p, d)
     module.frame_positions(0.0, x, u, p, d, np.zeros((len(model.frame_names), 3)))
     return model
+
+
+def _sample_arguments(model: CompiledModel):
+    """Defaults and the initial state, to call the module's functions once (so Numba compiles them)."""
+    p, u = model.parameter_defaults, model.input_defaults
+    return p, u, model.initial_state(p), model.initial_discrete(p), Workspace.for_model(model), model.initial_flow
 
 
 def integrator_compiled(model: CompiledModel) -> bool:
@@ -165,11 +167,7 @@ def compile_integrator(model: CompiledModel) -> None:
     module = model.module
     if integrator_compiled(model):
         return
-    p, u = model.parameter_defaults, model.input_defaults
-    x = model.initial_state(p)
-    d = model.initial_discrete(p)
-    ws = Workspace.for_model(model)
-    flow = model.initial_flow
+    p, u, x, d, ws, flow = _sample_arguments(model)
     U = model.flow_inputs(u, p)
     t_log, x_log, f_log, d_log = np.zeros(1), x[None, :].copy(), np.full(1, flow, dtype=np.int64), d[None, :].copy()
     module.advance(0, False, False, 0.0, -1.0, 1e-12, 0.0, 1e-3, 0, 0, 1, 0.0, flow, x.copy(), U, p, d.copy(),

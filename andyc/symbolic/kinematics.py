@@ -192,6 +192,27 @@ def _is_fixed(steps, moving: set) -> bool:
                or isinstance(s, Rotate) and not (s.angle.free_symbols & moving) for s in steps)
 
 
+def rigid_groups(spec: Spec) -> dict[str, tuple[str, sp.Matrix, sp.Matrix]]:
+    """frame -> (root, R, p): the nearest moving ancestor (or world) it is fixed to, and its pose there.
+
+    A frame is fixed to its parent when its link is only constant translations and
+    rotations (parameters allowed; no coordinate, no time); a moving frame is its own root.
+    """
+    q = [c.q for c in spec.coordinates]
+    v = spec.speed_symbols
+    moving = set(q) | {TIME}
+    out = {"world": ("world", sp.eye(3), sp.zeros(3, 1))}
+    for frame in spec.frames:
+        steps = list(frame.transforms)
+        if _is_fixed(steps, moving):
+            link = link_motion(steps, q, v)
+            root, R0, p0 = out[frame.parent]
+            out[frame.name] = (root, R0 * link.R, p0 + R0 * link.p)
+        else:
+            out[frame.name] = (frame.name, sp.eye(3), sp.zeros(3, 1))
+    return out
+
+
 def _fixed(R, p, n) -> LinkMotion:
     zero, Z = sp.zeros(3, 1), sp.zeros(3, n)
     return LinkMotion(R, p, Z, Z, zero, zero, zero, zero, Z, zero, zero)
@@ -232,7 +253,7 @@ def frame_kinematics(spec: Spec, emit: Emitter) -> dict[str, FrameKinematics]:
     out = {"world": FrameKinematics(-1, sp.eye(3), zero, zero, zero, sp.zeros(3, n), sp.zeros(3, n), zero, zero,
                                     zero, sp.zeros(3, n), zero)}
     moving = set(q) | {TIME}
-    rigid = {}      # frame -> (ancestor it is fixed to, R and p relative to that ancestor)
+    rigid = rigid_groups(spec)
     for k, frame in enumerate(spec.frames):
         P = out[frame.parent]
         steps = list(frame.transforms)
@@ -241,11 +262,9 @@ def frame_kinematics(spec: Spec, emit: Emitter) -> dict[str, FrameKinematics]:
             # Place a fixed frame from the nearest moving ancestor, so the frames
             # between (a bar's end, when only its COM carries a body) need no
             # Jacobians of their own.
-            link = link_motion(steps, q, v)
-            root, R0, p0 = rigid.get(frame.parent, (frame.parent, sp.eye(3), zero))
-            rigid[frame.name] = (root, R0 * link.R, p0 + R0 * link.p)
+            root, R, p = rigid[frame.name]
             P = out[root]
-            motion = _fixed(*rigid[frame.name][1:], n)
+            motion = _fixed(R, p, n)
         elif steps and isinstance(steps[-1], Nonholonomic):
             nonholonomic = steps.pop()
             if steps:   # fixed offsets first: the link's reference frame

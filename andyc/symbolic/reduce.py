@@ -23,28 +23,8 @@ from dataclasses import replace
 
 import sympy as sp
 
-from andyc.spec.expressions import TIME
 from andyc.spec.model import Body, Frame, Spec, Translate
-from andyc.symbolic.kinematics import _is_fixed, link_motion
-
-
-def rigid_groups(spec: Spec) -> dict[str, tuple[str, sp.Matrix, sp.Matrix]]:
-    """frame -> (root, R, p): the moving frame (or world) it is fixed to, and its pose in it."""
-    moving = {c.q for c in spec.coordinates} | {TIME}
-    q = [c.q for c in spec.coordinates]
-    v = spec.speed_symbols
-    out = {"world": ("world", sp.eye(3), sp.zeros(3, 1))}
-    for frame in spec.frames:
-        steps = list(frame.transforms)
-        if steps and _is_fixed(steps, moving):
-            link = link_motion(steps, q, v)
-            root, R0, p0 = out[frame.parent]
-            out[frame.name] = (root, R0 * link.R, p0 + R0 * link.p)
-        elif not steps:
-            out[frame.name] = out[frame.parent]
-        else:
-            out[frame.name] = (frame.name, sp.eye(3), sp.zeros(3, 1))
-    return out
+from andyc.symbolic.kinematics import rigid_groups
 
 
 def merge_rigid_bodies(spec: Spec) -> Spec:
