@@ -45,19 +45,24 @@ def _summary(file, spec, model) -> str:
             f"{_plural(n_elements, 'force element')}; {len(model.assignments)} intermediate expressions.")
 
 
-def _reduction(spec, model) -> str:
-    """What merging the bodies fixed to one moving frame saved (a URDF's fixed and locked joints)."""
+def _reduction(file, spec, model) -> str:
+    """What reduction saved on a URDF robot: the robot as written (every joint free, every body its own)
+    against the model derived, with the locked joints held and the bodies fixed to one moving frame merged."""
     from dataclasses import replace
 
     from andyc.codegen.generate import render
 
-    full = render(andyc.derive(replace(spec, reduce=False)), "")[1]
+    free = andyc.load(file, unlock=True) if spec.locked else spec
+    full_model = andyc.derive(replace(free, reduce=False))
+    full = render(full_model, "")[1]
     reduced = render(model, "")[1]
+    dof = (f"{full_model.dof} -> {model.dof} degrees of freedom ({_plural(len(spec.locked), 'joint')} locked: "
+           f"{', '.join(spec.locked)})" if spec.locked else f"{model.dof} degrees of freedom")
     bodies = _plural(len(spec.bodies), "body").replace("bodys", "bodies")
     merged = (f"{bodies} merged into {len(model.spec.bodies)} (one per moving frame)"
               if len(model.spec.bodies) < len(spec.bodies) else f"{bodies}, none fixed to another's frame")
-    return (f"  reduced: {model.dof} degrees of freedom; {merged}; dynamics {full['dynamics']} -> "
-            f"{reduced['dynamics']} operations, all functions {sum(full.values())} -> {sum(reduced.values())}")
+    return (f"  reduced: {dof}; {merged}; dynamics {full['dynamics']} -> {reduced['dynamics']} operations, "
+            f"all functions {sum(full.values())} -> {sum(reduced.values())}")
 
 
 def _plural(n: int, word: str) -> str:
@@ -95,7 +100,7 @@ def check(files):
             click.echo(f"{w} (warning)", err=True)
         click.echo(_summary(file, spec, model))
         if spec.reduce:
-            click.echo(_reduction(spec, model))
+            click.echo(_reduction(file, spec, model))
     if problems:
         click.echo(f"{_plural(problems, 'problem')} found", err=True)
     sys.exit(1 if problems else 0)

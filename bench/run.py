@@ -11,10 +11,12 @@ residuals, energy drift, right-hand-side evaluations and wall time; the
 Fig. 2-style comparison is drawn into docs/ball_in_bowl_methods.png. Issue 5:
 the passive walker's RK4 steps per second with its jumps (target 5e5; ANDY
 ran jump and flow evaluation at 1.7e4), and the bouncing ball's run to its
-Zeno point. Every ratio is measured in this one run.
+Zeno point. Issue 6: a 7-DOF arm URDF (panda, fingers locked): build time
+(target < 15 s) and forward dynamics per evaluation against pin.aba (target:
+within 2x). Every ratio is measured in this one run.
 
     python bench/run.py                      all sections (about 7 minutes)
-    python bench/run.py --only swing_bar     one section: chains, models, swing_bar, constraints, hybrid
+    python bench/run.py --only swing_bar     one section: chains, models, swing_bar, constraints, hybrid, urdf
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from numba import njit
 import andyc
 from andyc.reference.chains import chain_yaml, kane_model, random_chain
 from andyc.reference.closed_forms import ball_first_integral
+from andyc.reference.robots import robots_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -278,7 +281,86 @@ def hybrid_benchmark(tmp: Path) -> None:
           f"before t_inf = {t_inf:.9f} s in {run.stats['wall_seconds'] * 1e3:.1f} ms: {run.status[:60]}...")
 
 
-SECTIONS = ("chains", "models", "swing_bar", "constraints", "hybrid")
+def _pin_microseconds(model, data, q, v, tau, n=100_000, repeats=3) -> float:
+    """Best of `repeats`: microseconds per pin.aba call from Python."""
+    import pinocchio as pin
+    pin.aba(model, data, q, v, tau)
+    best = np.inf
+    for _ in range(repeats):
+        tic = time.perf_counter()
+        for _ in range(n):
+            pin.aba(model, data, q, v, tau)
+        best = min(best, time.perf_counter() - tic)
+    return 1e6 * best / n
+
+
+def _python_call_microseconds(model, n=100_000, repeats=3) -> float:
+    """Best of `repeats`: microseconds per rhs_into call from Python (Numba's dispatch included)."""
+    m, p, u = model.module, model.parameter_defaults, model.input_defaults
+    x, xdot = model.initial_state(p).copy(), np.zeros(model.nx)
+    M, G, S = np.zeros((model.nv, model.nv)), np.zeros(model.nv), np.zeros((m.S_ROWS, m.S_WIDTH))
+    d, f = model.initial_discrete(p), m.rhs_into
+    best = np.inf
+    for _ in range(repeats):
+        tic = time.perf_counter()
+        for _ in range(n):
+            f(0.0, x, u, p, d, 0, xdot, M, G, S)
+        best = min(best, time.perf_counter() - tic)
+    return 1e6 * best / n
+
+
+def urdf_benchmark(tmp: Path) -> None:
+    """Issue 6: a 7-DOF arm from a URDF against Pinocchio's aba."""
+    section("7-DOF arm from a URDF (panda, fingers locked): build time, forward dynamics against Pinocchio")
+    try:
+        import pinocchio as pin
+        urdf = robots_dir() / "panda_description/urdf/panda.urdf"
+    except ImportError as exc:                  # PackageNotFoundError is an ImportError too
+        print(f"skipped: {exc} (both come with pip install -e '.[test]')")
+        return
+    source = tmp / "panda_arm.yaml"
+    source.write_text(f"name: panda_arm\nurdf:\n  file: {urdf}\n  lock: {{panda_finger_joint1: 0.02}}\n")
+    model, result = andyc.compile_model(source, tmp / "urdf_build", force=True)    # a fresh folder: no Numba cache
+    t = result.timings
+    total = t["derive"] + t["generate"] + t["compile"]
+    print(f"build: derive {t['derive']:.2f} s, generate {t['generate']:.2f} s, compile {t['compile']:.2f} s "
+          f"(total {total:.2f} s, target < 15 s); {result.operations['dynamics']} operations in dynamics")
+
+    full = pin.buildModelFromUrdf(str(urdf))
+    fingers = [full.getJointId(f"panda_finger_joint{i}") for i in (1, 2)]
+    q_lock = pin.neutral(full)
+    for j in fingers:
+        q_lock[full.joints[j].idx_q] = 0.02
+    arm = pin.buildReducedModel(full, fingers, q_lock)
+    data = arm.createData()
+    rng = np.random.default_rng(6)
+    worst = 0.0
+    for _ in range(20):                    # the two compute the same thing (Pinocchio: no joint damping)
+        x = rng.uniform(-1, 1, model.nx)
+        a = pin.aba(arm, data, x[:7], x[7:], -arm.damping * x[7:])
+        worst = max(worst, np.abs(model.module.rhs(0.0, x)[7:] - a).max() / np.abs(a).max())
+    print(f"andyc rhs = pin.aba at 20 random states: largest relative difference {worst:.1e}")
+
+    x = rng.uniform(-1, 1, model.nx)
+    q, v, tau = x[:7].copy(), x[7:].copy(), np.zeros(7)
+    loop = rhs_microseconds(model)
+    called = _python_call_microseconds(model)
+    pin_us = _pin_microseconds(arm, data, q, v, tau)
+    one = pin.Model()                      # the binding's cost: aba on one joint, called the same way
+    one.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "j")
+    one.appendBodyToJoint(1, pin.Inertia.FromSphere(1.0, 0.1), pin.SE3.Identity())
+    overhead = _pin_microseconds(one, one.createData(), np.zeros(1), np.zeros(1), np.zeros(1))
+    print("forward dynamics per evaluation (best of 3):")
+    print(f"  andyc generated code, inside a compiled loop:  {loop:.3f} us")
+    print(f"  andyc generated code, each call from Python:   {called:.3f} us (Numba's dispatch included)")
+    print(f"  pin.aba, each call from Python:                {pin_us:.3f} us")
+    print(f"  pin.aba on a 1-joint model from Python:        {overhead:.3f} us (the binding's cost, at most)")
+    print(f"ratio andyc / Pinocchio (target <= 2): {loop / pin_us:.2f} compiled loop against pin.aba from Python, "
+          f"{called / pin_us:.2f} both from Python, {loop / (pin_us - overhead):.2f} compiled loop against "
+          "pin.aba less the 1-joint call")
+
+
+SECTIONS = ("chains", "models", "swing_bar", "constraints", "hybrid", "urdf")
 
 
 def main(argv=None):
@@ -300,6 +382,8 @@ def main(argv=None):
             constraints_benchmark(tmp)
         if "hybrid" in only:
             hybrid_benchmark(tmp)
+        if "urdf" in only:
+            urdf_benchmark(tmp)
 
 
 if __name__ == "__main__":

@@ -75,13 +75,17 @@ def test_merged_model_has_the_same_dynamics_and_fewer_operations(arms):
     assert merged_result.operations["dynamics"] < full_result.operations["dynamics"]
 
 
-def test_check_prints_the_operations_before_and_after_for_a_urdf():
-    """A URDF's fixed joints (panda: the hand and finger links on the flange) merge their bodies;
-    `andyc check` prints both counts, and the merged dynamics need fewer operations."""
-    result = CliRunner().invoke(main, ["check", str(ROBOTS_DIR / "panda_description/urdf/panda.urdf")])
+def test_check_prints_the_operations_before_and_after_for_a_urdf(tmp_path):
+    """panda with its fingers locked (panda_finger_joint2 mimics joint1, so both hold): the hand and
+    finger bodies merge into the flange's. `andyc check` prints the DOF and operations of the robot as
+    written (8 DOF, every body its own) and of the reduced model (7 DOF, merged), fewer after."""
+    source = tmp_path / "panda_arm.yaml"
+    source.write_text(f"name: panda_arm\nurdf:\n  file: {ROBOTS_DIR / 'panda_description/urdf/panda.urdf'}\n"
+                      "  lock: {panda_finger_joint1: 0.02}\n")
+    result = CliRunner().invoke(main, ["check", str(source)])
     assert result.exit_code == 0, result.output
-    found = re.search(r"reduced: 8 degrees of freedom; 11 bodies merged into (\d+) .*dynamics (\d+) -> (\d+) operations",
-                      result.output)
+    found = re.search(r"reduced: 8 -> 7 degrees of freedom \(1 joint locked: panda_finger_joint1\); "
+                      r"11 bodies merged into (\d+) .*dynamics (\d+) -> (\d+) operations", result.output)
     assert found, result.output
     merged, before, after = map(int, found.groups())
     assert merged < 11 and after < before

@@ -4,7 +4,6 @@ one (`urdf:` with overrides)."""
 
 from __future__ import annotations
 
-import importlib.metadata
 import subprocess
 import sys
 from pathlib import Path
@@ -14,11 +13,11 @@ import pytest
 
 import andyc
 from andyc.errors import SpecError
+from andyc.reference.robots import robots_dir
 from tests.test_check_errors import LINE_FORMAT, check, edit, line_of
 
 # The URDFs that ship in example-robot-data (also used by test_urdf_pinocchio and test_reduce).
-ROBOTS_DIR = Path(importlib.metadata.distribution("example-robot-data").locate_file(
-    "cmeel.prefix/share/example-robot-data/robots"))
+ROBOTS_DIR = robots_dir()
 
 INERTIAL = '<inertial><mass value="1"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial>'
 

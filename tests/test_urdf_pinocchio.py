@@ -15,8 +15,9 @@ andyc's generated module: M dv/dt = G(t, q, v) at zero inputs, so the bias is
 expected bias adds D v and aba gets tau = -D v, with D = diag(model.damping)
 as Pinocchio parsed it from <dynamics damping>.
 
-Set ANDYC_URDF_SLOW=1 to add baxter (17 DOF, mimic, prismatic, rotated
-inertials; about 50 s to build and compile).
+Set ANDYC_URDF_SLOW=1 to add bolt (a biped on a floating base, about 13 s)
+and baxter (17 DOF, mimic, prismatic, rotated inertials; about 50 s to build
+and compile).
 """
 
 from __future__ import annotations
@@ -42,9 +43,9 @@ ROBOTS = {
     "finger_edu": ("finger_edu_description/robots/finger_edu.urdf", "fixed"),
     "double_pendulum": ("double_pendulum_description/urdf/double_pendulum_continuous.urdf", "fixed"),
     "solo12": ("solo_description/robots/solo12.urdf", "floating"),           # quadruped on a floating base
-    "bolt": ("bolt_description/robots/bolt.urdf", "floating"),                # biped; feet with inertia, no mass
 }
 if os.environ.get("ANDYC_URDF_SLOW"):
+    ROBOTS["bolt"] = ("bolt_description/robots/bolt.urdf", "floating")       # biped; feet with inertia, no mass
     ROBOTS["baxter"] = ("baxter_description/urdf/baxter.urdf", "fixed")
 STATES, TOL = 20, 1e-10
 

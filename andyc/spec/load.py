@@ -57,8 +57,11 @@ def _defs() -> dict:
     return schema()["$defs"]
 
 
-def load(path) -> Spec:
-    """Load and validate a model file. Raises SpecError listing every problem."""
+def load(path, unlock: bool = False) -> Spec:
+    """Load and validate a model file. Raises SpecError listing every problem.
+
+    `unlock`: ignore the `lock:` of a YAML model's `urdf:` key (the robot with every joint free, for
+    `andyc check` to count what locking saved)."""
     path = Path(path)
     file = str(path)
     try:
@@ -82,6 +85,8 @@ def load(path) -> Spec:
     if problems:
         raise SpecError(sorted(problems, key=lambda d: d.line))
     if "urdf" in data:                              # start from a URDF, then the YAML's own keys
+        if unlock and isinstance(data["urdf"], dict):
+            data = {**data, "urdf": {k: v for k, v in data["urdf"].items() if k != "lock"}}
         data, smap, robot = urdf.merge(data, smap, path)
         problems = _schema_problems(data, smap)
         if problems:
@@ -95,6 +100,7 @@ def _with_urdf(spec: Spec, robot) -> Spec:
     """The URDF's visual references and warnings (unused elements) on the Spec; its fixed and locked
     joints' bodies are merged before deriving (reduce)."""
     spec.visuals = robot.visuals
+    spec.locked = robot.locked
     spec.reduce = True
     spec.warnings = robot.warnings + spec.warnings
     return spec

@@ -244,6 +244,7 @@ class Spec:
     initial_flow: int = 0
     warnings: list = field(default_factory=list)   # of Diagnostic
     visuals: list = field(default_factory=list)    # URDF visual geometry, for later display (andyc.spec.urdf)
+    locked: tuple = ()          # URDF joints held at given values (urdf: {lock: ...}), by their URDF name
     reduce: bool = False        # merge the bodies fixed to one moving frame before deriving (andyc.symbolic.reduce)
 
     @property

@@ -74,6 +74,7 @@ class UrdfModel:
     warnings: list              # of Diagnostic (unused elements, meshes not found)
     visuals: list               # of dict: link, frame, geometry, filename/size, scale, origin, material
     raw: bytes                  # the URDF's bytes (for the spec hash)
+    locked: tuple = ()          # the joints held at given values, by their URDF name
 
 
 def identifier(name: str, kind: str) -> str:
@@ -586,7 +587,7 @@ def read(path, options=None, option_error=None, raw: bytes | None = None) -> Urd
         del data["dampers"]
     if not data["bodies"]:
         del data["bodies"]
-    return UrdfModel(data, UrdfSourceMap(file, converter.entries), warnings, converter.visuals, raw)
+    return UrdfModel(data, UrdfSourceMap(file, converter.entries), warnings, converter.visuals, raw, tuple(o.lock))
 
 
 def merge(data: dict, smap: SourceMap, yaml_path: Path) -> tuple[dict, SourceMap, UrdfModel]:
