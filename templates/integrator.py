@@ -214,7 +214,8 @@ def evaluate_constraints(t, X, U, p, D, F, phi, c, lam, M, G, S):
     NaN for the rows not active in the sample's flow F[r]."""
     for r in range(t.shape[0]):
         u = U[F[r]]
-        phi_all, c_all, A, kappa = constraint_terms(t[r], X[r], u, p, D[r], S)
+        constraints_into(t[r], X[r], u, p, D[r], S)
+        phi_all, c_all, A, kappa = terms(S)
         phi[r, :] = np.nan
         c[r, :] = np.nan
         for n in range(FLOW_NROWS[F[r]]):

@@ -151,10 +151,11 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
     mirror = [(f"M[{j}, {i}]", sp.Symbol(f"M[{i}, {j}]")) for i in range(n) for j in range(i + 1, n)]
     frames = list(model.frame_positions)
     cons = model.constraints
-    constraint_outputs = ([(f"phi[{i}]", e) for i, e in enumerate(cons.phi)]
-                          + [(f"c[{i}]", e) for i, e in enumerate(cons.c)]
-                          + [(f"A[{i}, {j}]", cons.A[i, j]) for i in range(cons.nc) for j in range(n)]
-                          + [(f"kappa[{i}]", e) for i, e in enumerate(cons.kappa)])
+    # Into the rows of the scratch S that the constrained solves index directly (no views).
+    constraint_outputs = ([(f"S[S_PHI, {i}]", e) for i, e in enumerate(cons.phi)]
+                          + [(f"S[S_CV, {i}]", e) for i, e in enumerate(cons.c)]
+                          + [(f"S[S_A + {i}, {j}]", cons.A[i, j]) for i in range(cons.nc) for j in range(n)]
+                          + [(f"S[S_KAPPA, {i}]", e) for i, e in enumerate(cons.kappa)])
     functions = [
         _function(model, pool, "dynamics", "t, x, u, p, d, M, G",
                   "Fill the mass matrix M (NV, NV) and generalized force G (NV,): M dv/dt = G (eq. 8).",
@@ -168,9 +169,10 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         _function(model, pool, "signal_rates", "t, x, u, p, d, xdot",
                   "Rates of the nonholonomic signals (eq. 4) into xdot[NQ + NV:].",
                   [(f"xdot[{len(model.q) + n + i}]", r) for i, r in enumerate(model.signal_rates)]),
-        _function(model, pool, "constraints", "t, x, u, p, d, phi, c, A, kappa",
+        _function(model, pool, "constraints_into", "t, x, u, p, d, S",
                   "Constraint residuals phi (NH,), velocity residuals c = A v + b (NC,), their Jacobian A "
-                  "(NC, NV) and kappa (NC,), with dc/dt = A dv/dt + kappa (ANDY eq. 11).",
+                  "(NC, NV) and kappa (NC,), with dc/dt = A dv/dt + kappa (ANDY eq. 11), into the scratch S "
+                  "(views: terms(S)).",
                   constraint_outputs),
         _function(model, pool, "constraint_gains", "p, ks, kd",
                   "Soft-constraint gains K_s and K_d of each row (ANDY eq. 13-15), for the baumgarte method.",
@@ -182,8 +184,8 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
     ] + _hybrid_functions(model, pool)
     if cons.nc:
         functions.append(_function(
-            model, pool, "dynamics_constraints", "t, x, u, p, d, M, G, phi, c, A, kappa",
-            "`dynamics` and `constraints` in one pass that shares their subexpressions (the flows with rows).",
+            model, pool, "dynamics_constraints", "t, x, u, p, d, M, G, S",
+            "`dynamics` and `constraints_into` in one pass that shares their subexpressions (the flows with rows).",
             mass + [(f"G[{i}]", model.G[i]) for i in range(n)] + constraint_outputs))
     # M is symmetric: copy the upper triangle after it is written.
     for f in functions:
