@@ -79,6 +79,7 @@ def main():
     andyc build model.yaml      write build/<name>/<name>.py
     andyc sim model.yaml        build if needed, simulate, write run files
     andyc plot run.h5           plot states and energy
+    andyc linearize model.yaml  A, B and eigenvalues about a state
     """
 
 
@@ -152,6 +153,75 @@ def _parse_sets(values) -> dict:
         except ValueError:
             raise click.BadParameter(f"'{item}' is not NAME=NUMBER", param_hint="--set")
     return out
+
+
+@main.command()
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("--at", "at", multiple=True, metavar="NAME=VALUE",
+              help="The state to linearize about: a coordinate or speed (the others: the model's initial state).")
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
+@click.option("--flow", default=None, help="The flow to linearize (default: the initial flow).")
+@click.option("--time", "t", default=0.0, show_default=True, help="Time t of the point, s.")
+@click.option("--find-equilibrium", is_flag=True,
+              help="First find the rest point (speeds 0, dv/dt = 0) nearest the coordinates given (Newton on G = 0).")
+@click.option("-o", "--out", "out_dir", default=None, metavar="DIR",
+              help="Also write DIR/<name>_linearization.npz (A, B, x, u, names, eigenvalues) and DIR/<name>_A.csv, "
+                   "DIR/<name>_B.csv.")
+def linearize(file, at, sets, flow, t, find_equilibrium, out_dir):
+    """Linearize FILE's equations of motion: dx' = A dx + B du, from exact derivatives; print the eigenvalues."""
+    import numpy as np
+
+    from andyc.symbolic.linearize import LinearizeError, default_point, find_equilibrium as equilibrium
+    from andyc.symbolic.linearize import linearize as linearized
+
+    try:
+        spec = andyc.load(file)
+        model = andyc.derive(spec)
+    except SpecError as exc:
+        _fail_spec(exc)
+    overrides = _parse_sets(sets)
+    states = dict(_parse_sets(at))
+    try:
+        flows = model.hybrid.flows
+        if flow is not None and flow not in flows:
+            raise LinearizeError(f"{spec.name}: no flow named '{flow}'; flows: {', '.join(flows)}")
+        k = flows.index(flow) if flow is not None else None
+        x, u, p, d = default_point(model, {n: v for n, v in overrides.items() if n not in spec.inputs},
+                                   {n: v for n, v in overrides.items() if n in spec.inputs}, k)
+        names = [c.name for c in spec.coordinates] + list(spec.speed_names)
+        for name, value in states.items():
+            if name not in names:
+                raise LinearizeError(f"{spec.name}: no coordinate or speed named '{name}' (--at); "
+                                     f"states: {', '.join(names)}")
+            x[names.index(name)] = value
+        if find_equilibrium:
+            n = len(spec.coordinates)
+            x[:n] = equilibrium(model, x[:n], u, p, d, t, k)
+            x[n:] = 0.0
+        lin = linearized(model, x, u, p, d, t, k)
+    except LinearizeError as exc:
+        click.echo(f"{file}: {exc}", err=True)
+        sys.exit(1)
+    np.set_printoptions(precision=6, suppress=False, linewidth=120)
+    point = ", ".join(f"{n} = {v:.10g}" for n, v in zip(lin.state_names, lin.x))
+    inputs = ", ".join(f"{n} = {v:.10g}" for n, v in zip(lin.input_names, lin.u)) or "none"
+    click.echo(f"{spec.name}: linearized in flow '{lin.flow}' at t = {lin.t:g} about {point}; inputs {inputs}")
+    click.echo(f"states: {', '.join(lin.state_names)}\nA =\n{lin.A}")
+    if lin.input_names:
+        click.echo(f"inputs: {', '.join(lin.input_names)}\nB =\n{lin.B}")
+    ev = lin.eigenvalues
+    click.echo("eigenvalues: " + ", ".join(f"{e.real:.10g}{e.imag:+.10g}j" if e.imag else f"{e.real:.10g}" for e in ev))
+    unstable = int(np.sum(ev.real > 1e-9 * max(1.0, np.abs(ev).max())))
+    click.echo(f"{_plural(unstable, 'eigenvalue')} with positive real part" + (" (unstable)" if unstable else ""))
+    if out_dir:
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        np.savez(out / f"{spec.name}_linearization.npz", A=lin.A, B=lin.B, x=lin.x, u=lin.u, t=lin.t,
+                 state_names=np.array(lin.state_names), input_names=np.array(lin.input_names, dtype=str),
+                 eigenvalues=ev, flow=lin.flow)
+        np.savetxt(out / f"{spec.name}_A.csv", lin.A, delimiter=",", header=",".join(lin.state_names), comments="")
+        np.savetxt(out / f"{spec.name}_B.csv", lin.B, delimiter=",", header=",".join(lin.input_names), comments="")
+        click.echo(f"wrote {out / f'{spec.name}_linearization.npz'}, {spec.name}_A.csv and {spec.name}_B.csv")
 
 
 @main.command()

@@ -1,0 +1,195 @@
+"""Linearization of a flow's equations of motion from exact derivatives.
+
+With x = (q, v) and M(q) dv/dt = G(t, q, v, u) (eq. 8), a = M^-1 G:
+
+    d/dt dx = A dx + B du,   A = [[0, I], [da/dq, da/dv]],   B = [[0], [da/du]],
+    da/dz = M^-1 (dG/dz - (dM/dz) a)   for z in q, v, u.
+
+The derivatives are exact (no finite differences): the SymbolicModel is a
+chain of assignments `s = f(earlier symbols)`, so each intermediate symbol's
+value and gradient are carried forward in order (forward-mode automatic
+differentiation), every partial df/ds coming from SymPy's `diff` of that one
+small expression, evaluated at the point in double precision.
+
+An equilibrium (dv/dt = 0 at v = 0) is found by Newton's method on
+G(t, q, 0, u) = 0 with this exact Jacobian dG/dq (scipy.optimize.root, 'hybr').
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import sympy as sp
+
+from andyc.symbolic.model import SymbolicModel
+
+
+class LinearizeError(ValueError):
+    """A model or a point that this linearization does not handle; the message says why and what to do."""
+
+
+@dataclass
+class Linearization:
+    """dx' = A dx + B du about (x, u) at time t, in `flow`; states and inputs named as in the generated module."""
+    A: np.ndarray
+    B: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+    t: float
+    flow: str
+    state_names: list
+    input_names: list
+
+    @property
+    def eigenvalues(self) -> np.ndarray:
+        """Eigenvalues of A, sorted by real part, then imaginary part."""
+        ev = np.linalg.eigvals(self.A)
+        return ev[np.lexsort((ev.imag, ev.real))]
+
+
+class _Point:
+    """Values and exact gradients (with respect to `wrt`) of the symbols of a SymbolicModel at one point."""
+
+    def __init__(self, model: SymbolicModel, values: dict, wrt: list):
+        self.values = {s: sp.Float(v) for s, v in values.items()}
+        n = len(wrt)
+        self.grads = {s: np.eye(n)[i] for i, s in enumerate(wrt)}
+        self.zero = np.zeros(n)
+        needed = _needed(model)
+        for sym, expr in model.assignments:
+            if sym in needed:
+                value, grad = self.evaluate(expr)
+                self.values[sym] = sp.Float(value)
+                self.grads[sym] = grad
+
+    def evaluate(self, expr) -> tuple[float, np.ndarray]:
+        """The value of expr and its gradient, by the chain rule through the symbols it uses."""
+        expr = sp.sympify(expr)
+        value = float(expr.xreplace(self.values))
+        grad = self.zero.copy()
+        for s in expr.free_symbols:
+            g = self.grads.get(s)
+            if g is not None and g.any():
+                grad += float(sp.diff(expr, s).xreplace(self.values)) * g
+        return value, grad
+
+
+def _needed(model: SymbolicModel) -> set:
+    """The intermediate symbols M and G depend on (directly or through other intermediates)."""
+    defs = dict(model.assignments)
+    todo = list(model.M.free_symbols | model.G.free_symbols)
+    needed = set()
+    while todo:
+        s = todo.pop()
+        if s in defs and s not in needed:
+            needed.add(s)
+            todo.extend(defs[s].free_symbols)
+    return needed
+
+
+def _check_supported(model: SymbolicModel, flow: int) -> None:
+    name = model.spec.name
+    if model.signals:
+        raise LinearizeError(f"{name}: linearize handles coordinates and speeds; this model also has signals "
+                             f"({', '.join(str(s) for s in model.signals)}, from nonholonomic or quaternion links), "
+                             "which it does not yet handle")
+    if len(model.v) != len(model.q):
+        raise LinearizeError(f"{name}: linearize needs one speed per coordinate (dq/dt = v); this model has "
+                             f"{len(model.q)} coordinates and {len(model.v)} speeds")
+    rows = model.hybrid.flow_rows[flow]
+    if rows:
+        raise LinearizeError(f"{name}: flow '{model.hybrid.flows[flow]}' has {len(rows)} active constraint rows; "
+                             "linearize handles unconstrained flows so far: pick a flow without constraints "
+                             "(--flow) or a model without them")
+
+
+def default_point(model: SymbolicModel, parameters: dict | None = None, inputs: dict | None = None,
+                  flow: int | None = None):
+    """(x, u, p, d): the model's initial state, inputs (with the flow's own), parameters and discrete states
+    as numbers, with `parameters` and `inputs` {name: value} overriding the defaults."""
+    spec = model.spec
+    flow = model.hybrid.initial if flow is None else flow
+    for kind, given, known in (("parameter", parameters, spec.parameters), ("input", inputs, spec.inputs)):
+        unknown = sorted(set(given or {}) - set(known))
+        if unknown:
+            raise LinearizeError(f"{spec.name}: no {kind} named {', '.join(unknown)}; "
+                                 f"{kind}s: {', '.join(known) or 'none'}")
+    p = [float((parameters or {}).get(name, default)) for name, (_, default) in spec.parameters.items()]
+    at = {sym: sp.Float(v) for sym, v in zip(model.parameters, p)}
+    u = [float((inputs or {}).get(name, default)) for name, (_, default) in spec.inputs.items()]
+    for i, expr in model.hybrid.flow_inputs[flow].items():
+        u[i] = float(sp.sympify(expr).xreplace(at))
+    initial = ([c.initial for c in spec.coordinates] + [c.velocity for c in spec.coordinates]
+               + [s.initial for s in spec.speeds] + [s.initial for s in spec.signals])
+    x = [float(sp.sympify(e).xreplace(at)) for e in initial]
+    d = [float(sp.sympify(v.initial).xreplace(at)) for v in spec.discrete]
+    return np.array(x), np.array(u), np.array(p), np.array(d)
+
+
+def _point_values(model: SymbolicModel, x, u, p, d, t: float) -> dict:
+    values = {model.t: t}
+    values.update(zip(model.q + model.v, x))
+    values.update(zip(model.parameters, p))
+    values.update(zip(model.inputs, u))
+    values.update(zip(model.discrete, d))
+    return values
+
+
+def linearize(model: SymbolicModel, x, u, p, d=(), t: float = 0.0, flow: int | None = None) -> Linearization:
+    """A and B of `flow` (default the initial one) about state x and inputs u, at parameters p, discrete states d.
+
+    x, u, p, d are ordered as the generated module's STATES, INPUTS, PARAMETERS and DISCRETE_STATES.
+    """
+    flow = model.hybrid.initial if flow is None else flow
+    _check_supported(model, flow)
+    n, nu = len(model.v), len(model.inputs)
+    x, u = np.asarray(x, dtype=float), np.asarray(u, dtype=float)
+    wrt = model.q + model.v + model.inputs
+    point = _Point(model, _point_values(model, x, u, p, d, t), wrt)
+    M = np.empty((n, n))
+    dM = np.empty((n, n, len(wrt)))
+    for i in range(n):
+        for j in range(i, n):
+            M[i, j], dM[i, j] = point.evaluate(model.M[i, j])
+            M[j, i], dM[j, i] = M[i, j], dM[i, j]
+    G = np.empty(n)
+    dG = np.empty((n, len(wrt)))
+    for i in range(n):
+        G[i], dG[i] = point.evaluate(model.G[i])
+    a = np.linalg.solve(M, G)
+    da = np.linalg.solve(M, dG - np.einsum("ijk,j->ik", dM, a))     # (n, 2n + nu)
+    A = np.zeros((2 * n, 2 * n))
+    A[:n, n:] = np.eye(n)
+    A[n:, :] = da[:, :2 * n]
+    B = np.zeros((2 * n, nu))
+    B[n:, :] = da[:, 2 * n:]
+    return Linearization(A, B, x, u, t, model.hybrid.flows[flow], _state_names(model), list(model.spec.inputs))
+
+
+def _state_names(model: SymbolicModel) -> list:
+    return [c.name for c in model.spec.coordinates] + list(model.spec.speed_names)
+
+
+def find_equilibrium(model: SymbolicModel, q_guess, u, p, d=(), t: float = 0.0, flow: int | None = None,
+                     tol: float = 1e-12) -> np.ndarray:
+    """Coordinates q near q_guess with G(t, q, 0, u) = 0: at rest there, the flow stays at rest (dv/dt = 0).
+
+    Raises LinearizeError when Newton's method does not converge (no equilibrium near the guess)."""
+    from scipy.optimize import root
+
+    flow = model.hybrid.initial if flow is None else flow
+    _check_supported(model, flow)
+    n = len(model.q)
+
+    def residual(q):
+        point = _Point(model, _point_values(model, np.concatenate([q, np.zeros(n)]), u, p, d, t), model.q)
+        values = [point.evaluate(model.G[i]) for i in range(n)]
+        return np.array([v for v, _ in values]), np.array([g for _, g in values])
+
+    sol = root(residual, np.asarray(q_guess, dtype=float), jac=True, method="hybr", tol=tol)
+    if not sol.success or np.max(np.abs(sol.fun)) > 1e-9 * max(1.0, np.max(np.abs(residual(q_guess)[0]))):
+        raise LinearizeError(f"{model.spec.name}: no equilibrium found near q = {list(np.round(q_guess, 6))} "
+                             f"({sol.message.strip()}; largest |G| = {np.max(np.abs(sol.fun)):.2e}); "
+                             "start from a closer guess with --at")
+    return sol.x

@@ -1,0 +1,132 @@
+"""Linearization (andyc.symbolic.linearize, `andyc linearize`): A and B from exact derivatives.
+
+Checked against closed forms (the double pendulum's small-oscillation
+frequencies, the cart-pole's A and B derived by hand below), against central
+differences of the generated right-hand side at states away from equilibrium,
+and through the command line.
+"""
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import andyc
+from andyc.cli import main
+from andyc.symbolic.linearize import LinearizeError, default_point, find_equilibrium, linearize
+from tests.conftest import MODELS
+
+
+def derived(name):
+    return andyc.derive(andyc.load(MODELS / f"{name}.yaml"))
+
+
+def test_double_pendulum_frequencies_equal_the_closed_form():
+    """Point masses m1, m2 on links L1, L2 hanging at rest: with M0 = [[(m1+m2) L1^2, m2 L1 L2], [m2 L1 L2,
+    m2 L2^2]] and K = diag((m1+m2) g L1, m2 g L2) (absolute angles), det(K - w^2 M0) = 0 is the quadratic
+    (ac - b^2) w^4 - (k1 c + k2 a) w^2 + k1 k2 = 0. The eigenvalues of A are +-i w (relative angles give
+    the same frequencies)."""
+    model = derived("double_pendulum")
+    x, u, p, d = default_point(model)
+    L1, L2, m1, m2, g = p
+    lin = linearize(model, np.zeros(4), u, p, d)
+    a, b, c = (m1 + m2) * L1**2, m2 * L1 * L2, m2 * L2**2
+    k1, k2 = (m1 + m2) * g * L1, m2 * g * L2
+    qa, qb, qc = a * c - b * b, -(k1 * c + k2 * a), k1 * k2
+    w2 = (-qb + np.array([-1.0, 1.0]) * np.sqrt(qb * qb - 4 * qa * qc)) / (2 * qa)
+    expected = np.sort(np.concatenate([np.sqrt(w2), -np.sqrt(w2)]))
+    ev = lin.eigenvalues
+    assert np.abs(ev.real).max() < 1e-12
+    np.testing.assert_allclose(np.sort(ev.imag), expected, rtol=1e-10, atol=0)
+
+
+def test_cart_pole_A_and_B_equal_the_hand_derivation():
+    """models/cart_pole.yaml, th from the upright, pole COM at (x - l sin th, l cos th), rod inertia J_c = m l^2/3:
+    M = [[mc + m, -m l cos th], [-m l cos th, J]], J = 4/3 m l^2; V = m g l cos th; the force F acts on x.
+    At th = 0: [x'', th''] = M0^-1 [F, m g l th], M0^-1 = [[J, m l], [m l, mc + m]] / det, det = (mc + m) J - m^2 l^2."""
+    model = derived("cart_pole")
+    x, u, p, d = default_point(model)
+    mc, m, l, g = p
+    lin = linearize(model, np.zeros(4), [0.0], p, d)
+    J = 4 / 3 * m * l * l
+    det = (mc + m) * J - (m * l) ** 2
+    A = np.zeros((4, 4))
+    A[0, 2] = A[1, 3] = 1.0
+    A[2, 1] = m * l * m * g * l / det
+    A[3, 1] = (mc + m) * m * g * l / det
+    B = np.array([[0.0], [0.0], [J / det], [m * l / det]])
+    np.testing.assert_allclose(lin.A, A, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(lin.B, B, rtol=1e-13, atol=1e-13)
+    assert lin.state_names == ["x", "th", "x_dot", "th_dot"] and lin.input_names == ["F"]
+
+
+@pytest.mark.parametrize("name", ["cart_pole", "chain3d"])
+def test_away_from_equilibrium_A_and_B_equal_central_differences_of_the_generated_rhs(name, compiled):
+    """At random states with nonzero speeds (where dM/dq a and the velocity terms count), A and B equal
+    central differences of the generated module's rhs to the differences' own accuracy."""
+    model = derived(name)
+    module = compiled(name).module
+    _, u, p, d = default_point(model)
+    n = len(model.q)
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        x = np.concatenate([rng.uniform(-1.5, 1.5, n), rng.uniform(-2, 2, n)])
+        u = rng.uniform(-1, 1, len(u))
+        lin = linearize(model, x, u, p, d, t=0.0)
+        h = 1e-6
+        fd_A = np.column_stack([(module.rhs(0.0, x + h * e, u, p, d) - module.rhs(0.0, x - h * e, u, p, d)) / (2 * h)
+                                for e in np.eye(2 * n)])
+        np.testing.assert_allclose(lin.A, fd_A, rtol=1e-6, atol=1e-6 * np.abs(fd_A).max())
+        if len(u):
+            fd_B = np.column_stack([(module.rhs(0.0, x, u + h * e, p, d) - module.rhs(0.0, x, u - h * e, p, d))
+                                    / (2 * h) for e in np.eye(len(u))])
+            np.testing.assert_allclose(lin.B, fd_B, rtol=1e-6, atol=1e-8)
+
+
+def test_find_equilibrium_reaches_the_rest_points():
+    """The double pendulum from a guess off rest returns to hanging (0, 0); the cart-pole's pole from near the
+    bottom finds th = pi, where the linearization has two pairs of imaginary eigenvalues and no unstable one."""
+    model = derived("double_pendulum")
+    _, u, p, d = default_point(model)
+    np.testing.assert_allclose(find_equilibrium(model, [0.4, -0.3], u, p, d), [0.0, 0.0], atol=1e-12)
+    model = derived("cart_pole")
+    _, u, p, d = default_point(model)
+    q = find_equilibrium(model, [0.2, 2.9], u, p, d)
+    assert abs(q[1] - np.pi) < 1e-12
+    lin = linearize(model, np.concatenate([q, [0.0, 0.0]]), u, p, d)
+    assert np.all(lin.eigenvalues.real < 1e-9)
+
+
+def test_cli_prints_and_writes_the_linearization(tmp_path):
+    result = CliRunner().invoke(main, ["linearize", str(MODELS / "cart_pole.yaml"), "--at", "th=0",
+                                       "--set", "mc=2", "-o", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert "1 eigenvalue with positive real part (unstable)" in result.output
+    saved = np.load(tmp_path / "cart_pole_linearization.npz")
+    m, l, g, mc = 0.1, 0.5, 9.81, 2.0
+    J = 4 / 3 * m * l * l
+    assert saved["A"][3, 1] == pytest.approx((mc + m) * m * g * l / ((mc + m) * J - (m * l) ** 2), rel=1e-13)
+    assert list(saved["state_names"]) == ["x", "th", "x_dot", "th_dot"]
+    np.testing.assert_array_equal(np.loadtxt(tmp_path / "cart_pole_B.csv", delimiter=",", skiprows=1), saved["B"][:, 0])
+
+
+@pytest.mark.parametrize("args, message", [
+    (["passive_walker", "--flow", "IFixOOpen"], "flow 'IFixOOpen' has 3 active constraint rows; linearize handles "
+                                                "unconstrained flows so far"),
+    (["cart_pole", "--at", "phi=0"], "no coordinate or speed named 'phi' (--at); states: x, th, x_dot, th_dot"),
+    (["cart_pole", "--flow", "walk"], "no flow named 'walk'; flows: default"),
+    (["cart_pole", "--set", "mass=3"], "no parameter named mass; parameters: mc, m, l, g"),
+    (["swing_bar"], "also has signals"),
+])
+def test_cli_errors_say_what_and_how(args, message):
+    result = CliRunner().invoke(main, ["linearize", str(MODELS / f"{args[0]}.yaml"), *args[1:]])
+    assert result.exit_code == 1
+    assert message in result.output, result.output
+    assert "Traceback" not in result.output
+
+
+def test_no_equilibrium_is_an_error():
+    """A cart pushed by a constant force never rests."""
+    model = derived("cart_pole")
+    _, u, p, d = default_point(model, inputs={"F": 1.0})
+    with pytest.raises(LinearizeError, match="no equilibrium found near"):
+        find_equilibrium(model, [0.0, 0.1], u, p, d)
