@@ -34,6 +34,7 @@ import andyc
 from andyc.reference.chains import chain_yaml, kane_model, random_chain
 from andyc.reference.closed_forms import ball_first_integral
 from andyc.reference.robots import robots_dir
+from andyc.runtime.compiled import Workspace
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -49,18 +50,21 @@ def _rhs_loop(rhs_into, n, x, u, p, d, xdot, M, G, S):
     return acc
 
 
+def _rhs_arguments(model):
+    """(x, u, p, d, xdot, M, G, S): the initial state, defaults and a fresh workspace, for rhs_into."""
+    p, u = model.parameter_defaults, model.input_defaults
+    ws = Workspace.for_model(model)
+    return model.initial_state(p).copy(), u, p, model.initial_discrete(p), ws.xdot, ws.M, ws.G, ws.S
+
+
 def rhs_microseconds(model, repeats=3, n=200_000) -> float:
     """Best of `repeats`: microseconds per rhs_into call inside a compiled loop."""
-    p, u = model.parameter_defaults, model.input_defaults
-    x = model.initial_state(p).copy()
-    xdot = np.zeros(model.nx)
-    M, G, S = np.zeros((model.nv, model.nv)), np.zeros(model.nv), np.zeros((model.module.S_ROWS, model.module.S_WIDTH))
-    d = model.initial_discrete(p)
-    _rhs_loop(model.module.rhs_into, 10, x, u, p, d, xdot, M, G, S)
+    args = _rhs_arguments(model)
+    _rhs_loop(model.module.rhs_into, 10, *args)
     best = np.inf
     for _ in range(repeats):
         tic = time.perf_counter()
-        _rhs_loop(model.module.rhs_into, n, x, u, p, d, xdot, M, G, S)
+        _rhs_loop(model.module.rhs_into, n, *args)
         best = min(best, time.perf_counter() - tic)
     return 1e6 * best / n
 
@@ -296,10 +300,8 @@ def _pin_microseconds(model, data, q, v, tau, n=100_000, repeats=3) -> float:
 
 def _python_call_microseconds(model, n=100_000, repeats=3) -> float:
     """Best of `repeats`: microseconds per rhs_into call from Python (Numba's dispatch included)."""
-    m, p, u = model.module, model.parameter_defaults, model.input_defaults
-    x, xdot = model.initial_state(p).copy(), np.zeros(model.nx)
-    M, G, S = np.zeros((model.nv, model.nv)), np.zeros(model.nv), np.zeros((m.S_ROWS, m.S_WIDTH))
-    d, f = model.initial_discrete(p), m.rhs_into
+    x, u, p, d, xdot, M, G, S = _rhs_arguments(model)
+    f = model.module.rhs_into
     best = np.inf
     for _ in range(repeats):
         tic = time.perf_counter()

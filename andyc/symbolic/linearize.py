@@ -51,12 +51,12 @@ class Linearization:
 class _Point:
     """Values and exact gradients (with respect to `wrt`) of the symbols of a SymbolicModel at one point."""
 
-    def __init__(self, model: SymbolicModel, values: dict, wrt: list):
+    def __init__(self, model: SymbolicModel, needed: set, values: dict, wrt: list):
+        """needed: the intermediate symbols to evaluate (see _needed)."""
         self.values = {s: sp.Float(v) for s, v in values.items()}
         n = len(wrt)
         self.grads = {s: np.eye(n)[i] for i, s in enumerate(wrt)}
         self.zero = np.zeros(n)
-        needed = _needed(model)
         for sym, expr in model.assignments:
             if sym in needed:
                 value, grad = self.evaluate(expr)
@@ -146,7 +146,7 @@ def linearize(model: SymbolicModel, x, u, p, d=(), t: float = 0.0, flow: int | N
     n, nu = len(model.v), len(model.inputs)
     x, u = np.asarray(x, dtype=float), np.asarray(u, dtype=float)
     wrt = model.q + model.v + model.inputs
-    point = _Point(model, _point_values(model, x, u, p, d, t), wrt)
+    point = _Point(model, _needed(model), _point_values(model, x, u, p, d, t), wrt)
     M = np.empty((n, n))
     dM = np.empty((n, n, len(wrt)))
     for i in range(n):
@@ -181,9 +181,10 @@ def find_equilibrium(model: SymbolicModel, q_guess, u, p, d=(), t: float = 0.0, 
     flow = model.hybrid.initial if flow is None else flow
     _check_supported(model, flow)
     n = len(model.q)
+    needed = _needed(model)
 
     def residual(q):
-        point = _Point(model, _point_values(model, np.concatenate([q, np.zeros(n)]), u, p, d, t), model.q)
+        point = _Point(model, needed, _point_values(model, np.concatenate([q, np.zeros(n)]), u, p, d, t), model.q)
         values = [point.evaluate(model.G[i]) for i in range(n)]
         return np.array([v for v, _ in values]), np.array([g for _, g in values])
 
