@@ -142,7 +142,7 @@ def _report_jumps_file(result) -> None:
                    f"the file to regenerate it", err=True)
 
 
-def _parse_sets(values) -> dict:
+def _parse_sets(values, option: str = "--set") -> dict:
     out = {}
     for item in values:
         name, sep, value = item.partition("=")
@@ -151,7 +151,7 @@ def _parse_sets(values) -> dict:
                 raise ValueError
             out[name.strip()] = float(value)
         except ValueError:
-            raise click.BadParameter(f"'{item}' is not NAME=NUMBER", param_hint="--set")
+            raise click.BadParameter(f"'{item}' is not NAME=NUMBER", param_hint=option)
     return out
 
 
@@ -180,7 +180,7 @@ def linearize(file, at, sets, flow, t, find_equilibrium, out_dir):
     except SpecError as exc:
         _fail_spec(exc)
     overrides = _parse_sets(sets)
-    states = dict(_parse_sets(at))
+    states = _parse_sets(at, "--at")
     try:
         flows = model.hybrid.flows
         if flow is not None and flow not in flows:

@@ -130,3 +130,9 @@ def test_no_equilibrium_is_an_error():
     _, u, p, d = default_point(model, inputs={"F": 1.0})
     with pytest.raises(LinearizeError, match="no equilibrium found near"):
         find_equilibrium(model, [0.0, 0.1], u, p, d)
+
+
+def test_cli_a_malformed_at_names_the_option():
+    result = CliRunner().invoke(main, ["linearize", str(MODELS / "cart_pole.yaml"), "--at", "th"])
+    assert result.exit_code == 2
+    assert "'th' is not NAME=NUMBER" in result.output and "--at" in result.output
