@@ -20,8 +20,10 @@ demo: $(STAMP)
 		--out runs/$(DEMO).h5 --out runs/$(DEMO).csv
 	$(ANDYC) plot runs/$(DEMO).h5 -o runs/$(DEMO).png
 
+# Test files run in parallel, one worker per core (pytest-xdist), a file's tests on one worker so that
+# the models it compiles are compiled once.
 test: $(STAMP)
-	$(VENV)/bin/pytest -q
+	$(VENV)/bin/pytest -q -n auto --dist loadfile
 
 bench: $(STAMP)
 	$(PY) bench/run.py

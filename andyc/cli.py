@@ -6,6 +6,7 @@ Exit codes: 0 success, 1 an invalid model or a run that stopped, 2 usage.
 from __future__ import annotations
 
 import sys
+import warnings
 from pathlib import Path
 
 import click
@@ -13,6 +14,7 @@ import click
 import andyc
 from andyc.errors import SimulationError, SpecError
 from andyc.runtime.compiled import compile_integrator, integrator_compiled
+from andyc.runtime.inputs import InputWarning
 from andyc.runtime.simulate import METHODS
 
 
@@ -80,6 +82,7 @@ def main():
     andyc sim model.yaml        build if needed, simulate, write run files
     andyc plot run.h5           plot states and energy
     andyc linearize model.yaml  A, B and eigenvalues about a state
+    andyc eom model.yaml        M, G, constraint Jacobian, per element (LaTeX)
     """
 
 
@@ -206,6 +209,9 @@ def linearize(file, at, sets, flow, t, find_equilibrium, out_dir):
     point = ", ".join(f"{n} = {v:.10g}" for n, v in zip(lin.state_names, lin.x))
     inputs = ", ".join(f"{n} = {v:.10g}" for n, v in zip(lin.input_names, lin.u)) or "none"
     click.echo(f"{spec.name}: linearized in flow '{lin.flow}' at t = {lin.t:g} about {point}; inputs {inputs}")
+    if lin.form == "null-space":
+        click.echo(f"flow '{lin.flow}' is constrained: null-space form, dq = N_q z, dv = N_v w (orthonormal bases of "
+                   f"the null space of its constraint rows at the point)\nN_q =\n{lin.basis_q}\nN_v =\n{lin.basis_v}")
     click.echo(f"states: {', '.join(lin.state_names)}\nA =\n{lin.A}")
     if lin.input_names:
         click.echo(f"inputs: {', '.join(lin.input_names)}\nB =\n{lin.B}")
@@ -216,9 +222,10 @@ def linearize(file, at, sets, flow, t, find_equilibrium, out_dir):
     if out_dir:
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
+        bases = {"N_q": lin.basis_q, "N_v": lin.basis_v} if lin.form == "null-space" else {}
         np.savez(out / f"{spec.name}_linearization.npz", A=lin.A, B=lin.B, x=lin.x, u=lin.u, t=lin.t,
                  state_names=np.array(lin.state_names), input_names=np.array(lin.input_names, dtype=str),
-                 eigenvalues=ev, flow=lin.flow)
+                 eigenvalues=ev, flow=lin.flow, form=lin.form, **bases)
         np.savetxt(out / f"{spec.name}_A.csv", lin.A, delimiter=",", header=",".join(lin.state_names), comments="")
         np.savetxt(out / f"{spec.name}_B.csv", lin.B, delimiter=",", header=",".join(lin.input_names), comments="")
         click.echo(f"wrote {out / f'{spec.name}_linearization.npz'}, {spec.name}_A.csv and {spec.name}_B.csv")
@@ -231,6 +238,12 @@ def linearize(file, at, sets, flow, t, find_equilibrium, out_dir):
 @click.option("--method", default="rk4", show_default=True,
               type=click.Choice(list(METHODS)))
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
+@click.option("--input", "input_specs", multiple=True, metavar="NAME=VALUE|EXPR|FILE.csv",
+              help="Drive an input: a number; an expression of t, the states, parameters and discrete states "
+                   "(\"-10*th - 2*th_dot\"); or a CSV table with a time column t and a column NAME, interpolated.")
+@click.option("--controller", type=click.Path(dir_okay=False), default=None, metavar="FILE.py",
+              help="A Python file defining control(t, x, d, p), returning the inputs (compiled with Numba when it can "
+                   "be); it drives every input.")
 @click.option("--out", "outs", multiple=True, metavar="RUN.h5|RUN.csv",
               help="Run file(s) to write; default runs/<name>.h5.")
 @click.option("--every", default=1, show_default=True, help="Log one sample every N steps.")
@@ -255,8 +268,8 @@ def linearize(file, at, sets, flow, t, find_equilibrium, out_dir):
 @click.option("--rtol", default=1e-8, show_default=True, help="Relative tolerance (adaptive methods).")
 @click.option("--atol", default=1e-10, show_default=True, help="Absolute tolerance (adaptive methods).")
 @click.option("-o", "--out-dir", default="build", show_default=True, help="Build folder.")
-def sim(file, t_end, dt, method, sets, outs, every, frames, init, init_tol, energy_correction, energy_tol,
-        event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, out_dir):
+def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, frames, init, init_tol, energy_correction,
+        energy_tol, event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, out_dir):
     """Build FILE if needed, simulate it and write run files."""
     overrides = _parse_sets(sets)
     stops = {}
@@ -278,13 +291,26 @@ def sim(file, t_end, dt, method, sets, outs, every, frames, init, init_tol, ener
         compile_integrator(model)
     params = {k: v for k, v in overrides.items() if k not in model.input_names}
     inputs = {k: v for k, v in overrides.items() if k in model.input_names}
+    for item in input_specs:
+        name, sep, value = item.partition("=")
+        if not sep or not value.strip():
+            raise click.BadParameter(f"'{item}' is not NAME=VALUE", param_hint="--input")
+        if name.strip() in inputs:
+            raise click.BadParameter(f"input '{name.strip()}' given twice", param_hint="--input")
+        inputs[name.strip()] = value.strip()
     try:
-        run = andyc.simulate(model, t_end, dt=dt, method=method, parameters=params, inputs=inputs,
-                             every=every, frames=frames, rtol=rtol, atol=atol, init=init, init_tol=init_tol,
-                             energy_correction=energy_correction, energy_tol=energy_tol, event_tol=event_tol,
-                             max_instant_jumps=max_instant_jumps, zeno_tol=zeno_tol, stop_after=stops)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", InputWarning)
+            run = andyc.simulate(model, t_end, dt=dt, method=method, parameters=params, inputs=inputs,
+                                 controller=controller, every=every, frames=frames, rtol=rtol, atol=atol, init=init,
+                                 init_tol=init_tol, energy_correction=energy_correction, energy_tol=energy_tol,
+                                 event_tol=event_tol, max_instant_jumps=max_instant_jumps, zeno_tol=zeno_tol,
+                                 stop_after=stops)
     except SimulationError as exc:
         raise click.UsageError(str(exc))
+    finally:
+        for w in caught:
+            click.echo(f"warning: {w.message}", err=True)
     outs = outs or (f"runs/{model.name}.h5",)
     for out in outs:
         try:
@@ -319,6 +345,56 @@ def _largest(a) -> float:
 
 
 @main.command()
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("--format", "fmt", default="latex", show_default=True, type=click.Choice(["latex", "sympy", "json"]),
+              help="latex: an equation block per quantity; sympy: a Python file defining the symbols and matrices; "
+                   "json: names and each quantity as sympy str and LaTeX.")
+@click.option("--element", default=None, metavar="NAME", help="Only this element's own M and G.")
+@click.option("--flow", default=None, metavar="F", help="The flow whose constraint rows and inputs to use "
+              "(default: the initial one).")
+@click.option("--standalone", is_flag=True, help="latex: a whole document, not a fragment.")
+@click.option("-o", "--out", default=None, metavar="FILE", help="Write to FILE (default: standard output).")
+def eom(file, fmt, element, flow, standalone, out):
+    """Print FILE's equations of motion for reading: M dv/dt = G, the flow's constraint rows phi, A and
+    kappa, and each element's own M and G (ANDY eq. 5-8, 10-11), intermediates substituted, simplified."""
+    from andyc.symbolic.eom import FACTOR_OPS, SIMPLIFY_OPS, EomError, equations, render
+
+    if standalone and fmt != "latex":
+        raise click.BadParameter("a whole document is LaTeX: use it with --format latex", param_hint="--standalone")
+    try:
+        spec = andyc.load(file)
+        model = andyc.derive(spec)
+    except SpecError as exc:
+        _fail_spec(exc)
+    tty = sys.stderr.isatty()
+    shown = [0.0]
+
+    def progress(done, total, seconds):
+        """Past 1 s: on a terminal one line, rewritten twice a second; elsewhere a line every 10 s."""
+        if seconds > 1 and (done == total or seconds - shown[0] >= (0.5 if tty else 10)):
+            shown[0] = seconds
+            click.echo(("\r" if tty else "") + f"{spec.name}: {done} of {total} entries written out, {seconds:.0f} s",
+                       err=True, nl=not tty or done == total)
+
+    try:
+        eq = equations(model, flow=flow, element=element, progress=progress)
+    except EomError as exc:
+        click.echo(f"{file}: {exc}", err=True)
+        sys.exit(1)
+    if eq.factored or eq.as_written:
+        click.echo(f"{spec.name}: {eq.factored + eq.as_written} of {eq.entries} entries are past the simplification "
+                   f"budget ({SIMPLIFY_OPS} operations written out; largest {eq.largest}): only factored"
+                   + (f"; {eq.as_written} past {FACTOR_OPS} are left as written out, megabytes of text that take "
+                      "minutes to print (--element NAME prints one element)" if eq.as_written else ""), err=True)
+    text = render(eq, fmt, standalone)
+    if out:
+        Path(out).write_text(text)
+        click.echo(f"wrote {out} ({eq.entries} entries in {eq.seconds:.2f} s)")
+    else:
+        click.echo(text, nl=False)
+
+
+@main.command()
 @click.argument("run_file", type=click.Path(exists=True, dir_okay=False))
 @click.option("-o", "--out", default=None, help="PNG file; default RUN.png beside the run.")
 def plot(run_file, out):
@@ -328,6 +404,9 @@ def plot(run_file, out):
     from andyc.plot import plot_run, plot_sticks, stick_edges
     from andyc.runtime.run import read_h5
 
+    if Path(run_file).suffix.lower() not in (".h5", ".hdf5"):
+        raise click.BadParameter(f"{run_file}: andyc plot reads the HDF5 run file (.h5) that andyc sim writes; "
+                                 f"write one with --out RUN.h5", param_hint="RUN_FILE")
     run = read_h5(run_file)
     out = out or str(Path(run_file).with_suffix(".png"))
     plot_run(run, out)

@@ -81,6 +81,8 @@ def _series_panels(run: Run) -> list:
     for names, ylabel in ((positions, "position signals, m"), (others, "other signals")):
         if names:
             panels.append(partial(_states, cols=[run.state_names.index(n) for n in names], ylabel=ylabel))
+    if run.input_names and len(run.time) and np.ptp(run.input_values, axis=0).max() > 0:
+        panels.append(_inputs)      # inputs that change (driven, or set by flows)
     if run.multiplier_names:
         panels += [_multipliers, _residuals]
     return panels
@@ -176,6 +178,13 @@ def _states(ax, run: Run, cols, ylabel: str) -> None:
     for j in cols:
         ax.plot(run.time, run.state[:, j], lw=1, label=run.state_names[j])
     ax.set_ylabel(ylabel)
+    _legend(ax)
+
+
+def _inputs(ax, run: Run) -> None:
+    for j, name in enumerate(run.input_names):
+        ax.plot(run.time, run.input_values[:, j], lw=1, label=name)
+    ax.set_ylabel("inputs u")
     _legend(ax)
 
 

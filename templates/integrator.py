@@ -17,30 +17,47 @@
 # the rest of the step is integrated by the next call, so the grid stays
 # t0 + i dt. The caller applies the user's jump function and follows jumps
 # that happen at once (instant).
+#
+# Inputs: every function here takes `inputs`, a compiled function
+#     status = inputs(t, x, d, p, flow, u, data)
+# that writes the inputs u at (t, x) (INPUTS_SIGNATURE: a first-class function
+# type, so the integrator compiles once for every input source), and the
+# `data` it reads; andyc's runtime compiles it from expressions, tables and
+# controllers. It is called before each evaluation at a new (t, x); a nonzero
+# status stops the run with INPUT_FAILED. inputs = data = None: the inputs are
+# held, u as the caller set it for the flow. Numba then compiles the integrator
+# without the calls (branches on `is not None` are pruned at compile time), so
+# held inputs do not pay for carrying a function and an array down the call
+# chain, about a tenth of a constrained step in reference counting.
 
 
 @njit(cache=True, error_model="numpy")
-def rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, u, p, d, flow, out, M, G, S, k, xt):
-    """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status."""
+def update_inputs(inputs, t, x, p, d, flow, u, data):
+    """u at (t, x) when the inputs are driven (held: u stays as the caller set it); a status (INPUT_FAILED:
+    `inputs` failed, its record in data says why)."""
+    if inputs is not None:
+        if inputs(t, x, d, p, flow, u, data) != 0:
+            return INPUT_FAILED
+    return OK
+
+
+@njit(cache=True, error_model="numpy")
+def rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, inputs, u, data, p, d, flow, out, M, G, S, k, xt):
+    """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status.
+
+    Stage s evaluates at t + c_s h, x + c_s h k_(s-1), c = (0, 1/2, 1/2, 1).
+    """
     nx = x.shape[0]
-    status = rhs_mode_into(t, x, u, p, d, flow, k[0], M, G, S, mode)
-    if status != OK:
-        return status
-    for j in range(nx):
-        xt[j] = x[j] + 0.5 * h * k[0, j]
-    status = rhs_mode_into(t + 0.5 * h, xt, u, p, d, flow, k[1], M, G, S, mode)
-    if status != OK:
-        return status
-    for j in range(nx):
-        xt[j] = x[j] + 0.5 * h * k[1, j]
-    status = rhs_mode_into(t + 0.5 * h, xt, u, p, d, flow, k[2], M, G, S, mode)
-    if status != OK:
-        return status
-    for j in range(nx):
-        xt[j] = x[j] + h * k[2, j]
-    status = rhs_mode_into(t + h, xt, u, p, d, flow, k[3], M, G, S, mode)
-    if status != OK:
-        return status
+    for s in range(4):
+        c = 0.0 if s == 0 else (1.0 if s == 3 else 0.5)
+        for j in range(nx):
+            xt[j] = x[j] if s == 0 else x[j] + c * h * k[s - 1, j]
+        if inputs is not None:
+            if inputs(t + c * h, xt, d, p, flow, u, data) != 0:
+                return INPUT_FAILED
+        status = rhs_mode_into(t + c * h, xt, u, p, d, flow, k[s], M, G, S, mode)
+        if status != OK:
+            return status
     total = 0.0
     for j in range(nx):
         out[j] = x[j] + h / 6.0 * (k[0, j] + 2.0 * k[1, j] + 2.0 * k[2, j] + k[3, j])
@@ -48,6 +65,8 @@ def rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, u, p, d, flow
     if not math.isfinite(total):
         return NONFINITE
     if do_project:
+        if update_inputs(inputs, t + h, out, p, d, flow, u, data) != OK:
+            return INPUT_FAILED
         return project(t + h, out, u, p, d, flow, constrain, e0, energy_tol, M, G, S)
     return OK
 
@@ -63,7 +82,7 @@ def crosses(direction, g_start, g_end):
 
 
 @njit(cache=True, error_model="numpy")
-def locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, u, p, d, flow,
+def locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, inputs, u, data, p, d, flow,
            g_start, g_end, xb, xc, M, G, S, k, xt, counts):
     """Root of guard m on the step (t, x) -> t + h, as a bracket [a, b] no wider than tol.
 
@@ -85,7 +104,10 @@ def locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, u, p, d
             c = 0.5 * (a + b)
         width = b - a
         counts[1] += 1
-        status = rk4_step(mode, do_project, constrain, e0, energy_tol, t, c, x, u, p, d, flow, xc, M, G, S, k, xt)
+        status = rk4_step(mode, do_project, constrain, e0, energy_tol, t, c, x, inputs, u, data, p, d, flow, xc,
+                          M, G, S, k, xt)
+        if status == OK:
+            status = update_inputs(inputs, t + c, xc, p, d, flow, u, data)
         if status != OK:
             return c, status
         gc = guard(m, t + c, xc, u, p, d)
@@ -104,17 +126,18 @@ def locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, u, p, d
 
 
 @njit(cache=True, error_model="numpy")
-def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i_end, every, t, flow, x, U, p, d,
-            out_t, out_x, out_flow, out_d, row, g0, x_event, M, G, S, k, xt, x1, xb, xc, counts):
+def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i_end, every, t, flow, x, inputs,
+            u, data, p, d, out_t, out_x, out_u, out_flow, out_d, row, g0, x_event, M, G, S, k, xt, x1, xb, xc, counts):
     """Integrate from time t (on step i: t0 + i dt <= t < t0 + (i + 1) dt) to the grid point i_end,
     stopping early at a jump or a failure. x, d, g0 and the logs are updated in place; every
-    `every`-th grid point is logged at out_*[row]. counts[0] += steps taken (a step cut by a jump
-    counts twice), counts[1] += trial steps of event location.
+    `every`-th grid point is logged at out_*[row] (out_u: the inputs there). counts[0] += steps
+    taken (a step cut by a jump counts twice), counts[1] += trial steps of event location.
 
     Returns (i, row, status, t, flow, jump): jump is the index of the jump applied at t (x_event
     holds the state just before it), or -1.
     """
-    u = U[flow]
+    if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
+        return i, row, INPUT_FAILED, t, flow, -1
     for m in range(NJ):
         if JUMP_SOURCE[m] == flow:
             g0[m] = guard(m, t, x, u, p, d)
@@ -123,7 +146,8 @@ def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i
         h = t_next - t
         if h > 1e-14 * max(1.0, abs(t_next)):
             counts[0] += 1
-            status = rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, u, p, d, flow, x1, M, G, S, k, xt)
+            status = rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, inputs, u, data, p, d, flow,
+                              x1, M, G, S, k, xt)
             if status != OK:
                 return i, row, status, t, flow, -1
             best, best_tau = -1, h
@@ -131,10 +155,14 @@ def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i
             for m in range(NJ):
                 if JUMP_SOURCE[m] != flow:
                     continue
+                if update_inputs(inputs, t_next, x1, p, d, flow, u, data) != OK:
+                    return i, row, INPUT_FAILED, t, flow, -1
                 g1 = guard(m, t_next, x1, u, p, d)
                 if crosses(JUMP_DIRECTION[m], g0[m], g1):
-                    tau, status = locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, u, p, d, flow,
-                                         g0[m], g1, xb, xc, M, G, S, k, xt, counts)
+                    tau, status = locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, inputs,
+                                         u, data, p, d, flow, g0[m], g1, xb, xc, M, G, S, k, xt, counts)
+                    if status == OK:
+                        status = update_inputs(inputs, t + tau, xb, p, d, flow, u, data)
                     if status != OK:
                         return i, row, status, t, flow, -1
                     earlier = tau < best_tau - tol or (best >= 0 and tau <= best_tau + tol
@@ -146,14 +174,19 @@ def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i
             if best >= 0:
                 x[:] = x_event
                 t = t + best_tau
+                if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
+                    return i, row, INPUT_FAILED, t, flow, -1
                 status = jump(best, t, x, u, p, d, M, G, S)
                 return i, row, status, t, JUMP_TARGET[best], best
             x[:] = x1
         t = t_next
         i += 1
         if i % every == 0:
+            if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
+                return i, row, INPUT_FAILED, t, flow, -1
             out_t[row] = t
             out_x[row] = x
+            out_u[row] = u
             out_flow[row] = flow
             out_d[row] = d
             row += 1
@@ -161,15 +194,17 @@ def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i
 
 
 @njit(cache=True, error_model="numpy")
-def instant(mode, t, x, u, p, d, flow, xdot, M, G, S):
+def instant(mode, t, x, inputs, u, data, p, d, flow, xdot, M, G, S):
     """The first jump (in priority order) out of `flow` that happens at once at (t, x), or -1.
 
     A guard already past zero happens at once when it is moving further
     (falling: g < 0 and dg/dt <= 0, or g = 0 and dg/dt < 0; rising mirrored;
     either: g = 0 and dg/dt != 0) and its enabling condition holds. A guard
     past zero but moving back, such as a bouncing ball's height just after
-    the bounce, does not.
+    the bounce, does not. u is left at the inputs at (t, x); -2 when they fail.
     """
+    if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
+        return -2
     have_rate = False
     for n in range(NJ):
         m = JUMP_ORDER[n]
@@ -196,16 +231,16 @@ def instant(mode, t, x, u, p, d, flow, xdot, M, G, S):
 
 
 @njit(cache=True, error_model="numpy")
-def evaluate_energy(t, X, U, p, D, F, out):
-    """Energy at the logged samples (time t, state X, discrete states D, flow F)."""
+def evaluate_energy(t, X, U, p, D, out):
+    """Energy at the logged samples (time t, state X, inputs U, discrete states D)."""
     for r in range(t.shape[0]):
-        out[r] = energy(t[r], X[r], U[F[r]], p, D[r])
+        out[r] = energy(t[r], X[r], U[r], p, D[r])
 
 
 @njit(cache=True, error_model="numpy")
-def evaluate_frames(t, X, U, p, D, F, out):
+def evaluate_frames(t, X, U, p, D, out):
     for r in range(t.shape[0]):
-        frame_positions(t[r], X[r], U[F[r]], p, D[r], out[r])
+        frame_positions(t[r], X[r], U[r], p, D[r], out[r])
 
 
 @njit(cache=True, error_model="numpy")
@@ -213,7 +248,7 @@ def evaluate_constraints(t, X, U, p, D, F, phi, c, lam, M, G, S):
     """Residuals phi (N, NH), c (N, NC) and multipliers lam (N, NC) at the logged samples;
     NaN for the rows not active in the sample's flow F[r]."""
     for r in range(t.shape[0]):
-        u = U[F[r]]
+        u = U[r]
         constraints_into(t[r], X[r], u, p, D[r], S)
         phi_all, c_all, A, kappa = terms(S)
         phi[r, :] = np.nan

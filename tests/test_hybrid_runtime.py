@@ -120,3 +120,18 @@ hybrid:
     assert re.match(r"stopped: 21 jumps at t = 0\.(5|49999\d*) s without time advancing", run.status)
     assert "ab -> ba" in run.status or "ba -> ab" in run.status
     assert len(run.events["time"]) == 21 and np.all(run.events["time"] == run.events["time"][0])
+
+
+def test_a_flow_that_sets_an_input_wins_over_the_run_driving_it(push):
+    """In 'pushed' the flow sets u = F; in 'coast' the run's expression u = t/2 drives it:
+    x = a t^2 / 2 up to t_off, then x'' = t / (2 m)."""
+    model = push[0]
+    run = andyc.simulate(model, 3.0, dt=1e-3, inputs={"u": "t/2"}, progress=False)
+    m, F, t_off = 2.0, 3.0, 1.0
+    t, u = run.time, run.input_values[:, 0]
+    pushed = run.flow == run.flow_names.index("pushed")
+    assert np.all(u[pushed] == F) and np.allclose(u[~pushed], t[~pushed] / 2, rtol=0, atol=1e-15)
+    a = F / m
+    after = 0.5 * a * t_off**2 + a * t_off * (t - t_off) + ((t**3 - t_off**3) / 3 - t_off**2 * (t - t_off)) / (4 * m)
+    x = np.where(t <= t_off, 0.5 * a * t**2, after)
+    assert np.max(np.abs(run.column("x") - x)) < 1e-10

@@ -110,8 +110,10 @@ def test_cli_prints_and_writes_the_linearization(tmp_path):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["passive_walker", "--flow", "IFixOOpen"], "flow 'IFixOOpen' has 3 active constraint rows; linearize handles "
-                                                "unconstrained flows so far"),
+    (["passive_walker", "--flow", "IFixOOpen"], "flow 'IFixOOpen' has 3 active constraint rows; a constrained flow "
+                                                "is linearized at rest"),
+    (["fourbar", "--at", "th1_dot=0", "--at", "th2_dot=0", "--at", "th3_dot=0", "--at", "th2=1"],
+     "the point is off flow 'default''s constraint manifold (largest residual"),
     (["cart_pole", "--at", "phi=0"], "no coordinate or speed named 'phi' (--at); states: x, th, x_dot, th_dot"),
     (["cart_pole", "--flow", "walk"], "no flow named 'walk'; flows: default"),
     (["cart_pole", "--set", "mass=3"], "no parameter named mass; parameters: mc, m, l, g"),
@@ -136,3 +138,66 @@ def test_cli_a_malformed_at_names_the_option():
     result = CliRunner().invoke(main, ["linearize", str(MODELS / "cart_pole.yaml"), "--at", "th"])
     assert result.exit_code == 2
     assert "'th' is not NAME=NUMBER" in result.output and "--at" in result.output
+
+
+# The double pendulum again, its lower mass a free point (x, y) held at L2 from the elbow by a
+# holonomic constraint: 3 coordinates, 1 row, the same two modes.
+CARTESIAN = """\
+name: double_pendulum_cartesian
+parameters: {L1: 1.0, L2: 0.8, m1: 1.0, m2: 0.5, g: 9.81}
+coordinates:
+  q1: {}
+  x: {}
+  y: {initial: -L1 - L2}
+gravity: [0, -g, 0]
+frames:
+  - {name: upper, parent: world, revolute: q1}
+  - {name: elbow, parent: upper, translation: [0, -L1, 0]}
+  - {name: slide_x, parent: world, prismatic: x, axis: x}
+  - {name: point, parent: slide_x, prismatic: y, axis: y}
+bodies:
+  - {name: mass1, frame: elbow, mass: m1}
+  - {name: mass2, frame: point, mass: m2}
+constraints:
+  - name: rod
+    holonomic: (point.x - elbow.x)**2 + (point.y - elbow.y)**2 - L2**2
+"""
+
+
+def test_a_constrained_flow_in_null_space_form_has_the_mechanisms_frequencies(tmp_path):
+    """At the hanging rest point the null-space form of the constrained model has the double
+    pendulum's closed-form frequencies, with orthonormal bases of the row's null space."""
+    (tmp_path / "dp.yaml").write_text(CARTESIAN)
+    model = andyc.derive(andyc.load(tmp_path / "dp.yaml"))
+    x, u, p, d = default_point(model)
+    lin = linearize(model, x, u, p, d)
+    free = linearize(derived("double_pendulum"), np.zeros(4), [], p, d)
+    assert lin.form == "null-space" and lin.basis_q.shape == (3, 2) and lin.basis_v.shape == (3, 2)
+    np.testing.assert_allclose(lin.basis_q.T @ lin.basis_q, np.eye(2), atol=1e-14)
+    np.testing.assert_allclose(np.sort(lin.eigenvalues.imag), np.sort(free.eigenvalues.imag), rtol=1e-10, atol=0)
+    assert np.abs(lin.eigenvalues.real).max() < 1e-10
+    assert lin.state_names == ["z1", "z2", "z1_dot", "z2_dot"]
+
+
+def test_the_fourbar_at_rest_swings_at_its_closed_form_frequency():
+    """Parallelogram four-bar hanging at rest (cranks down, coupler level): the coupler translates, so
+    T = (I1 + I3 + m2 a^2) th'^2 / 2 with I = m a^2 / 3 and V = -(m1/2 + m3/2 + m2) g a cos th:
+    w^2 = g (m1/2 + m3/2 + m2) / (a (m1/3 + m3/3 + m2)). Two closure rows leave one degree of freedom."""
+    model = derived("fourbar")
+    x, u, p, d = default_point(model)
+    x[3:] = 0.0
+    lin = linearize(model, x, u, p, d)
+    a, dd, m1, m2, m3, g = p[:6]
+    w = np.sqrt(g * (m1 / 2 + m3 / 2 + m2) / (a * (m1 / 3 + m3 / 3 + m2)))
+    assert lin.A.shape == (2, 2)
+    np.testing.assert_allclose(np.sort(lin.eigenvalues.imag), [-w, w], rtol=1e-10)
+
+
+def test_cli_prints_the_null_space_bases_of_a_constrained_flow(tmp_path):
+    args = ["linearize", str(MODELS / "fourbar.yaml"), "-o", str(tmp_path)] + [
+        item for name in ("th1_dot", "th2_dot", "th3_dot") for item in ("--at", f"{name}=0")]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 0, result.output
+    assert "null-space form, dq = N_q z, dv = N_v w" in result.output
+    saved = np.load(tmp_path / "fourbar_linearization.npz")
+    assert str(saved["form"]) == "null-space" and saved["N_q"].shape == (3, 1)

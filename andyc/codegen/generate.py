@@ -132,6 +132,7 @@ def _hybrid_context(model: SymbolicModel) -> dict:
     nh = model.constraints.nh
     return {
         "flows": h.flows, "initial_flow": h.initial,
+        "flow_sets_input": repr([[i in inputs for i in range(len(model.inputs))] for inputs in h.flow_inputs]),
         "flow_rows": _padded(h.flow_rows, nc), "flow_nrows": repr([len(r) for r in h.flow_rows]),
         "flow_nhrows": repr([sum(1 for i in r if i < nh) for r in h.flow_rows]),
         "jumps": [{"name": j.name, "source": j.source, "target": j.target, "direction": j.direction,
@@ -211,6 +212,7 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         "parameter_defaults": repr([v for _, v in spec.parameters.values()]),
         "inputs": list(spec.inputs),
         "input_defaults": repr([v for _, v in spec.inputs.values()]),
+        "input_expressions": spec.input_expressions,
         "frames": frames, "operations": operations,
         "frame_parents": [next(f.parent for f in spec.frames if f.name == name) for name in frames],
         "nh": cons.nh, "nc": cons.nc, "constraint_rows": cons.rows, "multipliers": cons.multipliers,

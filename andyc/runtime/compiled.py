@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import inspect
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 
 import numpy as np
+from numba import types
 
 from andyc.errors import SimulationError
 
@@ -48,6 +50,7 @@ class CompiledModel:
     initial_flow: int = 0
     jump_names: tuple = ()
     frame_parents: tuple = ()   # parent of each frame in frame_names
+    input_expressions: tuple = ()  # (input, expression text) the model drives by default
 
     @property
     def nd(self) -> int:
@@ -108,12 +111,13 @@ class Workspace:
     x_event: np.ndarray  # (nx,) the state just before a jump
     xdot: np.ndarray     # (nx,)
     g0: np.ndarray       # (nj,) guard values at the current step's start
+    u: np.ndarray        # (nu,) the inputs at the latest (t, x)
 
     @classmethod
     def for_model(cls, model: CompiledModel) -> "Workspace":
         nx = model.nx
         return cls(np.zeros((model.nv, model.nv)), np.zeros(model.nv), np.zeros((model.module.S_ROWS, model.module.S_WIDTH)), np.zeros((4, nx)),
-                   *(np.zeros(nx) for _ in range(6)), np.zeros(model.nj))
+                   *(np.zeros(nx) for _ in range(6)), np.zeros(model.nj), np.zeros(len(model.input_names)))
 
 
 def load_compiled(path) -> CompiledModel:
@@ -137,7 +141,7 @@ def load_compiled(path) -> CompiledModel:
         constraint_where=tuple(tuple(w) for w in module.CONSTRAINT_WHERE),
         discrete_names=tuple(module.DISCRETE_STATES), flow_names=tuple(module.FLOWS),
         initial_flow=int(module.INITIAL_FLOW), jump_names=tuple(module.JUMPS),
-        frame_parents=tuple(module.FRAME_PARENTS))
+        frame_parents=tuple(module.FRAME_PARENTS), input_expressions=tuple(module.INPUT_EXPRESSIONS.items()))
     # Call each function once so Numba compiles now, not inside a timed run.
     p, u, x, d, ws, flow = _sample_arguments(model)
     module.rhs_into(0.0, x, u, p, d, flow, ws.k[0], ws.M, ws.G, ws.S)
@@ -154,27 +158,38 @@ def _sample_arguments(model: CompiledModel):
     return p, u, model.initial_state(p), model.initial_discrete(p), Workspace.for_model(model), model.initial_flow
 
 
-def integrator_compiled(model: CompiledModel) -> bool:
-    """Whether the module's integrator is compiled (or plain Python: Numba absent)."""
-    signatures = getattr(model.module.advance, "signatures", None)
-    return signatures is None or bool(signatures)
+def integrator_compiled(model: CompiledModel, driven: bool = False) -> bool:
+    """Whether the module's integrator is compiled (or plain Python: Numba absent), for held inputs
+    or (driven) for an input function."""
+    advance = model.module.advance
+    signatures = getattr(advance, "signatures", None)
+    if signatures is None:
+        return True
+    k = list(inspect.signature(advance.py_func).parameters).index("inputs")
+    return any((sig[k] != types.none) == driven for sig in signatures)
 
 
-def compile_integrator(model: CompiledModel) -> None:
+def compile_integrator(model: CompiledModel, function=None, data=None) -> None:
     """Compile the module's integrator and log evaluations (or load them from Numba's cache) once,
-    with the argument types simulate() passes: a block of no steps and one-sample logs. simulate()
+    with the argument types simulate() passes: a block of no steps and one-sample logs. With an
+    input function (and its data), the integrator's second compilation, which calls it. simulate()
     calls this before it starts its clock, so a run's wall time never includes compilation."""
     module = model.module
-    if integrator_compiled(model):
+    driven = function is not None
+    if integrator_compiled(model, driven):
         return
     p, u, x, d, ws, flow = _sample_arguments(model)
-    U = model.flow_inputs(u, p)
     t_log, x_log, f_log, d_log = np.zeros(1), x[None, :].copy(), np.full(1, flow, dtype=np.int64), d[None, :].copy()
-    module.advance(0, False, False, 0.0, -1.0, 1e-12, 0.0, 1e-3, 0, 0, 1, 0.0, flow, x.copy(), U, p, d.copy(),
-                   t_log.copy(), x_log.copy(), f_log.copy(), d_log.copy(), 1, ws.g0, ws.x_event, ws.M, ws.G, ws.S,
-                   ws.k, ws.x_tmp, ws.x_step, ws.x_near, ws.x_trial, np.zeros(2, dtype=np.int64))
-    module.instant(0, 0.0, x.copy(), U[flow], p, d.copy(), flow, ws.xdot, ws.M, ws.G, ws.S)
-    module.evaluate_energy(t_log, x_log, U, p, d_log, f_log, np.zeros(1))
+    u_log = u[None, :].copy()
+    module.advance(0, False, False, 0.0, -1.0, 1e-12, 0.0, 1e-3, 0, 0, 1, 0.0, flow, x.copy(), function, ws.u, data,
+                   p, d.copy(), t_log.copy(), x_log.copy(), u_log.copy(), f_log.copy(), d_log.copy(), 1, ws.g0,
+                   ws.x_event, ws.M, ws.G, ws.S, ws.k, ws.x_tmp, ws.x_step, ws.x_near, ws.x_trial,
+                   np.zeros(2, dtype=np.int64))
+    module.instant(0, 0.0, x.copy(), function, ws.u, data, p, d.copy(), flow, ws.xdot, ws.M, ws.G, ws.S)
+    module.update_inputs(function, 0.0, x, p, d, flow, ws.u, data)
+    if driven:
+        return
+    module.evaluate_energy(t_log, x_log, u_log, p, d_log, np.zeros(1))
     if model.nc:
-        module.evaluate_constraints(t_log, x_log, U, p, d_log, f_log, np.zeros((1, model.nh)),
+        module.evaluate_constraints(t_log, x_log, u_log, p, d_log, f_log, np.zeros((1, model.nh)),
                                     np.zeros((1, model.nc)), np.zeros((1, model.nc)), ws.M, ws.G, ws.S)

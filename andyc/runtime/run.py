@@ -43,6 +43,8 @@ class Run:
     events: dict = field(default_factory=dict)       # EVENT_COLUMNS -> arrays, one entry per jump
     jump_names: list = field(default_factory=list)
     frame_parents: dict = field(default_factory=dict)  # logged frame -> its parent frame (stick figures)
+    input_names: list = field(default_factory=list)
+    input_values: np.ndarray | None = None           # (N, nu) the inputs at each sample
     andyc_version: str = andyc.__version__
 
     def __post_init__(self):
@@ -52,6 +54,8 @@ class Run:
             self.flow = np.zeros(n, dtype=np.int64)
         if self.discrete is None:
             self.discrete = np.zeros((n, len(self.discrete_names)))
+        if self.input_values is None:
+            self.input_values = np.zeros((n, len(self.input_names)))
         nx = self.state.shape[1]
         empty = {"time": np.zeros(0), "jump": np.zeros(0, np.int32), "from_flow": np.zeros(0, np.int32),
                  "to_flow": np.zeros(0, np.int32), "state_before": np.zeros((0, nx)),
@@ -115,6 +119,8 @@ def write_h5(run: Run, path: Path) -> None:
         f["flow"].attrs["names"] = run.flow_names
         f["discrete"] = run.discrete
         f["discrete"].attrs["names"] = run.discrete_names
+        f["inputs"] = run.input_values
+        f["inputs"].attrs["names"] = run.input_names
         f["multipliers"] = run.multipliers
         f["multipliers"].attrs["names"] = run.multiplier_names
         f["residual/position"] = run.residual_position
@@ -159,16 +165,18 @@ def read_h5(path) -> Run:
                    flow=f["flow"][()].astype(np.int64), flow_names=json.loads(a.get("flow_names", '["default"]')),
                    discrete_names=[str(s) for s in f["discrete"].attrs["names"]] if "discrete" in f else [],
                    discrete=f["discrete"][()] if "discrete" in f else None, events=events, jump_names=jump_names,
+                   input_names=[str(s) for s in f["inputs"].attrs["names"]] if "inputs" in f else [],
+                   input_values=f["inputs"][()] if "inputs" in f else None,
                    frame_parents=json.loads(a.get("frame_parents", "{}")))
 
 
 def write_csv(run: Run, path: Path) -> None:
     header = [f"# {k}: {v}" for k, v in run.attributes().items()]
-    columns = (["time"] + list(run.state_names) + list(run.discrete_names) + ["flow", "energy"]
+    columns = (["time"] + list(run.state_names) + list(run.discrete_names) + list(run.input_names) + ["flow", "energy"]
                + list(run.multiplier_names)
                + [f"phi_{m}" for m in run.multiplier_names[:run.residual_position.shape[1]]]
                + [f"c_{m}" for m in run.multiplier_names])
-    data = [run.time[:, None], run.state, run.discrete, run.flow[:, None], run.energy[:, None],
+    data = [run.time[:, None], run.state, run.discrete, run.input_values, run.flow[:, None], run.energy[:, None],
             run.multipliers, run.residual_position, run.residual_velocity]
     for name, xyz in run.frames.items():
         columns += [f"{name}.x", f"{name}.y", f"{name}.z"]

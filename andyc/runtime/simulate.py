@@ -14,8 +14,12 @@ Before a constrained run, the initial state's distance from the constraint
 manifold is measured; past `init_tol` the run is refused unless `init` says
 to project the state onto the manifold ("project") or to start anyway ("as-is").
 
-Runs stop, keep their samples and say why when the state becomes non-finite
-or the mass matrix stops being positive definite. Long runs print progress.
+Inputs are constants, expressions, tables or a controller (andyc.runtime.inputs);
+they are evaluated at every stage and logged with the states.
+
+Runs stop, keep their samples and say why when the state becomes non-finite,
+the mass matrix stops being positive definite or a controller fails. Long runs
+print progress.
 """
 
 from __future__ import annotations
@@ -31,9 +35,10 @@ from scipy import integrate
 
 from andyc.errors import SimulationError
 from andyc.runtime.compiled import CompiledModel, Workspace, compile_integrator
+from andyc.runtime.inputs import InputSource, input_source
 from andyc.runtime.run import Run
 
-OK, NONFINITE, SINGULAR_MASS, DEPENDENT = 0, 1, 2, 3     # statuses, as in the generated module
+OK, NONFINITE, SINGULAR_MASS, DEPENDENT, INPUT_FAILED = 0, 1, 2, 3, 4     # statuses, as in the generated module
 IDEAL, LAGRANGE, BAUMGARTE = 0, 1, 2                   # how constraint forces are found, as there
 SCIPY_METHODS = {"DOP853": integrate.DOP853, "Radau": integrate.Radau, "LSODA": integrate.LSODA,
                  "RK45": integrate.RK45, "BDF": integrate.BDF}
@@ -73,11 +78,15 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
              normalize: bool = True, energy_correction: bool | None = None, energy_tol: float = 1e-6,
              init: str = "check", init_tol: float = 1e-6, d0=None, flow0: str | int | None = None,
              event_tol: float = 1e-12, max_instant_jumps: int = 100, zeno_tol: float = 1e-6,
-             stop_after: dict | None = None) -> Run:
+             stop_after: dict | None = None, controller=None) -> Run:
     """Integrate `model` from t = 0 to t_end and return the logged Run.
 
     dt is the step of rk4 and the output spacing of the adaptive methods;
     every N logs one sample in N steps. frames: None, "all" or a list of names.
+    inputs: {name: value}, a value being a number, an expression of t and the
+    states (a string) or a CSV table (a path ending in .csv); controller: a
+    Python file defining control(t, x, d, p), which drives every input (see
+    andyc.runtime.inputs).
     normalize: rk4 renormalizes quaternion signals after each step. (The
     adaptive methods do not; their norm drift stays within the tolerances and
     never reaches the dynamics, whose rotation matrices are exact for any norm.)
@@ -107,7 +116,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     if not (t_end > 0 and dt > 0 and every >= 1):
         raise SimulationError(f"need t_end > 0, dt > 0 and every >= 1, got t_end={t_end}, dt={dt}, every={every}")
     p = model.parameters(parameters)
-    u = model.inputs(inputs)
+    source = input_source(model, p, inputs, controller, t_end)
     x = np.array(model.initial_state(p) if x0 is None else x0, dtype=np.float64)
     if x.shape != (model.nx,):
         raise SimulationError(f"initial state has shape {x.shape}, expected ({model.nx},)")
@@ -115,46 +124,48 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     if d.shape != (model.nd,):
         raise SimulationError(f"initial discrete states have shape {d.shape}, expected ({model.nd},)")
     flow = _flow_index(model, flow0)
-    U = model.flow_inputs(u, p)
     events = EventLog(model, event_tol, max_instant_jumps, zeno_tol, stop_after)
     frame_names = _frame_selection(model, frames)
-    initial = consistent_initial_state(model, x, U[flow], p, d, flow, init, init_tol) if model.nc else {}
-    if method in ("lagrange", "baumgarte") and model.nc:
-        _require_independent_rows(model, method, x, U[flow], p, d, flow)
     compile_integrator(model)
+    compile_integrator(model, *source.function_data)
+    u = inputs_at(model, source, 0.0, x, p, d, flow)
+    initial = consistent_initial_state(model, x, u, p, d, flow, init, init_tol) if model.nc else {}
+    if method in ("lagrange", "baumgarte") and model.nc:
+        _require_independent_rows(model, method, x, u, p, d, flow)
     bar = Progress(f"{model.name} {method}", t_end, progress)
     start = time.perf_counter()
     try:
         if method in FIXED_STEP:
-            log, status, stats = _run_rk4(model, method, x, U, p, d, flow, t_end, dt, every, bar, events,
+            log, status, stats = _run_rk4(model, method, x, source, p, d, flow, t_end, dt, every, bar, events,
                                           energy_correction, energy_tol, normalize)
         else:
-            log, status, stats = _run_scipy(model, method, x, U, p, d, flow, t_end, dt * every, rtol, atol, bar,
+            log, status, stats = _run_scipy(model, method, x, source, p, d, flow, t_end, dt * every, rtol, atol, bar,
                                             events)
     finally:
         bar.close()
     stats["wall_seconds"] = time.perf_counter() - start
     stats["jumps"] = len(events.times)
     stats.update(initial)
-    t_log, x_log, f_log, d_log = log
+    t_log, x_log, u_log, f_log, d_log = log
     n = t_log.shape[0]
     energy = np.empty(n)
-    model.module.evaluate_energy(t_log, x_log, U, p, d_log, f_log, energy)
+    model.module.evaluate_energy(t_log, x_log, u_log, p, d_log, energy)
     phi, c, lam = np.empty((n, model.nh)), np.empty((n, model.nc)), np.empty((n, model.nc))
     if model.nc:
-        model.module.evaluate_constraints(t_log, x_log, U, p, d_log, f_log, phi, c, lam,
+        model.module.evaluate_constraints(t_log, x_log, u_log, p, d_log, f_log, phi, c, lam,
                                           np.empty((model.nv, model.nv)), np.empty(model.nv),
                                           np.empty((model.module.S_ROWS, model.module.S_WIDTH)))
     frames_out = {}
     if frame_names:
         xyz = np.empty((n, len(model.frame_names), 3))
-        model.module.evaluate_frames(t_log, x_log, U, p, d_log, f_log, xyz)
+        model.module.evaluate_frames(t_log, x_log, u_log, p, d_log, xyz)
         frames_out = {name: xyz[:, model.frame_names.index(name)] for name in frame_names}
     return Run(model=model.name, spec_sha256=model.spec_sha256, method=method, dt=dt, nq=model.nq, nv=model.nv,
                rtol=rtol if method not in FIXED_STEP else 0.0, atol=atol if method not in FIXED_STEP else 0.0,
                t_end=t_end, parameters=dict(zip(model.parameter_names, map(float, p))),
-               inputs=dict(zip(model.input_names, map(float, u))), state_names=list(model.state_names),
-               time=t_log, state=x_log, energy=energy, frames=frames_out, status=status, stats=stats,
+               inputs={n: source.drives.get(n, float(v)) for n, v in zip(model.input_names, u_log[0])},
+               state_names=list(model.state_names), time=t_log, state=x_log, input_names=list(model.input_names),
+               input_values=u_log, energy=energy, frames=frames_out, status=status, stats=stats,
                multiplier_names=list(model.multiplier_names), multipliers=lam, residual_position=phi,
                residual_velocity=c, energy_correction=bool(energy_correction),
                flow=f_log, flow_names=list(model.flow_names), discrete_names=list(model.discrete_names),
@@ -172,6 +183,15 @@ def _flow_index(model: CompiledModel, flow) -> int:
     if not 0 <= int(flow) < model.nf:
         raise SimulationError(f"flow index {flow} out of range; {model.name} has {model.nf} flows")
     return int(flow)
+
+
+def inputs_at(model: CompiledModel, source: InputSource, t: float, x, p, d, flow: int) -> np.ndarray:
+    """The inputs at (t, x) in `flow` (a new array); SimulationError naming the controller's line if it fails."""
+    u = np.empty(len(model.input_names))
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    if source.into(model.module, t, x, p, d, flow, u) != OK:
+        raise SimulationError(source.failure(model, d, p))
+    return u
 
 
 def constraint_residuals(model: CompiledModel, t: float, x, u, p, d=None, flow=None):
@@ -337,23 +357,28 @@ def user_jump(model: CompiledModel, k, t, x, u, p, d) -> str | None:
     return None
 
 
-def apply_jump(model: CompiledModel, k, t, x, U, p, d, source, ws: Workspace) -> str | None:
-    """Jump k at t from flow `source` (x, d in place): resets and impact, then the user's function."""
-    status = model.module.jump(k, t, x, U[source], p, d, ws.M, ws.G, ws.S)
+def apply_jump(model: CompiledModel, k, t, x, u, p, d, ws: Workspace) -> str | None:
+    """Jump k at t (x, d in place; u the inputs just before it): resets and impact, then the user's function."""
+    status = model.module.jump(k, t, x, u, p, d, ws.M, ws.G, ws.S)
     if status != OK:
         return f"stopped: {_STOPPED[status]} in jump '{model.jump_names[k]}' at t = {t:.9g} s"
-    return user_jump(model, k, t, x, U[source], p, d)
+    return user_jump(model, k, t, x, u, p, d)
 
 
-def follow_instant_jumps(model: CompiledModel, t, x, U, p, d, flow, events: EventLog, ws: Workspace, mode):
+def follow_instant_jumps(model: CompiledModel, t, x, source: InputSource, p, d, flow, events: EventLog,
+                         ws: Workspace, mode):
     """Apply the jumps that happen at once at (t, x), in priority order. Returns (flow, stop message or None)."""
     module = model.module
     while model.nj:
-        k = module.instant(mode, t, x, U[flow], p, d, flow, ws.xdot, ws.M, ws.G, ws.S)
+        ws.u[:] = source.held(flow)
+        fn, data = source.function_data
+        k = module.instant(mode, t, x, fn, ws.u, data, p, d, flow, ws.xdot, ws.M, ws.G, ws.S)
+        if k == -2:
+            return flow, f"stopped: {source.failure(model, d, p)}"
         if k < 0:
             break
         before = x.copy()
-        stop = apply_jump(model, k, t, x, U, p, d, flow, ws)
+        stop = apply_jump(model, k, t, x, ws.u, p, d, ws)
         flow = int(module.JUMP_TARGET[k])
         stop = stop or events.record(t, k, before, x, d)
         if stop is not None:
@@ -373,13 +398,13 @@ def _frame_selection(model: CompiledModel, frames) -> list:
     return names
 
 
-_STOPPED = {NONFINITE: "the state became non-finite (NaN or Inf)",
+_STOPPED = {NONFINITE: "the state became non-finite (NaN or Inf)", INPUT_FAILED: "the inputs failed",
             SINGULAR_MASS: "the mass matrix is not positive definite",
             DEPENDENT: "the constraint rows are linearly dependent (redundant constraints, or a singular "
                            "configuration); the multipliers are not unique, use --method projection"}
 
 
-def _run_rk4(model, method, x, U, p, d, flow, t_end, dt, every, bar, events, energy_correction, energy_tol,
+def _run_rk4(model, method, x, source, p, d, flow, t_end, dt, every, bar, events, energy_correction, energy_tol,
              normalize):
     n_steps = int(round(t_end / dt))
     if abs(n_steps * dt - t_end) > 1e-9 * max(1.0, t_end):
@@ -391,39 +416,47 @@ def _run_rk4(model, method, x, U, p, d, flow, t_end, dt, every, bar, events, ene
     etol = energy_tol if energy_correction else -1.0
     do_project = constrain or etol >= 0 or (normalize and bool(model.quaternions))
     rows = n_steps // every + 2             # the grid, and a last sample where a run stops between grid points
-    log = (np.empty(rows), np.empty((rows, model.nx)), np.empty(rows, dtype=np.int64), np.empty((rows, model.nd)))
-    out_t, out_x, out_f, out_d = log
-    out_t[0], out_x[0], out_f[0], out_d[0] = 0.0, x, flow, d
+    nu = len(model.input_names)
+    log = (np.empty(rows), np.empty((rows, model.nx)), np.empty((rows, nu)), np.empty(rows, dtype=np.int64),
+           np.empty((rows, model.nd)))
+    out_t, out_x, out_u, out_f, out_d = log
     ws = Workspace.for_model(model)
+    fn, data = source.function_data
+    out_t[0], out_x[0], out_u[0], out_f[0], out_d[0] = 0.0, x, inputs_at(model, source, 0.0, x, p, d, flow), flow, d
     i, row, chunk, status, t = 0, 1, 1000, OK, 0.0
     counts = np.zeros(2, dtype=np.int64)
-    e0 = module.energy(0.0, x, U[flow], p, d)
-    flow, message = follow_instant_jumps(model, t, x, U, p, d, flow, events, ws, mode)
+    e0 = module.energy(0.0, x, out_u[0], p, d)
+    flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, ws, mode)
     while i < n_steps and status == OK and message is None:
         i_end = min(i + chunk, n_steps)
         tic = time.perf_counter()
         i0 = i
-        source = flow
+        ws.u[:] = source.held(flow)
         i, row, status, t, flow, k = module.advance(
-            mode, do_project, constrain, e0, etol, events.event_tol, 0.0, dt, i, i_end, every, t, flow, x, U, p, d,
-            out_t, out_x, out_f, out_d, row, ws.g0, ws.x_event, ws.M, ws.G, ws.S, ws.k, ws.x_tmp, ws.x_step, ws.x_near,
-            ws.x_trial, counts)
+            mode, do_project, constrain, e0, etol, events.event_tol, 0.0, dt, i, i_end, every, t, flow, x, fn,
+            ws.u, data, p, d, out_t, out_x, out_u, out_f, out_d, row, ws.g0, ws.x_event, ws.M, ws.G, ws.S, ws.k, ws.x_tmp,
+            ws.x_step, ws.x_near, ws.x_trial, counts)
         if k >= 0:
             if status != OK:
                 message = f"stopped: {_STOPPED[status]} in jump '{model.jump_names[k]}' at t = {t:.9g} s"
                 break
-            message = user_jump(model, k, t, x, U[source], p, d) or events.record(t, k, ws.x_event, x, d)
+            message = user_jump(model, k, t, x, ws.u, p, d) or events.record(t, k, ws.x_event, x, d)
             if message is None:
-                flow, message = follow_instant_jumps(model, t, x, U, p, d, flow, events, ws, mode)
-            e0 = module.energy(t, x, U[flow], p, d)
+                flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, ws, mode)
+            if message is None and source.into(module, t, x, p, d, flow, ws.u) != OK:
+                status = INPUT_FAILED
+            e0 = module.energy(t, x, ws.u, p, d)
         elif i > i0:
             elapsed = time.perf_counter() - tic
             chunk = int(min(max(chunk * 0.25 / max(elapsed, 1e-6) * (i_end - i0) / (i - i0), 1000), 10_000_000))
         bar(t)
     if status != OK:
-        message = (f"stopped: {_STOPPED[status]} at t = {t:.9g} s, step {i}; the {row} samples before it are kept")
+        why = source.failure(model, d, p) if status == INPUT_FAILED else f"{_STOPPED[status]} at t = {t:.9g} s"
+        message = f"stopped: {why}, step {i}; the {row} samples before it are kept"
     elif message is not None and out_t[row - 1] != t:
         out_t[row], out_x[row], out_f[row], out_d[row] = t, x, flow, d
+        if source.into(module, t, x, p, d, flow, out_u[row]) != OK:
+            out_u[row] = np.nan
         row += 1
     if message is not None and not events.finished and status == OK:
         message += f"; the {row} samples before it are kept"
@@ -438,7 +471,7 @@ class _Stopped(Exception):
     pass
 
 
-def _run_scipy(model, method, x, U, p, d, flow, t_end, dt_out, rtol, atol, bar, events):
+def _run_scipy(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol, bar, events):
     """scipy's solver stepped one step at a time; after each step the guards are checked, a crossing
     is located on the step's dense output (Illinois, to the event tolerance) and the solver restarts
     after the jump."""
@@ -448,9 +481,16 @@ def _run_scipy(model, method, x, U, p, d, flow, t_end, dt_out, rtol, atol, bar, 
     calls = [0]
     current = [flow]
 
+    def inputs(t, y):
+        """ws.u at (t, y) in the current flow."""
+        y = np.ascontiguousarray(y)      # the input function's type takes C-contiguous arrays only
+        if source.into(module, t, y, p, d, current[0], ws.u) != OK:
+            raise _Stopped(t, INPUT_FAILED)
+        return ws.u
+
     def fun(t, y):
         calls[0] += 1
-        status = module.rhs_into(t, y, U[current[0]], p, d, current[0], xdot, ws.M, ws.G, ws.S)
+        status = module.rhs_into(t, y, inputs(t, y), p, d, current[0], xdot, ws.M, ws.G, ws.S)
         if status != OK:
             raise _Stopped(t, status)
         return xdot.copy()
@@ -460,14 +500,15 @@ def _run_scipy(model, method, x, U, p, d, flow, t_end, dt_out, rtol, atol, bar, 
     if grid[-1] < t_end - 1e-12 * t_end:
         grid = np.append(grid, t_end)
     out_t, out_x, out_f, out_d = [0.0], [x.copy()], [flow], [d.copy()]
+    out_u = [inputs(0.0, x).copy()]
     row, steps, t = 1, 0, 0.0
-    flow, message = follow_instant_jumps(model, t, x, U, p, d, flow, events, ws, IDEAL)
     try:
+        flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, ws, IDEAL)
         while message is None and t < t_end:
             current[0] = flow
             solver = SCIPY_METHODS[method](fun, t, x, t_end, rtol=rtol, atol=atol)
             watched = [m for m in range(model.nj) if module.JUMP_SOURCE[m] == flow]
-            g0 = {m: module.guard(m, t, x, U[flow], p, d) for m in watched}
+            g0 = {m: module.guard(m, t, x, inputs(t, x), p, d) for m in watched}
             while solver.status == "running":
                 t_old = solver.t
                 text = solver.step()
@@ -479,11 +520,11 @@ def _run_scipy(model, method, x, U, p, d, flow, t_end, dt_out, rtol, atol, bar, 
                     message = f"stopped: the state became non-finite (NaN or Inf) at t = {solver.t:.9g} s"
                     break
                 dense = solver.dense_output()
-                hit = _first_crossing(model, dense, watched, g0, t_old, solver.t, U[flow], p, d, events.event_tol)
+                hit = _first_crossing(model, dense, watched, g0, t_old, solver.t, inputs, p, d, events.event_tol)
                 t_stop = solver.t if hit is None else hit[1]
                 while row < grid.shape[0] and grid[row] <= t_stop:
                     out_t.append(grid[row]), out_x.append(dense(grid[row])), out_f.append(flow)
-                    out_d.append(d.copy())
+                    out_d.append(d.copy()), out_u.append(inputs(grid[row], out_x[-1]).copy())
                     row += 1
                 bar(t_stop)
                 if hit is None:
@@ -491,43 +532,52 @@ def _run_scipy(model, method, x, U, p, d, flow, t_end, dt_out, rtol, atol, bar, 
                     continue
                 k, t, x_before = hit
                 x = x_before.copy()
-                message = apply_jump(model, k, t, x, U, p, d, flow, ws)
+                message = apply_jump(model, k, t, x, inputs(t, x_before), p, d, ws)
                 flow = int(module.JUMP_TARGET[k])
                 message = message or events.record(t, k, x_before, x, d)
                 if message is None:
-                    flow, message = follow_instant_jumps(model, t, x, U, p, d, flow, events, ws, IDEAL)
+                    flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, ws, IDEAL)
                 break
             else:
                 t, x = solver.t, solver.y.copy()
     except _Stopped as exc:
-        message = f"stopped: {_STOPPED[exc.args[1]]} at t = {exc.args[0]:.9g} s"
+        why = (source.failure(model, d, p) if exc.args[1] == INPUT_FAILED
+               else f"{_STOPPED[exc.args[1]]} at t = {exc.args[0]:.9g} s")
+        message = f"stopped: {why}"
     if message is not None and out_t[-1] != t:
         out_t.append(t), out_x.append(x.copy()), out_f.append(flow), out_d.append(d.copy())
+        u = np.empty(len(model.input_names))
+        ok = source.into(module, t, x, p, d, flow, u) == OK
+        out_u.append(u if ok else np.full_like(u, np.nan))
     if message is not None and not events.finished:
         message += f"; the {len(out_t)} samples before it are kept"
     status = "finished" if message is None or events.finished else message
     n = len(out_t)
-    log = (np.array(out_t), np.array(out_x).reshape(n, model.nx), np.array(out_f, dtype=np.int64),
-           np.array(out_d).reshape(n, model.nd))
+    log = (np.array(out_t), np.array(out_x).reshape(n, model.nx), np.array(out_u).reshape(n, len(model.input_names)),
+           np.array(out_f, dtype=np.int64), np.array(out_d).reshape(n, model.nd))
     return log, status, {"steps": steps, "rhs_evaluations": calls[0]}
 
 
-def _first_crossing(model, dense, watched, g0, t0, t1, u, p, d, event_tol):
+def _first_crossing(model, dense, watched, g0, t0, t1, inputs, p, d, event_tol):
     """(jump, time, state) of the earliest enabled guard crossing on [t0, t1] along `dense`, or None.
 
-    g0 (jump -> guard value at t0) is updated to the values at t1.
+    inputs(t, x) gives the inputs there; g0 (jump -> guard value at t0) is updated to the values at t1.
     """
     module = model.module
     best = None
     x1 = dense(t1)
     tol = event_tol * max(1.0, abs(t0))
+
+    def guard(m, s, y):
+        return module.guard(m, s, y, inputs(s, y), p, d)
+
     for m in watched:
-        g1 = module.guard(m, t1, x1, u, p, d)
+        g1 = guard(m, t1, x1)
         if module.crosses(module.JUMP_DIRECTION[m], g0[m], g1):
-            tau, x_near = _illinois(lambda s: module.guard(m, s, dense(s), u, p, d), dense, t0, t1, g0[m], g1, tol)
+            tau, x_near = _illinois(lambda s: guard(m, s, dense(s)), dense, t0, t1, g0[m], g1, tol)
             earlier = best is None or tau < best[1] - tol or (
                 tau <= best[1] + tol and module.JUMP_PRIORITY[m] < module.JUMP_PRIORITY[best[0]])
-            if earlier and module.enabled(m, tau, x_near, u, p, d) >= 0.0:
+            if earlier and module.enabled(m, tau, x_near, inputs(tau, x_near), p, d) >= 0.0:
                 best = (m, tau, x_near)
         g0[m] = g1
     return best

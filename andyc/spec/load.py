@@ -314,11 +314,13 @@ class _Builder:
         self.check_names()
         for section in ("parameters", "inputs"):
             for n, v in (d.get(section) or {}).items():
-                if not math.isfinite(v):
+                if not isinstance(v, str) and not math.isfinite(v):
                     self.error((section, n), f"{v} is not a finite number", "give a finite default value")
         self.parameters = {n: (sp.Symbol(f"p_{n}", real=True), float(v))
                            for n, v in (d.get("parameters") or {}).items()}
-        self.inputs = {n: (sp.Symbol(f"u_{n}", real=True), float(v))
+        # An input given as an expression is driven by it in every run that does not set the input itself;
+        # its default (held, e.g. for `andyc linearize`) is 0.
+        self.inputs = {n: (sp.Symbol(f"u_{n}", real=True), 0.0 if isinstance(v, str) else float(v))
                        for n, v in (d.get("inputs") or {}).items()}
         self.param_names = {n: s for n, (s, _) in self.parameters.items()}
         self.defaults = {s: v for s, v in self.parameters.values()}
@@ -350,6 +352,13 @@ class _Builder:
         # Nonholonomic velocities may also use every speed: coordinate rates as <name>_dot.
         self.rate_names = {**{f"{c.name}_dot": c.v for c in coords}, **{s.name: s.v for s in self.speeds}}
         self.signals: list[Signal] = []
+        self.input_expressions = {}
+        for n, v in (d.get("inputs") or {}).items():
+            if isinstance(v, str):
+                self.expr(v, ("inputs", n), {**self.kin_names, **self.rate_names},
+                          "an input's expression uses t, parameters, coordinates, speeds (<coordinate>_dot) and "
+                          "discrete states")
+                self.input_expressions[n] = v
 
         frames = self.frames()
         self.frame_names = {"world"} | {f["name"] for f in d["frames"]}
@@ -387,7 +396,8 @@ class _Builder:
                     coordinates=coords, speeds=self.speeds, signals=self.signals, gravity=gravity, frames=frames + extra_frames, bodies=bodies,
                     loads=loads, dampers=dampers, springs=springs, potentials=potentials,
                     constraints=constraints, conserves_energy=conserves, discrete=self.discrete, flows=flows,
-                    jumps=jumps, initial_flow=initial_flow, warnings=self.warnings)
+                    jumps=jumps, initial_flow=initial_flow, warnings=self.warnings,
+                    input_expressions=self.input_expressions)
 
     def check_names(self):
         """Every name is unique across the model and not reserved."""

@@ -246,6 +246,7 @@ class Spec:
     visuals: list = field(default_factory=list)    # URDF visual geometry, for later display (andyc.spec.urdf)
     locked: tuple = ()          # URDF joints held at given values (urdf: {lock: ...}), by their URDF name
     reduce: bool = False        # merge the bodies fixed to one moving frame before deriving (andyc.symbolic.reduce)
+    input_expressions: dict = field(default_factory=dict)  # input name -> the expression text that drives it
 
     @property
     def speed_symbols(self) -> list:

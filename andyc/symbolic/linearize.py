@@ -11,8 +11,27 @@ value and gradient are carried forward in order (forward-mode automatic
 differentiation), every partial df/ds coming from SymPy's `diff` of that one
 small expression, evaluated at the point in double precision.
 
-An equilibrium (dv/dt = 0 at v = 0) is found by Newton's method on
-G(t, q, 0, u) = 0 with this exact Jacobian dG/dq (scipy.optimize.root, 'hybr').
+A flow with active constraint rows (c = A v + b, the first of them
+holonomic, A_h = dphi/dq; ANDY eq. 10-12) is linearized at rest on its
+constraint manifold, in the null-space form. The acceleration a and the
+multipliers lam solve M a = G + A^T lam, A a = -kappa, so their derivatives
+solve the same saddle-point matrix:
+
+    [[M, -A^T], [A, 0]] [da; dlam] = [dG/dz - (dM/dz) a + (dA/dz)^T lam;
+                                      -(dA/dz) a - dkappa/dz]
+
+(least squares, so redundant rows are allowed). With N_q and N_v orthonormal
+bases of null(A_h) and null(A) at the point, dq = N_q z and dv = N_v w, and
+
+    d/dt (z, w) = [[0, N_q^T N_v], [N_v^T da/dq N_q, N_v^T da/dv N_v]] (z, w)
+                  + [[0], [N_v^T da/du]] du.
+
+At rest (v = 0, kappa = 0) A a = 0 for every q on the manifold, so A da = 0
+and the projection on N_v loses nothing: the eigenvalues are the mechanism's.
+
+An equilibrium (dv/dt = 0 at v = 0) of an unconstrained flow is found by
+Newton's method on G(t, q, 0, u) = 0 with this exact Jacobian dG/dq
+(scipy.optimize.root, 'hybr').
 """
 
 from __future__ import annotations
@@ -31,7 +50,10 @@ class LinearizeError(ValueError):
 
 @dataclass
 class Linearization:
-    """dx' = A dx + B du about (x, u) at time t, in `flow`; states and inputs named as in the generated module."""
+    """dx' = A dx + B du about (x, u) at time t, in `flow`; states and inputs named as in the generated module.
+
+    For a constrained flow (null-space form) the state is (z, w) with dq = basis_q z, dv = basis_v w.
+    """
     A: np.ndarray
     B: np.ndarray
     x: np.ndarray
@@ -40,6 +62,12 @@ class Linearization:
     flow: str
     state_names: list
     input_names: list
+    basis_q: np.ndarray | None = None      # (nq, nq - holonomic rank), orthonormal
+    basis_v: np.ndarray | None = None      # (nv, nv - rank of all rows), orthonormal
+
+    @property
+    def form(self) -> str:
+        return "full" if self.basis_q is None else "null-space"
 
     @property
     def eigenvalues(self) -> np.ndarray:
@@ -75,10 +103,14 @@ class _Point:
         return value, grad
 
 
-def _needed(model: SymbolicModel) -> set:
-    """The intermediate symbols M and G depend on (directly or through other intermediates)."""
+def _needed(model: SymbolicModel, rows=()) -> set:
+    """The intermediate symbols M and G (and the constraint rows' A, kappa, phi, c) depend on, directly
+    or through other intermediates."""
     defs = dict(model.assignments)
-    todo = list(model.M.free_symbols | model.G.free_symbols)
+    C = model.constraints
+    todo = list(set().union(model.M.free_symbols, model.G.free_symbols,
+                            *(C.A.row(r).free_symbols | C.kappa[r].free_symbols | C.c[r].free_symbols for r in rows),
+                            *(C.phi[r].free_symbols for r in rows if r < C.nh)))
     needed = set()
     while todo:
         s = todo.pop()
@@ -97,11 +129,6 @@ def _check_supported(model: SymbolicModel, flow: int) -> None:
     if len(model.v) != len(model.q):
         raise LinearizeError(f"{name}: linearize needs one speed per coordinate (dq/dt = v); this model has "
                              f"{len(model.q)} coordinates and {len(model.v)} speeds")
-    rows = model.hybrid.flow_rows[flow]
-    if rows:
-        raise LinearizeError(f"{name}: flow '{model.hybrid.flows[flow]}' has {len(rows)} active constraint rows; "
-                             "linearize handles unconstrained flows so far: pick a flow without constraints "
-                             "(--flow) or a model without them")
 
 
 def default_point(model: SymbolicModel, parameters: dict | None = None, inputs: dict | None = None,
@@ -146,17 +173,18 @@ def linearize(model: SymbolicModel, x, u, p, d=(), t: float = 0.0, flow: int | N
     n, nu = len(model.v), len(model.inputs)
     x, u = np.asarray(x, dtype=float), np.asarray(u, dtype=float)
     wrt = model.q + model.v + model.inputs
-    point = _Point(model, _needed(model), _point_values(model, x, u, p, d, t), wrt)
+    rows = model.hybrid.flow_rows[flow]
+    point = _Point(model, _needed(model, rows), _point_values(model, x, u, p, d, t), wrt)
     M = np.empty((n, n))
     dM = np.empty((n, n, len(wrt)))
     for i in range(n):
         for j in range(i, n):
             M[i, j], dM[i, j] = point.evaluate(model.M[i, j])
             M[j, i], dM[j, i] = M[i, j], dM[i, j]
-    G = np.empty(n)
-    dG = np.empty((n, len(wrt)))
-    for i in range(n):
-        G[i], dG[i] = point.evaluate(model.G[i])
+    G, dG = _evaluate(point, list(model.G))
+    names, inputs = _state_names(model), list(model.spec.inputs)
+    if rows:
+        return _constrained(model, point, rows, M, dM, G, dG, x, u, t, flow)
     a = np.linalg.solve(M, G)
     da = np.linalg.solve(M, dG - np.einsum("ijk,j->ik", dM, a))     # (n, 2n + nu)
     A = np.zeros((2 * n, 2 * n))
@@ -164,7 +192,55 @@ def linearize(model: SymbolicModel, x, u, p, d=(), t: float = 0.0, flow: int | N
     A[n:, :] = da[:, :2 * n]
     B = np.zeros((2 * n, nu))
     B[n:, :] = da[:, 2 * n:]
-    return Linearization(A, B, x, u, t, model.hybrid.flows[flow], _state_names(model), list(model.spec.inputs))
+    return Linearization(A, B, x, u, t, model.hybrid.flows[flow], names, inputs)
+
+
+def _evaluate(point: _Point, exprs: list) -> tuple[np.ndarray, np.ndarray]:
+    """Values (len,) and gradients (len, wrt) of expressions at the point."""
+    pairs = [point.evaluate(e) for e in exprs]
+    return np.array([v for v, _ in pairs]), np.array([g for _, g in pairs]).reshape(len(exprs), -1)
+
+
+def _constrained(model: SymbolicModel, point: _Point, rows: list, M, dM, G, dG, x, u, t, flow) -> Linearization:
+    """The null-space form of a constrained flow at rest on its manifold (see the module docstring)."""
+    C, n, name = model.constraints, len(model.v), model.spec.name
+    m, k = len(rows), dG.shape[1]
+    A_rows, dA = _evaluate(point, [C.A[r, j] for r in rows for j in range(n)])
+    A_rows, dA = A_rows.reshape(m, n), dA.reshape(m, n, k)
+    kappa, dkappa = _evaluate(point, [C.kappa[r] for r in rows])
+    phi = _evaluate(point, [C.phi[r] for r in rows if r < C.nh])[0]
+    c = _evaluate(point, [C.c[r] for r in rows])[0]
+    flow_name = model.hybrid.flows[flow]
+    speeds = x[n:]
+    if np.any(speeds != 0.0):
+        raise LinearizeError(f"{name}: flow '{flow_name}' has {m} active constraint rows; a constrained flow is "
+                             f"linearized at rest: set every speed to 0 (--at <coordinate>_dot=0)")
+    worst = max(np.max(np.abs(phi), initial=0.0), np.max(np.abs(c), initial=0.0))
+    if worst > 1e-9 * max(1.0, np.max(np.abs(x))):
+        j = int(np.argmax(np.abs(np.concatenate([phi, c]))))
+        row = rows[j if j < len(phi) else j - len(phi)]
+        raise LinearizeError(f"{name}: the point is off flow '{flow_name}''s constraint manifold (largest residual "
+                             f"{worst:.3g}, in constraint '{C.rows[row]}'); give coordinates that satisfy the "
+                             f"constraints with --at (a sample of a run, for instance)")
+    saddle = np.block([[M, -A_rows.T], [A_rows, np.zeros((m, m))]])
+    a_lam = np.linalg.lstsq(saddle, np.concatenate([G, -kappa]), rcond=None)[0]
+    a, lam = a_lam[:n], a_lam[n:]
+    rhs = np.concatenate([dG - np.einsum("ijk,j->ik", dM, a) + np.einsum("rik,r->ik", dA, lam),
+                          -np.einsum("rjk,j->rk", dA, a) - dkappa])
+    da = np.linalg.lstsq(saddle, rhs, rcond=None)[0][:n]
+    from scipy.linalg import null_space
+    Nq = null_space(A_rows[[i for i, r in enumerate(rows) if r < C.nh]]) if C.nh else np.eye(n)
+    Nv = null_space(A_rows)
+    nz, nw = Nq.shape[1], Nv.shape[1]
+    A = np.zeros((nz + nw, nz + nw))
+    A[:nz, nz:] = Nq.T @ Nv
+    A[nz:, :nz] = Nv.T @ da[:, :n] @ Nq
+    A[nz:, nz:] = Nv.T @ da[:, n:2 * n] @ Nv
+    B = np.zeros((nz + nw, len(u)))
+    B[nz:, :] = Nv.T @ da[:, 2 * n:]
+    holonomic_only = nz == nw and np.allclose(Nq.T @ Nv, np.eye(nz))
+    names = [f"z{i + 1}" for i in range(nz)] + [f"z{i + 1}_dot" if holonomic_only else f"w{i + 1}" for i in range(nw)]
+    return Linearization(A, B, x, u, t, flow_name, names, list(model.spec.inputs), Nq, Nv)
 
 
 def _state_names(model: SymbolicModel) -> list:
@@ -180,6 +256,9 @@ def find_equilibrium(model: SymbolicModel, q_guess, u, p, d=(), t: float = 0.0, 
 
     flow = model.hybrid.initial if flow is None else flow
     _check_supported(model, flow)
+    if model.hybrid.flow_rows[flow]:
+        raise LinearizeError(f"{model.spec.name}: --find-equilibrium handles flows without constraint rows so far; "
+                             f"give a rest point on the constraint manifold with --at instead")
     n = len(model.q)
     needed = _needed(model)
 
