@@ -82,6 +82,8 @@ def main():
     andyc sim model.yaml        build if needed, simulate, write run files
     andyc plot run.h5           plot states and energy
     andyc linearize model.yaml  A, B and eigenvalues about a state
+    andyc bench model.yaml      work-precision: error against cost per method
+    andyc stability model.yaml  stability map: step against method, failures named
     andyc eom model.yaml        M, G, constraint Jacobian, per element (LaTeX)
     """
 
@@ -163,6 +165,8 @@ def _parse_sets(values, option: str = "--set") -> dict:
 @click.option("--at", "at", multiple=True, metavar="NAME=VALUE",
               help="The state to linearize about: a coordinate or speed (the others: the model's initial state).")
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
+@click.option("--input", "input_values", multiple=True, metavar="NAME=VALUE",
+              help="The inputs at the point (default: their held values); the same as --set for an input.")
 @click.option("--flow", default=None, help="The flow to linearize (default: the initial flow).")
 @click.option("--time", "t", default=0.0, show_default=True, help="Time t of the point, s.")
 @click.option("--find-equilibrium", is_flag=True,
@@ -170,7 +174,7 @@ def _parse_sets(values, option: str = "--set") -> dict:
 @click.option("-o", "--out", "out_dir", default=None, metavar="DIR",
               help="Also write DIR/<name>_linearization.npz (A, B, x, u, names, eigenvalues) and DIR/<name>_A.csv, "
                    "DIR/<name>_B.csv.")
-def linearize(file, at, sets, flow, t, find_equilibrium, out_dir):
+def linearize(file, at, sets, input_values, flow, t, find_equilibrium, out_dir):
     """Linearize FILE's equations of motion: dx' = A dx + B du, from exact derivatives; print the eigenvalues."""
     import numpy as np
 
@@ -183,12 +187,18 @@ def linearize(file, at, sets, flow, t, find_equilibrium, out_dir):
     except SpecError as exc:
         _fail_spec(exc)
     overrides = _parse_sets(sets)
+    given = _parse_sets(input_values, "--input")
+    overrides.update(given)
     states = _parse_sets(at, "--at")
     try:
         flows = model.hybrid.flows
         if flow is not None and flow not in flows:
             raise LinearizeError(f"{spec.name}: no flow named '{flow}'; flows: {', '.join(flows)}")
         k = flows.index(flow) if flow is not None else None
+        unknown = sorted(set(given) - set(spec.inputs))
+        if unknown:
+            raise LinearizeError(f"{spec.name}: no input named {', '.join(unknown)} (--input); inputs: "
+                                 f"{', '.join(spec.inputs) or 'none'}")
         x, u, p, d = default_point(model, {n: v for n, v in overrides.items() if n not in spec.inputs},
                                    {n: v for n, v in overrides.items() if n in spec.inputs}, k)
         names = [c.name for c in spec.coordinates] + list(spec.speed_names)
@@ -392,6 +402,138 @@ def eom(file, fmt, element, flow, standalone, out):
         click.echo(f"wrote {out} ({eq.entries} entries in {eq.seconds:.2f} s)")
     else:
         click.echo(text, nl=False)
+
+
+def _floats(text: str | None, option: str) -> list | None:
+    """'1e-3,2e-3' -> [0.001, 0.002]; 'geom:A:B:N' -> N values from A to B, evenly spaced in log."""
+    import numpy as np
+
+    if text is None:
+        return None
+    try:
+        if text.startswith("geom:"):
+            lo, hi, n = text[5:].split(":")
+            return list(np.geomspace(float(lo), float(hi), int(n)))
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise click.BadParameter(f"'{text}' is not a list of numbers (1e-3,2e-3) or geom:FROM:TO:COUNT",
+                                 param_hint=option) from None
+
+
+def _methods(text: str, option: str) -> list:
+    names = [m.strip() for m in text.split(",") if m.strip()]
+    unknown = [m for m in names if m not in METHODS]
+    if unknown or not names:
+        raise click.BadParameter(f"unknown method(s) {', '.join(unknown) or '(none given)'}; available: "
+                                 f"{', '.join(METHODS)}", param_hint=option)
+    return names
+
+
+def _compiled(file, out_dir):
+    try:
+        model, _ = andyc.compile_model(file, out_dir)
+    except SpecError as exc:
+        _fail_spec(exc)
+    except SimulationError as exc:
+        raise click.UsageError(str(exc))
+    return model
+
+
+@main.command()
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("--methods", default=None, metavar="M1,M2",
+              help="Methods to compare (default: rk4 and DOP853; with constraints also projection, lagrange, "
+                   "baumgarte).")
+@click.option("--steps", default=None, metavar="H1,H2|geom:A:B:N",
+              help="Steps of the fixed-step methods, each adjusted to divide --t-end (default: T/100 .. T/10000).")
+@click.option("--tols", default=None, metavar="R1,R2|geom:A:B:N",
+              help="Tolerances (rtol = atol) of the adaptive methods (default: 1e-3 .. 1e-10).")
+@click.option("--t-end", default=10.0, show_default=True, help="Horizon T, s.")
+@click.option("--repeats", default=3, show_default=True, help="Wall time: the best of this many runs.")
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
+@click.option("-o", "--out", "out_dir", default="runs", show_default=True, metavar="DIR",
+              help="Writes DIR/<name>_work_precision.csv, .png and .svg.")
+@click.option("--build-dir", default="build", show_default=True, help="Build folder.")
+def bench(file, methods, steps, tols, t_end, repeats, sets, out_dir, build_dir):
+    """Work-precision of FILE: each method at each step or tolerance against a DOP853 reference (rtol 1e-13);
+    error at T against wall time and evaluations, as a table, a CSV and diagrams."""
+    from andyc.analysis.workprecision import DEFAULT_TOLS, draw, sweep, write_csv
+
+    model = _compiled(file, build_dir)
+    overrides = _parse_sets(sets)
+    chosen = _methods(methods, "--methods") if methods else (
+        ["rk4", "projection", "lagrange", "baumgarte", "DOP853"] if model.nc else ["rk4", "DOP853"])
+    options = {"parameters": {k: v for k, v in overrides.items() if k not in model.input_names},
+               "inputs": {k: v for k, v in overrides.items() if k in model.input_names}}
+    click.echo(f"{model.name}: work-precision over T = {t_end:g} s; reference DOP853, rtol = atol = 1e-13")
+    click.echo(f"{'method':>10} {'step/tol':>9} {'error':>9} {'residual':>9} {'energy':>9} {'rhs':>8} "
+               f"{'wall s':>9}  status")
+
+    def show(p):
+        click.echo(f"{p.method:>10} {p.setting:>9.3g} {p.error:>9.2e} {p.residual:>9.1e} {p.energy_drift:>9.1e} "
+                   f"{p.rhs:>8} {p.wall:>9.2e}  {p.status[:60]}")
+
+    try:
+        ref, points = sweep(model, chosen, t_end, _floats(steps, "--steps"),
+                            _floats(tols, "--tols") or DEFAULT_TOLS, repeats, progress=show, **options)
+    except SimulationError as exc:
+        raise click.UsageError(str(exc))
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(points, out / f"{model.name}_work_precision.csv")
+    figures = draw(points, ref, model.name, out / f"{model.name}_work_precision")
+    click.echo(f"wrote {out / f'{model.name}_work_precision.csv'}, " + ", ".join(map(str, figures)))
+
+
+@main.command()
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("--methods", default=None, metavar="M1,M2",
+              help="Fixed-step methods to scan (default: rk4; with constraints projection, lagrange, baumgarte too).")
+@click.option("--steps", default=None, metavar="H1,H2|geom:A:B:N",
+              help="Steps, each adjusted to divide the horizon (default: geom:T/20:T/20000:31).")
+@click.option("--horizon", "horizons", multiple=True, type=float, metavar="T",
+              help="Horizon(s), s; one map each (default: 10).")
+@click.option("--tol", default=1e-3, show_default=True,
+              help="Accurate: the state error at T within TOL x the reference's amplitude.")
+@click.option("--blowup", default=1e3, show_default=True, help="Blown up: |x| past this x the reference's largest.")
+@click.option("--residual-tol", default=1e-6, show_default=True, help="Constraints lost: a residual past this.")
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
+@click.option("-o", "--out", "out_dir", default="runs", show_default=True, metavar="DIR",
+              help="Writes DIR/<name>_stability_T<horizon>.csv, .png and .svg.")
+@click.option("--build-dir", default="build", show_default=True, help="Build folder.")
+def stability(file, methods, steps, horizons, tol, blowup, residual_tol, sets, out_dir, build_dir):
+    """Stability map of FILE: each fixed-step method at each step, classified accurate, inaccurate (stable,
+    not accurate) or failed (stopped, blown up, constraints lost, event missed: what, and when)."""
+    from andyc.analysis.stability import boundaries, draw_map, geometric, scan, write_csv
+
+    model = _compiled(file, build_dir)
+    overrides = _parse_sets(sets)
+    chosen = _methods(methods, "--methods") if methods else (
+        ["rk4", "projection", "lagrange", "baumgarte"] if model.nc else ["rk4"])
+    adaptive = [m for m in chosen if m not in ("rk4", "projection", "lagrange", "baumgarte")]
+    if adaptive:
+        raise click.BadParameter(f"{', '.join(adaptive)}: the scan is over steps, for fixed-step methods",
+                                 param_hint="--methods")
+    options = {"parameters": {k: v for k, v in overrides.items() if k not in model.input_names},
+               "inputs": {k: v for k, v in overrides.items() if k in model.input_names}}
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    for horizon in horizons or (10.0,):
+        grid = _floats(steps, "--steps") or geometric(horizon / 20, horizon / 20000, 31)
+        click.echo(f"{model.name}: stability over T = {horizon:g} s, {len(grid)} steps x {len(chosen)} methods")
+        try:
+            ref, verdicts = scan(model, chosen, grid, horizon, tol, blowup, residual_tol,
+                                 progress=lambda v: click.echo(f"  {v.point.method:>10} h = {v.point.setting:<10.4g} "
+                                                               f"{v.verdict:>10}: {v.reason}"), **options)
+        except SimulationError as exc:
+            raise click.UsageError(str(exc))
+        for method, (accurate, failing, why) in boundaries(verdicts).items():
+            click.echo(f"{method}: largest accurate step {'none' if accurate is None else f'{accurate:.4g} s'}; "
+                       + (f"fails from h = {failing:.4g} s ({why})" if failing else "no failure in the scan"))
+        stem = out / f"{model.name}_stability_T{horizon:g}"
+        write_csv(verdicts, stem.with_suffix(".csv"))
+        figures = draw_map(verdicts, ref, model.name, stem)
+        click.echo(f"wrote {stem.with_suffix('.csv')}, " + ", ".join(map(str, figures)))
 
 
 @main.command()

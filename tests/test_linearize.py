@@ -98,10 +98,11 @@ def test_find_equilibrium_reaches_the_rest_points():
 
 def test_cli_prints_and_writes_the_linearization(tmp_path):
     result = CliRunner().invoke(main, ["linearize", str(MODELS / "cart_pole.yaml"), "--at", "th=0",
-                                       "--set", "mc=2", "-o", str(tmp_path)])
+                                       "--set", "mc=2", "--input", "F=1.5", "-o", str(tmp_path)])
     assert result.exit_code == 0, result.output
     assert "1 eigenvalue with positive real part (unstable)" in result.output
     saved = np.load(tmp_path / "cart_pole_linearization.npz")
+    assert list(saved["u"]) == [1.5]
     m, l, g, mc = 0.1, 0.5, 9.81, 2.0
     J = 4 / 3 * m * l * l
     assert saved["A"][3, 1] == pytest.approx((mc + m) * m * g * l / ((mc + m) * J - (m * l) ** 2), rel=1e-13)
@@ -117,6 +118,7 @@ def test_cli_prints_and_writes_the_linearization(tmp_path):
     (["cart_pole", "--at", "phi=0"], "no coordinate or speed named 'phi' (--at); states: x, th, x_dot, th_dot"),
     (["cart_pole", "--flow", "walk"], "no flow named 'walk'; flows: default"),
     (["cart_pole", "--set", "mass=3"], "no parameter named mass; parameters: mc, m, l, g"),
+    (["cart_pole", "--input", "G=1"], "no input named G (--input); inputs: F"),
     (["swing_bar"], "also has signals"),
 ])
 def test_cli_errors_say_what_and_how(args, message):

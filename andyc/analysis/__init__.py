@@ -1,0 +1,7 @@
+"""Accuracy against cost, and where methods fail: work-precision sweeps and stability scans.
+
+Both run a compiled model many times through andyc.simulate and compare each
+run with a reference: DOP853 at rtol = atol = 1e-13 over the same horizon.
+A fixed step h is adjusted to divide the horizon T (h = T / round(T / h)), so
+that every run ends at T and one reference serves them all.
+"""
