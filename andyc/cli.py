@@ -67,6 +67,22 @@ def _reduction(file, spec, model) -> str:
             f"all functions {sum(full.values())} -> {sum(reduced.values())}")
 
 
+def _progress(label: str, unit: str):
+    """A progress callback (done, total) for long work: silent for the first second, then on a terminal one
+    line rewritten once a second, elsewhere a line every 10 s; the last call ends the line."""
+    import time
+
+    tty, start, shown = sys.stderr.isatty(), time.monotonic(), [0.0]
+
+    def show(done: int, total: int) -> None:
+        seconds = time.monotonic() - start
+        if seconds > 1 and ((done == total and shown[0]) or seconds - shown[0] >= (1 if tty else 10)):
+            shown[0] = seconds
+            click.echo(("\r" if tty else "") + f"{label}: {done} of {total} {unit}, {seconds:.0f} s", err=True,
+                       nl=not tty or done == total)
+    return show
+
+
 def _plural(n: int, word: str) -> str:
     return f"{n} {word}{'' if n == 1 else 's'}"
 
@@ -351,7 +367,10 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
 
 
 def _largest(a) -> float:
-    return float(abs(a).max()) if a.size else 0.0
+    """The largest |entry|, skipping NaN (the rows a sample's flow does not use)."""
+    import numpy as np
+
+    return float(np.nanmax(np.abs(a), initial=0.0)) if a.size else 0.0
 
 
 @main.command()
@@ -376,18 +395,9 @@ def eom(file, fmt, element, flow, standalone, out):
         model = andyc.derive(spec)
     except SpecError as exc:
         _fail_spec(exc)
-    tty = sys.stderr.isatty()
-    shown = [0.0]
-
-    def progress(done, total, seconds):
-        """Past 1 s: on a terminal one line, rewritten twice a second; elsewhere a line every 10 s."""
-        if seconds > 1 and (done == total or seconds - shown[0] >= (0.5 if tty else 10)):
-            shown[0] = seconds
-            click.echo(("\r" if tty else "") + f"{spec.name}: {done} of {total} entries written out, {seconds:.0f} s",
-                       err=True, nl=not tty or done == total)
-
+    show = _progress(spec.name, "entries written out")
     try:
-        eq = equations(model, flow=flow, element=element, progress=progress)
+        eq = equations(model, flow=flow, element=element, progress=lambda done, total, seconds: show(done, total))
     except EomError as exc:
         click.echo(f"{file}: {exc}", err=True)
         sys.exit(1)
@@ -538,18 +548,49 @@ def stability(file, methods, steps, horizons, tol, blowup, residual_tol, sets, o
 
 @main.command()
 @click.argument("run_file", type=click.Path(exists=True, dir_okay=False))
-@click.option("-o", "--out", default=None, help="PNG file; default RUN.png beside the run.")
-def plot(run_file, out):
+@click.option("-o", "--out", default=None, help="PNG file; default RUN.png beside the run. With --animate: the "
+              "animation, OUT.gif or OUT.mp4 (needs ffmpeg); default RUN.gif beside the run.")
+@click.option("--animate", is_flag=True, help="Instead of the plots, write a 3-D stick animation of the frames the "
+              "run logged (andyc sim ... --frames all).")
+@click.option("--fps", default=None, type=click.IntRange(1, 100), metavar="N",
+              help="With --animate: frames per second (default 30; a GIF frame lasts whole hundredths of a "
+                   "second: 30 plays at 33.3).")
+@click.option("--frames-max", default=None, type=click.IntRange(min=1), metavar="N",
+              help="With --animate: at most N frames, evenly spread in time (default 300); a run longer than "
+                   "N / fps seconds plays faster than real time.")
+def plot(run_file, out, animate, fps, frames_max):
     """Plot the states and the energy of a run against time (and, for a hybrid run, its flows,
     jumps and discrete states); when the run logged frames with their parents, also draw them as
-    stick figures, into RUN_sticks.png (or OUT_sticks.png beside OUT)."""
+    stick figures, into RUN_sticks.png (or OUT_sticks.png beside OUT). With --animate, write an
+    animation of the logged frames instead."""
     from andyc.plot import plot_run, plot_sticks, stick_edges
     from andyc.runtime.run import read_h5
 
     if Path(run_file).suffix.lower() not in (".h5", ".hdf5"):
         raise click.BadParameter(f"{run_file}: andyc plot reads the HDF5 run file (.h5) that andyc sim writes; "
                                  f"write one with --out RUN.h5", param_hint="RUN_FILE")
+    if not animate:
+        given = [name for name, value in (("--fps", fps), ("--frames-max", frames_max)) if value is not None]
+        if given:
+            raise click.BadParameter("only with --animate", param_hint=" and ".join(given))
     run = read_h5(run_file)
+    if animate:
+        from andyc.plot import animate_run, animation_writer
+
+        out, fps = out or str(Path(run_file).with_suffix(".gif")), fps or 30
+        if not run.frames:
+            raise click.BadParameter(f"{run_file}: this run of {run.model} logged no frames to animate; re-run it "
+                                     f"with `andyc sim MODEL.yaml --frames all --out {run_file}`",
+                                     param_hint="RUN_FILE")
+        try:
+            animation_writer(out, fps)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc), param_hint="'-o' / '--out'") from None
+        info = animate_run(run, out, fps=fps, max_frames=frames_max or 300, progress=_progress(run.model, "frames"))
+        pace = "real time" if info["speed"] < 1.01 else f"{info['speed']:.2f} x real time"
+        click.echo(f"wrote {out} ({info['frames']} frames, {info['seconds']:.1f} s at {info['fps']:.3g} fps, {pace}; "
+                   f"rendered in {info['render_seconds']:.1f} s)")
+        return
     out = out or str(Path(run_file).with_suffix(".png"))
     plot_run(run, out)
     click.echo(f"wrote {out}")
