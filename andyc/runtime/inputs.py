@@ -88,10 +88,6 @@ class InputSource:
     controller: Controller | None = None
 
     @property
-    def driven(self) -> bool:
-        return self.function is not None
-
-    @property
     def function_data(self):
         """The integrator's (inputs, data) arguments: (None, None) when the inputs are held."""
         return (self.function, self.data) if self.function is not None else (None, None)

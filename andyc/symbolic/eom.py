@@ -112,14 +112,7 @@ class _Written:
     """The model's intermediate symbols written out in display symbols, with their sizes (count_ops)."""
 
     def __init__(self, model: SymbolicModel, rename: dict, exprs: list):
-        defs = dict(model.assignments)
-        todo = [s for e in exprs for s in sp.sympify(e).free_symbols]
-        needed = set()
-        while todo:
-            s = todo.pop()
-            if s in defs and s not in needed:
-                needed.add(s)
-                todo.extend(defs[s].free_symbols)
+        needed = model.intermediates_of(exprs)
         self.values, self.sizes = dict(rename), {}
         for sym, expr in model.assignments:
             if sym in needed:

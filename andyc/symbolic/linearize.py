@@ -106,18 +106,9 @@ class _Point:
 def _needed(model: SymbolicModel, rows=()) -> set:
     """The intermediate symbols M and G (and the constraint rows' A, kappa, phi, c) depend on, directly
     or through other intermediates."""
-    defs = dict(model.assignments)
     C = model.constraints
-    todo = list(set().union(model.M.free_symbols, model.G.free_symbols,
-                            *(C.A.row(r).free_symbols | C.kappa[r].free_symbols | C.c[r].free_symbols for r in rows),
-                            *(C.phi[r].free_symbols for r in rows if r < C.nh)))
-    needed = set()
-    while todo:
-        s = todo.pop()
-        if s in defs and s not in needed:
-            needed.add(s)
-            todo.extend(defs[s].free_symbols)
-    return needed
+    return model.intermediates_of([*model.M, *model.G, *(e for r in rows for e in (*C.A.row(r), C.kappa[r], C.c[r])),
+                                   *(C.phi[r] for r in rows if r < C.nh)])
 
 
 def _check_supported(model: SymbolicModel, flow: int) -> None:

@@ -41,3 +41,15 @@ class SymbolicModel:
     @property
     def dof(self) -> int:
         return len(self.v)
+
+    def intermediates_of(self, exprs) -> set:
+        """The intermediate symbols (of `assignments`) the expressions depend on, directly or through others."""
+        defs = dict(self.assignments)
+        todo = [s for e in exprs for s in sp.sympify(e).free_symbols]
+        needed = set()
+        while todo:
+            s = todo.pop()
+            if s in defs and s not in needed:
+                needed.add(s)
+                todo.extend(defs[s].free_symbols)
+        return needed
