@@ -304,12 +304,7 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
         if not sep or not count.strip().isdigit():
             raise click.BadParameter(f"'{item}' is not JUMP=N", param_hint="--stop-after")
         stops[name.strip()] = int(count)
-    try:
-        model, result = andyc.compile_model(file, out_dir)
-    except SpecError as exc:
-        _fail_spec(exc)
-    except SimulationError as exc:
-        raise click.UsageError(str(exc))
+    model, result = _compiled(file, out_dir)
     if not result.skipped:
         _report_jumps_file(result)
     if not integrator_compiled(model):
@@ -440,13 +435,13 @@ def _methods(text: str, option: str) -> list:
 
 
 def _compiled(file, out_dir):
+    """(CompiledModel, BuildResult) of FILE; a model error is printed as andyc check does (exit 1)."""
     try:
-        model, _ = andyc.compile_model(file, out_dir)
+        return andyc.compile_model(file, out_dir)
     except SpecError as exc:
         _fail_spec(exc)
     except SimulationError as exc:
         raise click.UsageError(str(exc))
-    return model
 
 
 @main.command()
@@ -469,7 +464,7 @@ def bench(file, methods, steps, tols, t_end, repeats, sets, out_dir, build_dir):
     error at T against wall time and evaluations, as a table, a CSV and diagrams."""
     from andyc.analysis.workprecision import DEFAULT_TOLS, draw, sweep, write_csv
 
-    model = _compiled(file, build_dir)
+    model = _compiled(file, build_dir)[0]
     overrides = _parse_sets(sets)
     chosen = _methods(methods, "--methods") if methods else (
         ["rk4", "projection", "lagrange", "baumgarte", "DOP853"] if model.nc else ["rk4", "DOP853"])
@@ -516,7 +511,7 @@ def stability(file, methods, steps, horizons, tol, blowup, residual_tol, sets, o
     not accurate) or failed (stopped, blown up, constraints lost, event missed: what, and when)."""
     from andyc.analysis.stability import boundaries, draw_map, geometric, scan, write_csv
 
-    model = _compiled(file, build_dir)
+    model = _compiled(file, build_dir)[0]
     overrides = _parse_sets(sets)
     chosen = _methods(methods, "--methods") if methods else (
         ["rk4", "projection", "lagrange", "baumgarte"] if model.nc else ["rk4"])
