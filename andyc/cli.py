@@ -434,6 +434,16 @@ def _methods(text: str, option: str) -> list:
     return names
 
 
+def _scanned(model, text: str) -> tuple[str, list]:
+    """'k=1e3,1e4' or 'k=geom:1e3:1e5:5' -> ('k', [values]) for a parameter of `model`."""
+    name, sep, values = text.partition("=")
+    name = name.strip()
+    if not sep or name not in model.parameter_names:
+        raise click.BadParameter(f"'{text}': give NAME=VALUES with NAME a parameter of {model.name} "
+                                 f"({', '.join(model.parameter_names)})", param_hint="--scan")
+    return name, _floats(values, "--scan")
+
+
 def _compiled(file, out_dir):
     """(CompiledModel, BuildResult) of FILE; a model error is printed as andyc check does (exit 1)."""
     try:
@@ -458,10 +468,15 @@ def _compiled(file, out_dir):
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
 @click.option("-o", "--out", "out_dir", default="runs", show_default=True, metavar="DIR",
               help="Writes DIR/<name>_work_precision.csv, .png and .svg.")
+@click.option("--reference", "reference", default="auto", show_default=True,
+              type=click.Choice(["auto", "closed-form", "DOP853"]),
+              help="What runs are compared with: the model's closed form (auto: when it declares one) or DOP853 "
+                   "at rtol = atol = 1e-13.")
 @click.option("--build-dir", default="build", show_default=True, help="Build folder.")
-def bench(file, methods, steps, tols, t_end, repeats, sets, out_dir, build_dir):
-    """Work-precision of FILE: each method at each step or tolerance against a DOP853 reference (rtol 1e-13);
-    error at T against wall time and evaluations, as a table, a CSV and diagrams."""
+def bench(file, methods, steps, tols, t_end, repeats, sets, reference, out_dir, build_dir):
+    """Work-precision of FILE: each method at each step or tolerance against a reference (the model's closed form,
+    or DOP853 at rtol 1e-13); error at T against wall time and evaluations, as a table, a CSV and diagrams."""
+    from andyc.analysis.sweep import reference as reference_run
     from andyc.analysis.workprecision import DEFAULT_TOLS, draw, sweep, write_csv
 
     model = _compiled(file, build_dir)[0]
@@ -470,7 +485,11 @@ def bench(file, methods, steps, tols, t_end, repeats, sets, out_dir, build_dir):
         ["rk4", "projection", "lagrange", "baumgarte", "DOP853"] if model.nc else ["rk4", "DOP853"])
     options = {"parameters": {k: v for k, v in overrides.items() if k not in model.input_names},
                "inputs": {k: v for k, v in overrides.items() if k in model.input_names}}
-    click.echo(f"{model.name}: work-precision over T = {t_end:g} s; reference DOP853, rtol = atol = 1e-13")
+    try:
+        ref = reference_run(model, t_end, reference, **options)
+    except SimulationError as exc:
+        raise click.UsageError(str(exc))
+    click.echo(f"{model.name}: work-precision over T = {t_end:g} s; reference: {ref.source}")
     click.echo(f"{'method':>10} {'step/tol':>9} {'error':>9} {'residual':>9} {'energy':>9} {'rhs':>8} "
                f"{'wall s':>9}  status")
 
@@ -480,7 +499,8 @@ def bench(file, methods, steps, tols, t_end, repeats, sets, out_dir, build_dir):
 
     try:
         ref, points = sweep(model, chosen, t_end, _floats(steps, "--steps"),
-                            _floats(tols, "--tols") or DEFAULT_TOLS, repeats, progress=show, **options)
+                            _floats(tols, "--tols") or DEFAULT_TOLS, repeats, progress=show, reference=ref,
+                            **options)
     except SimulationError as exc:
         raise click.UsageError(str(exc))
     out = Path(out_dir)
@@ -502,15 +522,28 @@ def bench(file, methods, steps, tols, t_end, repeats, sets, out_dir, build_dir):
               help="Accurate: the state error at T within TOL x the reference's amplitude.")
 @click.option("--blowup", default=1e3, show_default=True, help="Blown up: |x| past this x the reference's largest.")
 @click.option("--residual-tol", default=1e-6, show_default=True, help="Constraints lost: a residual past this.")
+@click.option("--gains", default=None, metavar="W1,W2|geom:A:B:N",
+              help="A second axis: Baumgarte gains stiffness w^2 and damping 2w at each w, 1/s (critical damping "
+                   "at rate w for a unit effective mass; the gains must be parameters).")
+@click.option("--scan", "scan_values", default=None, metavar="NAME=V1,V2|NAME=geom:A:B:N",
+              help="A second axis: this parameter at each value (each with its own reference).")
+@click.option("--reference", "reference", default="auto", show_default=True,
+              type=click.Choice(["auto", "closed-form", "DOP853"]),
+              help="What runs are compared with: the model's closed form (auto: when it declares one) or DOP853 "
+                   "at rtol = atol = 1e-13.")
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
 @click.option("-o", "--out", "out_dir", default="runs", show_default=True, metavar="DIR",
               help="Writes DIR/<name>_stability_T<horizon>.csv, .png and .svg.")
 @click.option("--build-dir", default="build", show_default=True, help="Build folder.")
-def stability(file, methods, steps, horizons, tol, blowup, residual_tol, sets, out_dir, build_dir):
+def stability(file, methods, steps, horizons, tol, blowup, residual_tol, gains, scan_values, reference, sets, out_dir,
+              build_dir):
     """Stability map of FILE: each fixed-step method at each step, classified accurate, inaccurate (stable,
     not accurate) or failed (stopped, blown up, constraints lost, event missed: what, and when)."""
-    from andyc.analysis.stability import boundaries, draw_map, geometric, scan, write_csv
+    from andyc.analysis.stability import (baumgarte_rates, boundaries, draw_map, geometric, parameter_values, scan,
+                                          write_csv)
 
+    if gains and scan_values:
+        raise click.UsageError("give --gains or --scan, not both: a map has one second axis")
     model = _compiled(file, build_dir)[0]
     overrides = _parse_sets(sets)
     chosen = _methods(methods, "--methods") if methods else (
@@ -521,23 +554,36 @@ def stability(file, methods, steps, horizons, tol, blowup, residual_tol, sets, o
                                  param_hint="--methods")
     options = {"parameters": {k: v for k, v in overrides.items() if k not in model.input_names},
                "inputs": {k: v for k, v in overrides.items() if k in model.input_names}}
+    try:
+        variants = (baumgarte_rates(model, _floats(gains, "--gains")) if gains else
+                    parameter_values(*_scanned(model, scan_values)) if scan_values else None)
+    except SimulationError as exc:
+        raise click.BadParameter(str(exc), param_hint="--gains")
+    axis, name = (variants[0].axis, variants[0].name) if variants else (None, None)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     for horizon in horizons or (10.0,):
         grid = _floats(steps, "--steps") or geometric(horizon / 20, horizon / 20000, 31)
-        click.echo(f"{model.name}: stability over T = {horizon:g} s, {len(grid)} steps x {len(chosen)} methods")
+        click.echo(f"{model.name}: stability over T = {horizon:g} s, {len(grid)} steps x {len(chosen)} methods"
+                   + (f" x {len(variants)} values of {axis}" if variants else ""))
+
+        def show(v):
+            at = "" if v.variant is None else f" {name} = {v.variant:<9.4g}"
+            click.echo(f"  {v.point.method:>10}{at} h = {v.point.setting:<10.4g} {v.verdict:>10}: {v.reason}")
+
         try:
-            ref, verdicts = scan(model, chosen, grid, horizon, tol, blowup, residual_tol,
-                                 progress=lambda v: click.echo(f"  {v.point.method:>10} h = {v.point.setting:<10.4g} "
-                                                               f"{v.verdict:>10}: {v.reason}"), **options)
+            ref, verdicts = scan(model, chosen, grid, horizon, tol, blowup, residual_tol, progress=show,
+                                 reference=reference, variants=variants, **options)
         except SimulationError as exc:
             raise click.UsageError(str(exc))
-        for method, (accurate, failing, why) in boundaries(verdicts).items():
-            click.echo(f"{method}: largest accurate step {'none' if accurate is None else f'{accurate:.4g} s'}; "
+        click.echo(f"reference: {ref.source}")
+        for (method, variant), (accurate, failing, why) in boundaries(verdicts).items():
+            at = "" if variant is None else f" at {name} = {variant:.4g}"
+            click.echo(f"{method}{at}: largest accurate step {'none' if accurate is None else f'{accurate:.4g} s'}; "
                        + (f"fails from h = {failing:.4g} s ({why})" if failing else "no failure in the scan"))
         stem = out / f"{model.name}_stability_T{horizon:g}"
         write_csv(verdicts, stem.with_suffix(".csv"))
-        figures = draw_map(verdicts, ref, model.name, stem)
+        figures = draw_map(verdicts, ref, model.name, stem, axis)
         click.echo(f"wrote {stem.with_suffix('.csv')}, " + ", ".join(map(str, figures)))
 
 

@@ -13,18 +13,26 @@ the passive walker's RK4 steps per second with its jumps (target 5e5; ANDY
 ran jump and flow evaluation at 1.7e4), and the bouncing ball's run to its
 Zeno point. Issue 6: a 7-DOF arm URDF (panda, fingers locked): build time
 (target < 15 s) and forward dynamics per evaluation against pin.aba (target:
-within 2x). Every ratio is measured in this one run.
+within 2x). Issue 7: work-precision diagrams, stability maps (steps, and Baumgarte
+gains) and animations of the swing bar, the ball in a bowl, the four-bar and
+the walker (bench/accuracy.py), written with the printed figures of every
+other section into docs/BENCHMARKS.md and docs/bench/. Every ratio is
+measured in this one run.
 
-    python bench/run.py                      all sections (about 7 minutes)
-    python bench/run.py --only swing_bar     one section: chains, models, swing_bar, constraints, hybrid, urdf
+    python bench/run.py                      all sections (about 10 minutes)
+    python bench/run.py --only accuracy      one section: chains, models, swing_bar, constraints, hybrid, urdf,
+                                             accuracy (docs/BENCHMARKS.md then holds only what ran)
 """
 
 from __future__ import annotations
 
 import argparse
+import multiprocessing
+import shutil
 import sys
 import tempfile
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -76,22 +84,36 @@ def rk4_steps_per_second(model, t_end=20.0, dt=1e-3, repeats=3) -> float:
     return (t_end / dt) / best
 
 
+STARTED = time.perf_counter()
+
+
 def section(title):
-    print(f"\n== {title} " + "=" * max(0, 70 - len(title)))
+    print(f"\n== {title} " + "=" * max(0, 70 - len(title)) + f" (at {(time.perf_counter() - STARTED) / 60:.1f} min)")
 
 
-def chain_benchmark(n_bodies: int, tmp: Path, with_kane: bool = True):
-    chain = random_chain(n_bodies, "3d", "axis", seed=2026)
+def _chain(n_bodies: int):
+    return random_chain(n_bodies, "3d", "axis", seed=2026)
+
+
+def kane_chains(max_bodies: int) -> dict:
+    """bodies -> (KanesMethod's derivation seconds, its operations after cse), chains of 1 .. max_bodies."""
+    out = {}
+    for n in range(1, max_bodies + 1):
+        kane = kane_model(_chain(n))
+        out[n] = (kane.derive_seconds + kane.setup_seconds, kane.ops_after_cse)
+    return out
+
+
+def chain_benchmark(n_bodies: int, tmp: Path, run: bool = False):
+    """Derivation time and operation count of a random 3-D chain; with run, Numba-compiled too."""
     path = tmp / f"chain{n_bodies}.yaml"
-    path.write_text(chain_yaml(chain))
-    model, result = andyc.compile_model(path, tmp / "build", force=True)
-    row = {"bodies": n_bodies, **{k: result.timings[k] for k in ("derive", "generate", "compile")},
-           "ops": result.operations["dynamics"], "model": model}
-    if with_kane:
-        kane = kane_model(chain)
-        row["kane_derive"] = kane.derive_seconds + kane.setup_seconds
-        row["kane_ops"] = kane.ops_after_cse
-    return row
+    path.write_text(chain_yaml(_chain(n_bodies)))
+    if run:
+        model, result = andyc.compile_model(path, tmp / "build", force=True)
+    else:
+        model, result = None, andyc.build(path, tmp / "build", force=True)
+    return {"bodies": n_bodies, **{k: result.timings.get(k) for k in ("derive", "generate", "compile")},
+            "ops": result.operations["dynamics"], "model": model}
 
 
 ANDY_SWING_BAR_STEPS_PER_SECOND = 2.4e4     # ANDY paper section 3.1 (i7-7700, single thread)
@@ -132,16 +154,20 @@ def swing_bar_benchmark(tmp: Path) -> None:
     print(f"  DOP853 (never renormalized):  max | |quat| - 1 | = {drift:.2e}")
 
 
-def chains_benchmark(tmp: Path, max_bodies: int) -> None:
+def chains_benchmark(tmp: Path, max_bodies: int, kane: dict) -> None:
+    """andyc's derivations against `kane` (kane_chains, run in a second process meanwhile)."""
     section("3-D serial chains: andyc against sympy.physics.mechanics.KanesMethod")
     print("derive = kinematics + equations of motion (andyc: recursive, eq. 1-8; Kane: frames, points,")
     print("velocities + KanesMethod.kanes_equations); ops = sympy count_ops of M and G after cse.")
+    print("(KanesMethod ran in a second process, one chain after another, while the sections above ran;")
+    print("andyc's derivations run here, after them.)")
     header = (f"{'bodies':>6} {'andyc derive s':>14} {'Kane derive s':>13} {'speed-up':>8} "
               f"{'andyc ops':>9} {'Kane ops':>9} {'ops ratio':>9}")
     print(header)
     rows = []
     for n in range(1, max_bodies + 1):
-        row = chain_benchmark(n, tmp)
+        row = chain_benchmark(n, tmp, run=n == max_bodies)
+        row["kane_derive"], row["kane_ops"] = kane[n]
         rows.append(row)
         print(f"{n:>6} {row['derive']:>14.3f} {row['kane_derive']:>13.3f} "
               f"{row['kane_derive'] / row['derive']:>7.1f}x {row['ops']:>9} {row['kane_ops']:>9} "
@@ -362,7 +388,41 @@ def urdf_benchmark(tmp: Path) -> None:
           "pin.aba less the 1-joint call")
 
 
-SECTIONS = ("chains", "models", "swing_bar", "constraints", "hybrid", "urdf")
+SECTIONS = ("chains", "models", "swing_bar", "constraints", "hybrid", "urdf", "accuracy")
+
+
+class Tee:
+    """Standard output that is also kept, for docs/BENCHMARKS.md."""
+
+    def __init__(self, stream):
+        self.stream, self.parts = stream, []
+
+    def write(self, text):
+        self.parts.append(text)
+        return self.stream.write(text)
+
+    def flush(self):
+        self.stream.flush()
+
+    def text(self) -> str:
+        return "".join(self.parts)
+
+
+def accuracy_benchmark(tmp: Path) -> tuple:
+    """Issue 7: work-precision, stability maps and animations of four models, into docs/bench/."""
+    from accuracy import ANIMATIONS, CASES, animate, run_case
+
+    section("accuracy against cost: swing bar, ball in a bowl, four-bar, passive walker -> docs/bench/")
+    figures = ROOT / "docs" / "bench"
+    shutil.rmtree(figures, ignore_errors=True)         # nothing stale from an earlier run
+    figures.mkdir(parents=True)
+    results = [run_case(case, tmp / "accuracy_build", figures) for case in CASES]
+    animations = {}
+    for name in ANIMATIONS:
+        tic = time.perf_counter()
+        animations[name] = animate(name, tmp / "accuracy_build", figures).relative_to(figures.parent)
+        print(f"  {name}: animation {animations[name]} ({time.perf_counter() - tic:.0f} s)", flush=True)
+    return results, animations
 
 
 def main(argv=None):
@@ -371,21 +431,37 @@ def main(argv=None):
     parser.add_argument("--only", choices=SECTIONS, action="append", help="run only this section (repeatable)")
     args = parser.parse_args(argv)
     only = set(args.only or SECTIONS)
-    print(f"andyc {andyc.__version__}, Python {sys.version.split()[0]}")
-    with tempfile.TemporaryDirectory() as tmpdir:
-        tmp = Path(tmpdir)
-        if "chains" in only:
-            chains_benchmark(tmp, args.max_bodies)
-        if "models" in only:
-            models_benchmark(tmp)
-        if "swing_bar" in only:
-            swing_bar_benchmark(tmp)
-        if "constraints" in only:
-            constraints_benchmark(tmp)
-        if "hybrid" in only:
-            hybrid_benchmark(tmp)
-        if "urdf" in only:
-            urdf_benchmark(tmp)
+    started, accuracy = STARTED, None
+    tee = Tee(sys.stdout)
+    sys.stdout = tee
+    try:
+        print(f"andyc {andyc.__version__}, Python {sys.version.split()[0]}")
+        # KanesMethod takes minutes on the 6-body chain: it derives in a second process (a second core)
+        # while the other sections run, and its table is printed last, once it is done.
+        pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
+        kane = pool.submit(kane_chains, args.max_bodies) if "chains" in only else None
+        with pool, tempfile.TemporaryDirectory() as tmpdir:
+            tmp = Path(tmpdir)
+            if "models" in only:
+                models_benchmark(tmp)
+            if "swing_bar" in only:
+                swing_bar_benchmark(tmp)
+            if "constraints" in only:
+                constraints_benchmark(tmp)
+            if "hybrid" in only:
+                hybrid_benchmark(tmp)
+            if "urdf" in only:
+                urdf_benchmark(tmp)
+            accuracy = accuracy_benchmark(tmp) if "accuracy" in only else None
+            if kane is not None:
+                chains_benchmark(tmp, args.max_bodies, kane.result())
+        print(f"\nmake bench: {(time.perf_counter() - started) / 60:.1f} min")
+    finally:
+        sys.stdout = tee.stream
+    if accuracy:
+        from accuracy import write_markdown
+        write_markdown(*accuracy, tee.text(), time.perf_counter() - started, ROOT / "docs" / "BENCHMARKS.md")
+        print("wrote docs/BENCHMARKS.md")
 
 
 if __name__ == "__main__":

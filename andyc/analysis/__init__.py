@@ -1,7 +1,8 @@
 """Accuracy against cost, and where methods fail: work-precision sweeps and stability scans.
 
 Both run a compiled model many times through andyc.simulate and compare each
-run with a reference: DOP853 at rtol = atol = 1e-13 over the same horizon.
+run with a reference over the same horizon: the model's closed form where it
+declares one (closed_form:), else DOP853 at rtol = atol = 1e-13.
 A fixed step h is adjusted to divide the horizon T (h = T / round(T / h)), so
 that every run ends at T and one reference serves them all.
 """

@@ -1,37 +1,125 @@
-"""One sweep point: a run of the model against the reference, reduced to the figures both analyses use."""
+"""One sweep point: a run of the model against the reference, reduced to the figures both analyses use.
+
+The reference is the model's closed form where it declares one (closed_form:), else a DOP853 run at
+rtol = atol = 1e-13. The closed form is the exact solution, so a run's error against it is the run's own
+error, not the difference of two approximations; it is checked against the initial state before use.
+"""
 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
 
 import andyc
 from andyc.errors import SimulationError
+from andyc.runtime.inputs import input_source
 from andyc.runtime.simulate import FIXED_STEP, SCIPY_METHODS
 
 REFERENCE_TOL = 1e-13
 REFERENCE_SAMPLES = 200          # the reference's samples: its amplitude (scale) and its jumps
+SOURCES = ("auto", "closed-form", "DOP853")
+DOP853_SOURCE = f"DOP853, rtol = atol = {REFERENCE_TOL:g}"
+CLOSED_FORM_SOURCE = "closed form"
+START_TOL = 1e-9                 # the closed form at t = 0 must match the initial state to this x the amplitude
 
 
 @dataclass
 class Reference:
-    """The reference run to T: its final state, amplitude and jump count."""
+    """The reference to T: its final state, amplitude and jump count, and which reference it is."""
     t_end: float
     final: np.ndarray
     scale: float                 # max |x| over its samples (at least 1e-300)
     jumps: int
-    wall: float
+    wall: float                  # seconds to run DOP853, or to evaluate the closed form at the samples
+    source: str = DOP853_SOURCE  # what it is, for tables and titles: "closed form" or "DOP853, rtol = atol = 1e-13"
 
 
-def reference(model, t_end: float, **options) -> Reference:
+def reference(model, t_end: float, source: str | Reference = "auto", **options) -> Reference:
+    """The reference run to t_end for `model` with andyc.simulate's `options` (parameters, inputs, x0, ...).
+
+    source: "auto" -- the model's closed form when it declares one that holds for this run, else DOP853;
+    "closed-form" -- the closed form, or SimulationError saying why there is none; "DOP853" -- always DOP853;
+    or a Reference made already (another model of the same motion, say), used as it is if it ends at t_end.
+    """
+    if isinstance(source, Reference):
+        if not math.isclose(source.t_end, t_end, rel_tol=1e-12):
+            raise SimulationError(f"the reference ends at T = {source.t_end:g} s, the runs at {t_end:g} s")
+        return source
+    if source not in SOURCES:
+        raise SimulationError(f"unknown reference '{source}'; use one of: {', '.join(SOURCES)}")
+    if source != "DOP853":
+        p, u, why_not = _closed_form_setting(model, t_end, options)
+        if why_not is None:
+            return _closed_form_reference(model, t_end, p, u, options.get("x0"))
+        if source == "closed-form":
+            raise SimulationError(f"no closed-form reference: {why_not}; compare with DOP853 instead")
+        if model.closed_form is not None:       # say why the declared one is not used
+            return _dop853_reference(model, t_end, f"{DOP853_SOURCE} (not the closed form: {why_not})", **options)
+    return _dop853_reference(model, t_end, DOP853_SOURCE, **options)
+
+
+def _dop853_reference(model, t_end: float, label: str, **options) -> Reference:
     run = andyc.simulate(model, t_end, dt=t_end / REFERENCE_SAMPLES, method="DOP853", rtol=REFERENCE_TOL,
                          atol=REFERENCE_TOL, progress=False, **options)
     if not run.finished:
         raise SimulationError(f"the reference run (DOP853, rtol {REFERENCE_TOL:g}) did not finish: {run.status}")
     return Reference(t_end, run.state[-1].copy(), max(float(np.abs(run.state).max()), 1e-300),
-                     len(run.events["time"]), run.stats["wall_seconds"])
+                     len(run.events["time"]), run.stats["wall_seconds"], label)
+
+
+def _closed_form_setting(model, t_end: float, options: dict) -> tuple:
+    """(p, u, None): the parameters and held inputs of the run `options` describe, as andyc.simulate makes
+    them; or (None, None, why the closed form does not describe that run).
+
+    The closed form holds the inputs at their values, so a run whose own inputs are driven (an expression, a
+    table, a controller) is not described by it; the model's own input expressions are (the loader keeps
+    them out of the closed form, whose solution is then the driven one).
+    """
+    if model.closed_form is None:
+        return None, None, f"{model.name} declares none (add 'closed_form:' to {model.source})"
+    if options.get("controller") is not None:
+        return None, None, f"the controller {options['controller']} drives the inputs, which the closed form holds"
+    p = model.parameters(options.get("parameters"))
+    run_inputs = options.get("inputs") or {}
+    inputs = input_source(model, p, run_inputs, None, t_end)
+    driven = [f"{n} ({inputs.drives[n]})" for n in run_inputs if n in inputs.drives]
+    if driven:
+        return None, None, f"the run drives {', '.join(driven)}, and the closed form holds the inputs"
+    return p, inputs.held(model.initial_flow).copy(), None
+
+
+def _closed_form_reference(model, t_end: float, p: np.ndarray, u: np.ndarray, x0=None) -> Reference:
+    """The closed form at the reference's samples t_k = k T / 200: x(T), max |x|, no jumps; wall is the
+    time to evaluate it. Checked first at t = 0 against the run's initial state (x0, or the model's)."""
+    times = np.linspace(0.0, t_end, REFERENCE_SAMPLES + 1)      # (its last entry is t_end exactly)
+    start = time.perf_counter()
+    xs = np.array([model.closed_form(float(t), u, p) for t in times])
+    wall = time.perf_counter() - start
+    bad = ~np.isfinite(xs)
+    if bad.any():
+        k, i = np.argwhere(bad)[0]
+        raise SimulationError(f"{model.closed_form_location(i)}: {model.state_names[i]} is {xs[k, i]} at "
+                              f"t = {times[k]:.6g} s; fix the closed form, or the parameters it is evaluated at")
+    initial = np.asarray(model.initial_state(p) if x0 is None else x0, dtype=np.float64)
+    if initial.shape != (model.nx,):
+        raise SimulationError(f"initial state has shape {initial.shape}, expected ({model.nx},)")
+    _check_start(model, xs, initial)
+    return Reference(t_end, xs[-1].copy(), max(float(np.abs(xs).max()), 1e-300), 0, wall, CLOSED_FORM_SOURCE)
+
+
+def _check_start(model, xs: np.ndarray, initial: np.ndarray) -> None:
+    """The closed form must start where the runs start: |x_i(0) - x0_i| <= START_TOL x the state's amplitude
+    (max |x_i| over the samples and x0_i), plus round-off of the whole state (1e-15 x max |x|)."""
+    amplitude = np.maximum(np.abs(xs).max(axis=0), np.abs(initial))
+    bound = START_TOL * amplitude + 1e-15 * float(np.abs(xs).max())
+    off = np.abs(xs[0] - initial) > bound
+    if off.any():
+        i = int(np.argmax(off))
+        raise SimulationError(f"{model.closed_form_location(i)}: {model.state_names[i]} is {xs[0, i]:.9g} at "
+                              f"t = 0, the initial state {initial[i]:.9g}; fix the closed form or the initial values")
 
 
 def divides(step: float, t_end: float) -> float:
@@ -50,7 +138,7 @@ class Point:
     error: float                 # max |x(T) - x_ref(T)| over the state (inf when it did not reach T)
     growth: float                # max |x| over the run / the reference's max |x|
     residual: float              # largest constraint residual over the run (position and velocity rows)
-    energy_drift: float          # max |E - E0| / |E0| over the run
+    energy_drift: float          # max |E - E0| / |E0| over the run (NaN: the model does not conserve it)
     jumps: int
     wall: float                  # seconds (best of the repeats)
     rhs: int                     # right-hand-side evaluations
@@ -79,7 +167,9 @@ def run_point(model, ref: Reference, method: str, setting: float, repeats: int =
         residual = max(np.nanmax(np.abs(run.residual_position), initial=0.0),
                        np.nanmax(np.abs(run.residual_velocity), initial=0.0))
         e0 = abs(run.energy[0]) or 1.0
-        drift = float(np.nanmax(np.abs(run.energy - run.energy[0]), initial=0.0)) / e0
+        # (a model that does not conserve energy has no drift to speak of: NaN, not its physical change)
+        drift = (float(np.nanmax(np.abs(run.energy - run.energy[0]), initial=0.0)) / e0 if model.conserves_energy
+                 else math.nan)
         big = ~(np.abs(np.nan_to_num(run.state, nan=np.inf)) <= blowup * ref.scale).all(axis=1)
         off = np.nanmax(np.abs(np.hstack([run.residual_position, run.residual_velocity])), axis=1,
                         initial=0.0) > residual_tol

@@ -122,6 +122,22 @@ def _hybrid_functions(model: SymbolicModel, pool: dict) -> list:
     return out
 
 
+def _closed_form(model: SymbolicModel) -> dict | None:
+    """The body of closed_form(t, u, p) -> x, the exact solution the model declares; None without one.
+
+    Its expressions use only t, parameters and inputs, so no intermediate of the pool is needed; cse
+    still shares the repeated parts (sqrt(k/m), the sine and cosine of w t).
+    """
+    spec = model.spec
+    if not spec.closed_form:
+        return None
+    states = [c.name for c in spec.coordinates] + spec.speed_names + [s.name for s in spec.signals]
+    body = function_body([(f"x[{i}]", spec.closed_form[name]) for i, name in enumerate(states)], {})
+    return {"unpack": _unpack(model, body.inputs), "lines": body.lines, "outputs": body.outputs,
+            "where": [[spec.source.line(("closed_form", name)), format_path(("closed_form", name))]
+                      for name in states]}
+
+
 def _padded(rows: list[list[int]], width: int) -> str:
     """A (len(rows), width) int64 array literal, -1 past each row's entries."""
     return repr([r + [-1] * (width - len(r)) for r in rows])
@@ -216,15 +232,24 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         "frames": frames, "operations": operations,
         "frame_parents": [next(f.parent for f in spec.frames if f.name == name) for name in frames],
         "nh": cons.nh, "nc": cons.nc, "constraint_rows": cons.rows, "multipliers": cons.multipliers,
+        "constraint_gains": repr([(c.name, "holonomic" if c.holonomic else "nonholonomic",
+                                   _gain_parameter(spec, c.stiffness), _gain_parameter(spec, c.damping))
+                                  for c in spec.constraints]),
         "conserves_energy": spec.conserves_energy,
         "constraint_where": [[spec.source.line(w), format_path(w)] for c in spec.constraints for w in c.row_where],
         "initial": {"unpack": _parameter_unpack(model, initial), "state": values},
         "initial_discrete": {"unpack": _parameter_unpack(model, discrete), "values": [to_code(e) for e in discrete]},
         "discrete": [x.name for x in spec.discrete],
+        "closed_form": _closed_form(model),
         **_hybrid_context(model),
         "functions": functions,
     }
     return _environment().get_template("module.py.j2").render(**context), operations
+
+
+def _gain_parameter(spec, gain) -> str | None:
+    """The parameter a Baumgarte gain is, if it is one (then a scan can set it), else None."""
+    return next((name for name, (symbol, _) in spec.parameters.items() if gain == symbol), None)
 
 
 def _environment() -> jinja2.Environment:

@@ -25,8 +25,8 @@ def ball_first_integral(run, r: float, R: float) -> np.ndarray:
     return db * np.cos(a) ** 2 + 2 * r / (7 * (R - r)) * w_rho * np.sin(a)
 
 
-def fourbar_crank_angle(p: dict, th0: float, w0: float, times) -> np.ndarray:
-    """Crank angle of the parallelogram four-bar on its parallelogram branch.
+def fourbar_branch(p: dict, th0: float, w0: float, times) -> tuple:
+    """(th, th') of the parallelogram four-bar's crank on its parallelogram branch, at `times`.
 
     The coupler translates, so th1 = th3 = th and the mechanism is one physical
     pendulum: (I1 + I3 + m2 a^2) th'' = -g a (m1/2 + m2 + m3/2) cos th, with
@@ -38,4 +38,10 @@ def fourbar_crank_angle(p: dict, th0: float, w0: float, times) -> np.ndarray:
     k = g * a * (m1 / 2 + m2 + m3 / 2)
     sol = solve_ivp(lambda t, y: [y[1], -k / inertia * np.cos(y[0])], (0.0, float(times[-1])), [th0, w0],
                     method="DOP853", rtol=1e-13, atol=1e-13, dense_output=True)
-    return sol.sol(times)[0]
+    th, w = sol.sol(times)
+    return th, w
+
+
+def fourbar_crank_angle(p: dict, th0: float, w0: float, times) -> np.ndarray:
+    """The crank angle th of `fourbar_branch`."""
+    return fourbar_branch(p, th0, w0, times)[0]

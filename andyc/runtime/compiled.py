@@ -42,6 +42,7 @@ class CompiledModel:
     nc: int = 0                 # velocity-level constraint rows
     multiplier_names: tuple = ()
     constraint_rows: tuple = () # constraint name of each row
+    constraint_gains: tuple = ()  # (constraint, "holonomic" | "nonholonomic", stiffness parameter, damping parameter)
     conserves_energy: bool = False
     source: str = ""            # the model file's name
     constraint_where: tuple = ()  # (line, document path) of each row in the model file
@@ -51,6 +52,8 @@ class CompiledModel:
     jump_names: tuple = ()
     frame_parents: tuple = ()   # parent of each frame in frame_names
     input_expressions: tuple = ()  # (input, expression text) the model drives by default
+    closed_form: object = None  # the module's closed_form(t, u, p) -> x, the exact solution it declares, or None
+    closed_form_where: tuple = ()  # (line, document path) of each state's closed form in the model file
 
     @property
     def nd(self) -> int:
@@ -86,6 +89,11 @@ class CompiledModel:
 
     def initial_state(self, p: np.ndarray) -> np.ndarray:
         return self.module.initial_state(p)
+
+    def closed_form_location(self, k: int) -> str:
+        """`FILE:LINE: PATH` of state k's closed form, for messages."""
+        line, path = self.closed_form_where[k]
+        return f"{self.source}:{line}: {path}"
 
 
 def _with_overrides(names, defaults, overrides, kind) -> np.ndarray:
@@ -137,11 +145,14 @@ def load_compiled(path) -> CompiledModel:
         input_names=tuple(module.INPUTS), input_defaults=module.INPUT_DEFAULTS,
         frame_names=tuple(module.FRAMES), nh=module.NH, nc=module.NC,
         multiplier_names=tuple(module.MULTIPLIERS), constraint_rows=tuple(module.CONSTRAINT_ROWS),
+        constraint_gains=tuple(tuple(g) for g in module.CONSTRAINT_GAINS),
         conserves_energy=bool(module.CONSERVES_ENERGY), source=module.SOURCE,
         constraint_where=tuple(tuple(w) for w in module.CONSTRAINT_WHERE),
         discrete_names=tuple(module.DISCRETE_STATES), flow_names=tuple(module.FLOWS),
         initial_flow=int(module.INITIAL_FLOW), jump_names=tuple(module.JUMPS),
-        frame_parents=tuple(module.FRAME_PARENTS), input_expressions=tuple(module.INPUT_EXPRESSIONS.items()))
+        frame_parents=tuple(module.FRAME_PARENTS), input_expressions=tuple(module.INPUT_EXPRESSIONS.items()),
+        closed_form=module.closed_form if module.HAS_CLOSED_FORM else None,
+        closed_form_where=tuple(tuple(w) for w in module.CLOSED_FORM_WHERE))
     # Call each function once so Numba compiles now, not inside a timed run.
     p, u, x, d, ws, flow = _sample_arguments(model)
     module.rhs_into(0.0, x, u, p, d, flow, ws.k[0], ws.M, ws.G, ws.S)
@@ -149,6 +160,8 @@ def load_compiled(path) -> CompiledModel:
     module.energy(0.0, x, u, p, d)
     module.power(0.0, x, u, p, d)
     module.frame_positions(0.0, x, u, p, d, np.zeros((len(model.frame_names), 3)))
+    if model.closed_form is not None:
+        model.closed_form(0.0, u, p)
     return model
 
 

@@ -376,6 +376,7 @@ class _Builder:
         constraints.sort(key=lambda c: not c.holonomic)     # holonomic rows first (DESIGN.md run layout)
         self.check_multipliers(constraints)
         flows, jumps, initial_flow = self.hybrid(constraints)
+        closed_form = self.closed_form(jumps)
         conserves = bool(d.get("conserves_energy", False))
         if conserves:
             self.check_conservative(loads, dampers, springs, potentials, constraints, frames)
@@ -397,7 +398,7 @@ class _Builder:
                     loads=loads, dampers=dampers, springs=springs, potentials=potentials,
                     constraints=constraints, conserves_energy=conserves, discrete=self.discrete, flows=flows,
                     jumps=jumps, initial_flow=initial_flow, warnings=self.warnings,
-                    input_expressions=self.input_expressions)
+                    input_expressions=self.input_expressions, closed_form=closed_form)
 
     def check_names(self):
         """Every name is unique across the model and not reserved."""
@@ -904,6 +905,57 @@ class _Builder:
                 self.warnings.append(self.smap.diag(c.where, f"constraint '{c.name}' is active in no flow and "
                                                     "takes no impact", "list it in a flow's 'constraints', or remove it"))
         return flows, jumps, initial_index
+
+    # closed form -----------------------------------------------------------
+    def closed_form(self, jumps) -> dict:
+        """closed_form: state name -> x_i(t), an expression of t, parameters and held inputs, in STATES order.
+
+        It is the exact solution from the initial state, which andyc bench and stability compare runs with; a
+        state inside it would make it an equation, not a solution, and a jump would break the one formula.
+        """
+        given = self.data.get("closed_form")
+        if given is None:
+            return {}
+        if jumps:
+            self.error(("closed_form",), "a closed form cannot describe jumps (the model has "
+                       + ", ".join(f"'{j.name}'" for j in jumps) + ")",
+                       "remove closed_form; andyc bench and stability then compare with DOP853 at rtol 1e-13")
+            return {}
+        states = {**{c.name: c.q for c in self.coords}, **self.rate_names, **{s.name: s.symbol for s in self.signals}}
+        # Inputs an expression drives are not held values (their held default 0 is not what the runs see).
+        held = {n: s for n, (s, _) in self.inputs.items() if n not in self.input_expressions}
+        allowed = {**self.param_names, **held}
+        context = "a closed form uses t, parameters and held inputs, not those the model drives by an expression"
+        kinds = {**{c.name: "coordinate" for c in self.coords}, **{n: "speed" for n in self.rate_names},
+                 **{s.name: "signal" for s in self.signals}}
+        out = {}
+        for name, value in given.items():
+            where = ("closed_form", name)
+            if name not in states:
+                kind = _KIND.get(self.declared.get(name))
+                close = difflib.get_close_matches(str(name), list(states), n=1)
+                self.error(where, f"{kind + ' ' if kind else ''}'{name}' is not a state of the model",
+                           (f"did you mean '{close[0]}'? " if close else "") + "the closed form gives each state: "
+                           + ", ".join(states))
+                continue
+            try:            # states parse too, to be named below as what they are
+                expr = parse(value, {**allowed, **states})
+            except ExpressionError:
+                self.expr(value, where, allowed, context)       # reports it, listing the names allowed here
+                continue
+            self.used |= expr.free_symbols
+            inside = [f"{kinds[n]} '{n}'" for n, s in states.items() if s in expr.free_symbols]
+            if inside:
+                self.error(where, f"in {value!r}: the closed form of '{name}' uses {' and '.join(inside)}",
+                           "a closed form is the solution itself: write x(t) with t, parameters and inputs only "
+                           "(for example x0*cos(sqrt(k/m)*t)), no coordinates, speeds or signals")
+            out[name] = expr
+        missing = [n for n in states if n not in given]
+        if missing:
+            self.error(("closed_form",), f"the closed form gives no expression for {', '.join(missing)}",
+                       "give every state (coordinates, their rates <coordinate>_dot, declared speeds, signals): "
+                       + ", ".join(f"{n}: ..." for n in missing))
+        return {n: out[n] for n in states if n in out}
 
     def known(self, name, known: list, where, kind: str) -> bool:
         """Report `name` (a reference to a {kind}) unless it is in `known`."""

@@ -247,6 +247,7 @@ class Spec:
     locked: tuple = ()          # URDF joints held at given values (urdf: {lock: ...}), by their URDF name
     reduce: bool = False        # merge the bodies fixed to one moving frame before deriving (andyc.symbolic.reduce)
     input_expressions: dict = field(default_factory=dict)  # input name -> the expression text that drives it
+    closed_form: dict = field(default_factory=dict)  # state name -> x_i(t) of t, parameters and held inputs
 
     @property
     def speed_symbols(self) -> list:
