@@ -106,7 +106,7 @@ def test_sweep_and_scan_pass_the_reference_choice_on(spring):
     assert scan(spring, ["rk4"], [1e-3], horizon=0.1, reference="DOP853")[0].source.startswith("DOP853")
     made = reference(spring, 0.1, source="DOP853")             # a reference made already is used as it is
     assert sweep(spring, ["rk4"], 0.1, steps=[1e-3], repeats=1, reference=made)[0] is made
-    with pytest.raises(SimulationError, match="the reference ends at T = 0.1 s, the sweep at 0.2 s"):
+    with pytest.raises(SimulationError, match="the reference ends at T = 0.1 s, the runs at 0.2 s"):
         sweep(spring, ["rk4"], 0.2, steps=[1e-3], repeats=1, reference=made)
 
 
