@@ -20,12 +20,9 @@ from tests.conftest import MODELS
 OMEGA, X0 = 100.0, 0.01     # models/stiff_spring.yaml: sqrt(k/m), the initial displacement
 T = 1.3                     # 20.7 periods: the phase at T is no multiple of pi/2
 
-# A spring whose closed form starts at twice its initial displacement; F is a held input (F/k: the
-# static offset a constant push adds).
-WRONG_START = """\
-name: wrong_start
+# The mass on its spring (models/stiff_spring.yaml without its closed form).
+SPRING_BODY = """\
 parameters: {m: 1.0, k: 1.0e4, x0: 0.01}
-inputs: {F: 0.0}
 coordinates:
   x: {initial: x0}
 frames:
@@ -34,6 +31,11 @@ bodies:
   - {name: mass, frame: slider, mass: m}
 springs:
   - {name: spring, stiffness: k, rest_length: 0, length: x}
+"""
+
+# A spring whose closed form starts at twice its initial displacement; F is a held input (F/k: the
+# static offset a constant push adds).
+WRONG_START = "name: wrong_start\ninputs: {F: 0.0}\n" + SPRING_BODY + """\
 forces:
   - {name: push, frame: slider, vector: [F, 0, 0]}
 closed_form:
@@ -140,19 +142,7 @@ def test_a_closed_form_off_the_initial_state_is_refused_with_its_line(wrong_star
         reference(wrong_start, T, source="closed-form", inputs={"F": "0*t"})
 
 
-SPRING = """\
-name: spring
-parameters: {m: 1.0, k: 1.0e4, x0: 0.01}
-coordinates:
-  x: {initial: x0}
-frames:
-  - {name: slider, parent: world, prismatic: x, axis: x}
-bodies:
-  - {name: mass, frame: slider, mass: m}
-springs:
-  - {name: spring, stiffness: k, rest_length: 0, length: x}
-closed_form:
-"""
+SPRING = "name: spring\n" + SPRING_BODY + "closed_form:\n"
 X = "  x: x0*cos(sqrt(k/m)*t)\n"
 X_DOT = "  x_dot: -x0*sqrt(k/m)*sin(sqrt(k/m)*t)\n"
 
