@@ -158,7 +158,7 @@ def run_case(case: Case, build: Path, out: Path, log=print) -> Result:
     figures["work-precision"] = stem.with_suffix(".png")
     log(f"  {case.name}: work-precision, {len(points)} runs ({time.perf_counter() - tic:.0f} s)")
 
-    scan_ref = ref_for(case.horizon)
+    scan_ref = ref if case.horizon == case.t_end else ref_for(case.horizon)     # (one reference, not two)
     scan_ref, verdicts = stability.scan(model, case.scan_methods, case.scan_steps, case.horizon,
                                         reference=scan_ref, **case.options)
     stem = out / f"{case.name}_stability"
