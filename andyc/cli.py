@@ -1,10 +1,13 @@
 """Command line: a thin layer over the Python API (andyc.pipeline, andyc.simulate).
 
-Exit codes: 0 success, 1 an invalid model or a run that stopped, 2 usage.
+Exit codes: 0 success, 1 an invalid model or a run that stopped, 2 usage, 130 / 143 a run interrupted by
+SIGINT / SIGTERM (its samples written), 70 a bug in andyc.
 """
 
 from __future__ import annotations
 
+import math
+import os
 import sys
 import warnings
 from pathlib import Path
@@ -12,10 +15,12 @@ from pathlib import Path
 import click
 
 import andyc
-from andyc.errors import SimulationError, SpecError
+from andyc.cli_values import COUNT, NON_NEGATIVE, POSITIVE, TOLERANCE, Number, floats, parse_sets
+from andyc.errors import SimulationError, SpecError, printable
+from andyc.outputs import OutputError, check_folder, check_output, write_atomic, write_text
 from andyc.runtime.compiled import compile_integrator, integrator_compiled
 from andyc.runtime.inputs import InputWarning
-from andyc.runtime.simulate import METHODS
+from andyc.runtime.simulate import MAX_STEPS, METHODS
 
 
 def _fail_spec(exc: SpecError) -> None:
@@ -87,7 +92,48 @@ def _plural(n: int, word: str) -> str:
     return f"{n} {word}{'' if n == 1 else 's'}"
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class Refused(click.ClickException):
+    """A request andyc will not carry out (an output over an input, say): `Error: ...`, exit 2, no usage text."""
+    exit_code = 2
+
+    def __init__(self, message: str):
+        super().__init__(printable(message))
+
+
+class _Andyc(click.Group):
+    """The command group: text that cannot be encoded is escaped, not fatal (a message may quote a file name
+    with undecodable bytes); an output that must not be written, Ctrl-C and bugs get a message, not a
+    traceback (ANDYC_DEBUG=1 shows the traceback of a bug)."""
+
+    def main(self, *args, **kwargs):
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.reconfigure(errors="backslashreplace")
+            except (AttributeError, ValueError):
+                pass
+        return super().main(*args, **kwargs)
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except OutputError as exc:
+            raise Refused(str(exc)) from None
+        except KeyboardInterrupt:
+            click.echo("andyc: interrupted", err=True)
+            ctx.exit(130)
+        except RecursionError:
+            raise Refused("the input is nested too deeply for andyc to process; simplify it") from None
+        except (click.ClickException, click.exceptions.Exit, click.exceptions.Abort, SystemExit):
+            raise
+        except Exception as exc:
+            if os.environ.get("ANDYC_DEBUG"):
+                raise
+            click.echo(f"andyc: internal error ({type(exc).__name__}: {exc}); this is a bug in andyc: please "
+                       f"report it with the command and its input (ANDYC_DEBUG=1 shows the traceback)", err=True)
+            ctx.exit(70)
+
+
+@click.group(cls=_Andyc, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(andyc.__version__, prog_name="andyc")
 def main():
     """andyc: compile multibody models (YAML or URDF) into fast simulation code.
@@ -134,10 +180,8 @@ def check(files):
 @click.option("--force", is_flag=True, help="Rebuild even if the spec is unchanged.")
 def build(file, out_dir, force):
     """Derive the equations of motion of FILE and generate its module."""
-    try:
-        model, result = andyc.compile_model(file, out_dir, force)
-    except SpecError as exc:
-        _fail_spec(exc)
+    check_folder(out_dir, [file])
+    model, result = _compiled(file, out_dir, force)
     t = result.timings
     if result.skipped:
         click.echo(f"{result.module_path}: up to date (spec and andyc unchanged); compile {t['compile']:.2f} s")
@@ -163,19 +207,6 @@ def _report_jumps_file(result) -> None:
                    f"the file to regenerate it", err=True)
 
 
-def _parse_sets(values, option: str = "--set") -> dict:
-    out = {}
-    for item in values:
-        name, sep, value = item.partition("=")
-        try:
-            if not sep:
-                raise ValueError
-            out[name.strip()] = float(value)
-        except ValueError:
-            raise click.BadParameter(f"'{item}' is not NAME=NUMBER", param_hint=option)
-    return out
-
-
 @main.command()
 @click.argument("file", type=click.Path(dir_okay=False))
 @click.option("--at", "at", multiple=True, metavar="NAME=VALUE",
@@ -184,7 +215,7 @@ def _parse_sets(values, option: str = "--set") -> dict:
 @click.option("--input", "input_values", multiple=True, metavar="NAME=VALUE",
               help="The inputs at the point (default: their held values); the same as --set for an input.")
 @click.option("--flow", default=None, help="The flow to linearize (default: the initial flow).")
-@click.option("--time", "t", default=0.0, show_default=True, help="Time t of the point, s.")
+@click.option("--time", "t", default=0.0, show_default=True, type=Number(), help="Time t of the point, s.")
 @click.option("--find-equilibrium", is_flag=True,
               help="First find the rest point (speeds 0, dv/dt = 0) nearest the coordinates given (Newton on G = 0).")
 @click.option("-o", "--out", "out_dir", default=None, metavar="DIR",
@@ -202,10 +233,14 @@ def linearize(file, at, sets, input_values, flow, t, find_equilibrium, out_dir):
         model = andyc.derive(spec)
     except SpecError as exc:
         _fail_spec(exc)
-    overrides = _parse_sets(sets)
-    given = _parse_sets(input_values, "--input")
+    if out_dir:
+        check_folder(out_dir, spec.files)
+        for suffix in ("_linearization.npz", "_A.csv", "_B.csv"):
+            check_output(Path(out_dir) / f"{spec.name}{suffix}", spec.files, "linearization")
+    overrides = parse_sets(sets)
+    given = parse_sets(input_values, "--input")
     overrides.update(given)
-    states = _parse_sets(at, "--at")
+    states = parse_sets(at, "--at")
     try:
         flows = model.hybrid.flows
         if flow is not None and flow not in flows:
@@ -247,20 +282,21 @@ def linearize(file, at, sets, input_values, flow, t, find_equilibrium, out_dir):
     click.echo(f"{_plural(unstable, 'eigenvalue')} with positive real part" + (" (unstable)" if unstable else ""))
     if out_dir:
         out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
         bases = {"N_q": lin.basis_q, "N_v": lin.basis_v} if lin.form == "null-space" else {}
-        np.savez(out / f"{spec.name}_linearization.npz", A=lin.A, B=lin.B, x=lin.x, u=lin.u, t=lin.t,
-                 state_names=np.array(lin.state_names), input_names=np.array(lin.input_names, dtype=str),
-                 eigenvalues=ev, flow=lin.flow, form=lin.form, **bases)
-        np.savetxt(out / f"{spec.name}_A.csv", lin.A, delimiter=",", header=",".join(lin.state_names), comments="")
-        np.savetxt(out / f"{spec.name}_B.csv", lin.B, delimiter=",", header=",".join(lin.input_names), comments="")
+        with write_atomic(out / f"{spec.name}_linearization.npz") as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, A=lin.A, B=lin.B, x=lin.x, u=lin.u, t=lin.t,
+                     state_names=np.array(lin.state_names), input_names=np.array(lin.input_names, dtype=str),
+                     eigenvalues=ev, flow=lin.flow, form=lin.form, **bases)
+        for matrix, names, suffix in ((lin.A, lin.state_names, "A"), (lin.B, lin.input_names, "B")):
+            with write_atomic(out / f"{spec.name}_{suffix}.csv") as tmp:
+                np.savetxt(tmp, matrix, delimiter=",", header=",".join(names), comments="")
         click.echo(f"wrote {out / f'{spec.name}_linearization.npz'}, {spec.name}_A.csv and {spec.name}_B.csv")
 
 
 @main.command()
 @click.argument("file", type=click.Path(dir_okay=False))
-@click.option("--t-end", default=10.0, show_default=True, help="End time, s.")
-@click.option("--dt", default=1e-3, show_default=True, help="Step (rk4) or output spacing (adaptive methods), s.")
+@click.option("--t-end", default=10.0, show_default=True, type=POSITIVE, help="End time, s.")
+@click.option("--dt", default=1e-3, show_default=True, type=POSITIVE, help="Step (rk4) or output spacing (adaptive methods), s.")
 @click.option("--method", default="rk4", show_default=True,
               type=click.Choice(list(METHODS)))
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
@@ -272,53 +308,96 @@ def linearize(file, at, sets, input_values, flow, t, find_equilibrium, out_dir):
                    "be); it drives every input.")
 @click.option("--out", "outs", multiple=True, metavar="RUN.h5|RUN.csv",
               help="Run file(s) to write; default runs/<name>.h5.")
-@click.option("--every", default=1, show_default=True, help="Log one sample every N steps.")
+@click.option("--every", default=1, show_default=True, type=COUNT, help="Log one sample every N steps.")
 @click.option("--frames", default=None, metavar="all|F1,F2", help="Log the world positions of these frames.")
 @click.option("--init", "init", default="check", show_default=True, type=click.Choice(["check", "project", "as-is"]),
               help="Initial state off the constraint manifold: refuse past --init-tol (check), project it onto "
                    "the manifold (project), or start from it anyway (as-is).")
-@click.option("--init-tol", default=1e-6, show_default=True, help="Largest initial constraint residual accepted by check.")
+@click.option("--init-tol", default=1e-6, show_default=True, type=NON_NEGATIVE, help="Largest initial constraint residual accepted by check.")
 @click.option("--energy-correction/--no-energy-correction", default=None,
               help="Braun & Goldfarb energy correction of the projection method; default on when the model "
                    "declares conserves_energy.")
-@click.option("--energy-tol", default=1e-6, show_default=True,
+@click.option("--energy-tol", default=1e-6, show_default=True, type=NON_NEGATIVE,
               help="Energy correction only where 2T exceeds this (Braun & Goldfarb eq. 6).")
-@click.option("--event-tol", default=1e-12, show_default=True,
+@click.option("--event-tol", default=1e-12, show_default=True, type=Number(0, 1, low_open=True),
               help="Guard crossings are located to this many seconds (relative beyond t = 1 s).")
-@click.option("--max-instant-jumps", default=100, show_default=True,
+@click.option("--max-instant-jumps", default=100, show_default=True, type=COUNT,
               help="Stop after this many jumps at one instant (a jump loop).")
-@click.option("--zeno-tol", default=1e-6, show_default=True,
+@click.option("--zeno-tol", default=1e-6, show_default=True, type=NON_NEGATIVE,
               help="Stop when jump times accumulate at a point less than this many seconds ahead (Zeno).")
 @click.option("--stop-after", "stop_after", multiple=True, metavar="JUMP=N",
               help="End the run right after the N-th occurrence of JUMP.")
-@click.option("--rtol", default=1e-8, show_default=True, help="Relative tolerance (adaptive methods).")
-@click.option("--atol", default=1e-10, show_default=True, help="Absolute tolerance (adaptive methods).")
+@click.option("--rtol", default=1e-8, show_default=True, type=TOLERANCE, help="Relative tolerance (adaptive methods).")
+@click.option("--atol", default=1e-10, show_default=True, type=POSITIVE, help="Absolute tolerance (adaptive methods).")
+@click.option("--timeout", default=None, type=POSITIVE, metavar="SECONDS",
+              help="Stop the run after this much wall time, keeping its samples (also when a controller never "
+                   "returns).")
 @click.option("-o", "--out-dir", default="build", show_default=True, help="Build folder.")
 def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, frames, init, init_tol, energy_correction,
-        energy_tol, event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, out_dir):
-    """Build FILE if needed, simulate it and write run files."""
-    overrides = _parse_sets(sets)
+        energy_tol, event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, timeout, out_dir):
+    """Build FILE if needed, simulate it and write run files.
+
+    SIGINT (Ctrl-C) or SIGTERM stop the run and write the samples so far, with the status "interrupted";
+    the exit code is then 130 or 143."""
+    from andyc.runtime.interrupts import Interrupts
+    from andyc.runtime.run import RUN_SUFFIXES
+
+    overrides = parse_sets(sets)
     stops = {}
     for item in stop_after:
         name, sep, count = item.partition("=")
-        if not sep or not count.strip().isdigit():
-            raise click.BadParameter(f"'{item}' is not JUMP=N", param_hint="--stop-after")
+        if not sep or not count.strip().isdigit() or int(count) < 1:
+            raise click.BadParameter(f"'{item}' is not JUMP=N with N >= 1", param_hint="--stop-after")
         stops[name.strip()] = int(count)
-    model, result = _compiled(file, out_dir)
-    if not result.skipped:
-        _report_jumps_file(result)
-    if not integrator_compiled(model):
-        click.echo(f"{model.name}: compiling the integrator (once per build; Numba caches it) ...", err=True)
-        compile_integrator(model)
-    params = {k: v for k, v in overrides.items() if k not in model.input_names}
-    inputs = {k: v for k, v in overrides.items() if k in model.input_names}
+    inputs = {}
     for item in input_specs:
         name, sep, value = item.partition("=")
         if not sep or not value.strip():
             raise click.BadParameter(f"'{item}' is not NAME=VALUE", param_hint="--input")
         if name.strip() in inputs:
             raise click.BadParameter(f"input '{name.strip()}' given twice", param_hint="--input")
+        try:
+            number = float(value)
+        except ValueError:
+            number = 0.0
+        if not math.isfinite(number):
+            raise click.BadParameter(f"'{item}': {value.strip()} is not a finite number", param_hint="--input")
         inputs[name.strip()] = value.strip()
+    read = [file, controller] + [v for v in inputs.values() if v.lower().endswith(".csv")]
+    for out in outs:
+        if Path(out).suffix.lower() not in RUN_SUFFIXES:
+            raise click.BadParameter(f"unknown run file type '{Path(out).suffix}'; use .h5 or .csv",
+                                     param_hint="--out")
+        check_output(out, read, "run file")
+    check_folder(out_dir, read)
+    if t_end / dt > MAX_STEPS:
+        raise click.BadParameter(f"t_end / dt = {t_end / dt:.3g} steps, past the limit of {MAX_STEPS:.0e}; raise "
+                                 f"--dt or shorten --t-end", param_hint="--dt")
+    model, result = _compiled(file, out_dir)
+    if not result.skipped:
+        _report_jumps_file(result)
+    outs = outs or (f"runs/{model.name}.h5",)
+    read += [model.path, result.jumps_path]
+    for out in outs:
+        check_output(out, read, "run file")
+    if not integrator_compiled(model):
+        click.echo(f"{model.name}: compiling the integrator (once per build; Numba caches it) ...", err=True)
+        compile_integrator(model)
+    params = {k: v for k, v in overrides.items() if k not in model.input_names}
+    for name in (k for k in overrides if k in model.input_names):
+        if name in inputs:
+            raise click.BadParameter(f"input '{name}' given twice", param_hint="--input")
+        inputs[name] = overrides[name]
+
+    def save(run) -> None:
+        for out in outs:
+            run.save(out)
+
+    def abandon(run) -> None:       # the watchdog's: the run never returned
+        save(run)
+        click.echo(f"{run.status}; wrote {', '.join(outs)}", err=True)
+
+    interrupts = Interrupts(timeout, abandon)
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", InputWarning)
@@ -326,18 +405,13 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
                                  controller=controller, every=every, frames=frames, rtol=rtol, atol=atol, init=init,
                                  init_tol=init_tol, energy_correction=energy_correction, energy_tol=energy_tol,
                                  event_tol=event_tol, max_instant_jumps=max_instant_jumps, zeno_tol=zeno_tol,
-                                 stop_after=stops)
+                                 stop_after=stops, interrupts=interrupts)
     except SimulationError as exc:
-        raise click.UsageError(str(exc))
+        raise Refused(str(exc))
     finally:
         for w in caught:
             click.echo(f"warning: {w.message}", err=True)
-    outs = outs or (f"runs/{model.name}.h5",)
-    for out in outs:
-        try:
-            run.save(out)
-        except ValueError as exc:
-            raise click.BadParameter(str(exc), param_hint="--out")
+    save(run)
     s = run.stats
     constraints = ""
     if model.nc:
@@ -358,7 +432,7 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
                f"{constraints}; wrote {', '.join(outs)}")
     if not run.finished:
         click.echo(run.status, err=True)
-        sys.exit(1)
+        sys.exit(interrupts.exit_code if run.status.startswith("interrupted") else 1)
 
 
 def _largest(a) -> float:
@@ -390,6 +464,8 @@ def eom(file, fmt, element, flow, standalone, out):
         model = andyc.derive(spec)
     except SpecError as exc:
         _fail_spec(exc)
+    if out:
+        check_output(out, spec.files, "equations")
     show = _progress(spec.name, "entries written out")
     try:
         eq = equations(model, flow=flow, element=element, progress=lambda done, total, seconds: show(done, total))
@@ -403,26 +479,10 @@ def eom(file, fmt, element, flow, standalone, out):
                       "minutes to print (--element NAME prints one element)" if eq.as_written else ""), err=True)
     text = render(eq, fmt, standalone)
     if out:
-        Path(out).write_text(text)
+        write_text(out, text)
         click.echo(f"wrote {out} ({eq.entries} entries in {eq.seconds:.2f} s)")
     else:
         click.echo(text, nl=False)
-
-
-def _floats(text: str | None, option: str) -> list | None:
-    """'1e-3,2e-3' -> [0.001, 0.002]; 'geom:A:B:N' -> N values from A to B, evenly spaced in log."""
-    import numpy as np
-
-    if text is None:
-        return None
-    try:
-        if text.startswith("geom:"):
-            lo, hi, n = text[5:].split(":")
-            return list(np.geomspace(float(lo), float(hi), int(n)))
-        return [float(v) for v in text.split(",")]
-    except ValueError:
-        raise click.BadParameter(f"'{text}' is not a list of numbers (1e-3,2e-3) or geom:FROM:TO:COUNT",
-                                 param_hint=option) from None
 
 
 def _methods(text: str, option: str) -> list:
@@ -441,17 +501,17 @@ def _scanned(model, text: str) -> tuple[str, list]:
     if not sep or name not in model.parameter_names:
         raise click.BadParameter(f"'{text}': give NAME=VALUES with NAME a parameter of {model.name} "
                                  f"({', '.join(model.parameter_names)})", param_hint="--scan")
-    return name, _floats(values, "--scan")
+    return name, floats(values, "--scan")
 
 
-def _compiled(file, out_dir):
+def _compiled(file, out_dir, force: bool = False):
     """(CompiledModel, BuildResult) of FILE; a model error is printed as andyc check does (exit 1)."""
     try:
-        return andyc.compile_model(file, out_dir)
+        return andyc.compile_model(file, out_dir, force)
     except SpecError as exc:
         _fail_spec(exc)
     except SimulationError as exc:
-        raise click.UsageError(str(exc))
+        raise Refused(str(exc))
 
 
 @main.command()
@@ -463,8 +523,8 @@ def _compiled(file, out_dir):
               help="Steps of the fixed-step methods, each adjusted to divide --t-end (default: T/100 .. T/10000).")
 @click.option("--tols", default=None, metavar="R1,R2|geom:A:B:N",
               help="Tolerances (rtol = atol) of the adaptive methods (default: 1e-3 .. 1e-10).")
-@click.option("--t-end", default=10.0, show_default=True, help="Horizon T, s.")
-@click.option("--repeats", default=3, show_default=True, help="Wall time: the best of this many runs.")
+@click.option("--t-end", default=10.0, show_default=True, type=POSITIVE, help="Horizon T, s.")
+@click.option("--repeats", default=3, show_default=True, type=Number(1, 1000, integer=True), help="Wall time: the best of this many runs.")
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
 @click.option("-o", "--out", "out_dir", default="runs", show_default=True, metavar="DIR",
               help="Writes DIR/<name>_work_precision.csv, .png and .svg.")
@@ -479,8 +539,12 @@ def bench(file, methods, steps, tols, t_end, repeats, sets, reference, out_dir, 
     from andyc.analysis.sweep import reference as reference_run
     from andyc.analysis.workprecision import DEFAULT_TOLS, draw, sweep, write_csv
 
+    check_folder(out_dir, [file])
+    check_folder(build_dir, [file])
     model = _compiled(file, build_dir)[0]
-    overrides = _parse_sets(sets)
+    for suffix in (".csv", ".png", ".svg"):
+        check_output(Path(out_dir) / f"{model.name}_work_precision{suffix}", [file], "work-precision file")
+    overrides = parse_sets(sets)
     chosen = _methods(methods, "--methods") if methods else (
         ["rk4", "projection", "lagrange", "baumgarte", "DOP853"] if model.nc else ["rk4", "DOP853"])
     options = {"parameters": {k: v for k, v in overrides.items() if k not in model.input_names},
@@ -498,8 +562,8 @@ def bench(file, methods, steps, tols, t_end, repeats, sets, reference, out_dir, 
                    f"{p.rhs:>8} {p.wall:>9.2e}  {p.status[:60]}")
 
     try:
-        ref, points = sweep(model, chosen, t_end, _floats(steps, "--steps"),
-                            _floats(tols, "--tols") or DEFAULT_TOLS, repeats, progress=show, reference=ref,
+        ref, points = sweep(model, chosen, t_end, floats(steps, "--steps"),
+                            floats(tols, "--tols") or DEFAULT_TOLS, repeats, progress=show, reference=ref,
                             **options)
     except SimulationError as exc:
         raise click.UsageError(str(exc))
@@ -516,12 +580,12 @@ def bench(file, methods, steps, tols, t_end, repeats, sets, reference, out_dir, 
               help="Fixed-step methods to scan (default: rk4; with constraints projection, lagrange, baumgarte too).")
 @click.option("--steps", default=None, metavar="H1,H2|geom:A:B:N",
               help="Steps, each adjusted to divide the horizon (default: geom:T/20:T/20000:31).")
-@click.option("--horizon", "horizons", multiple=True, type=float, metavar="T",
+@click.option("--horizon", "horizons", multiple=True, type=POSITIVE, metavar="T",
               help="Horizon(s), s; one map each (default: 10).")
-@click.option("--tol", default=1e-3, show_default=True,
+@click.option("--tol", default=1e-3, show_default=True, type=POSITIVE,
               help="Accurate: the state error at T within TOL x the reference's amplitude.")
-@click.option("--blowup", default=1e3, show_default=True, help="Blown up: |x| past this x the reference's largest.")
-@click.option("--residual-tol", default=1e-6, show_default=True, help="Constraints lost: a residual past this.")
+@click.option("--blowup", default=1e3, show_default=True, type=Number(1, low_open=True), help="Blown up: |x| past this x the reference's largest.")
+@click.option("--residual-tol", default=1e-6, show_default=True, type=POSITIVE, help="Constraints lost: a residual past this.")
 @click.option("--gains", default=None, metavar="W1,W2|geom:A:B:N",
               help="A second axis: Baumgarte gains stiffness w^2 and damping 2w at each w, 1/s (critical damping "
                    "at rate w for a unit effective mass; the gains must be parameters).")
@@ -544,8 +608,14 @@ def stability(file, methods, steps, horizons, tol, blowup, residual_tol, gains, 
 
     if gains and scan_values:
         raise click.UsageError("give --gains or --scan, not both: a map has one second axis")
+    check_folder(out_dir, [file])
+    check_folder(build_dir, [file])
     model = _compiled(file, build_dir)[0]
-    overrides = _parse_sets(sets)
+    for horizon in horizons or (10.0,):
+        for suffix in (".csv", ".png", ".svg"):
+            check_output(Path(out_dir) / f"{model.name}_stability_T{horizon:g}{suffix}", [file],
+                         "stability file")
+    overrides = parse_sets(sets)
     chosen = _methods(methods, "--methods") if methods else (
         ["rk4", "projection", "lagrange", "baumgarte"] if model.nc else ["rk4"])
     adaptive = [m for m in chosen if m not in ("rk4", "projection", "lagrange", "baumgarte")]
@@ -555,7 +625,7 @@ def stability(file, methods, steps, horizons, tol, blowup, residual_tol, gains, 
     options = {"parameters": {k: v for k, v in overrides.items() if k not in model.input_names},
                "inputs": {k: v for k, v in overrides.items() if k in model.input_names}}
     try:
-        variants = (baumgarte_rates(model, _floats(gains, "--gains")) if gains else
+        variants = (baumgarte_rates(model, floats(gains, "--gains")) if gains else
                     parameter_values(*_scanned(model, scan_values)) if scan_values else None)
     except SimulationError as exc:
         raise click.BadParameter(str(exc), param_hint="--gains")
@@ -563,7 +633,7 @@ def stability(file, methods, steps, horizons, tol, blowup, residual_tol, gains, 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     for horizon in horizons or (10.0,):
-        grid = _floats(steps, "--steps") or geometric(horizon / 20, horizon / 20000, 31)
+        grid = floats(steps, "--steps") or geometric(horizon / 20, horizon / 20000, 31)
         click.echo(f"{model.name}: stability over T = {horizon:g} s, {len(grid)} steps x {len(chosen)} methods"
                    + (f" x {len(variants)} values of {axis}" if variants else ""))
 
@@ -582,9 +652,10 @@ def stability(file, methods, steps, horizons, tol, blowup, residual_tol, gains, 
             click.echo(f"{method}{at}: largest accurate step {'none' if accurate is None else f'{accurate:.4g} s'}; "
                        + (f"fails from h = {failing:.4g} s ({why})" if failing else "no failure in the scan"))
         stem = out / f"{model.name}_stability_T{horizon:g}"
-        write_csv(verdicts, stem.with_suffix(".csv"))
+        table = stem.with_name(stem.name + ".csv")          # (not with_suffix: the horizon may hold a '.')
+        write_csv(verdicts, table)
         figures = draw_map(verdicts, ref, model.name, stem, axis)
-        click.echo(f"wrote {stem.with_suffix('.csv')}, " + ", ".join(map(str, figures)))
+        click.echo(f"wrote {table}, " + ", ".join(map(str, figures)))
 
 
 @main.command()
@@ -614,11 +685,19 @@ def plot(run_file, out, animate, fps, frames_max):
         given = [name for name, value in (("--fps", fps), ("--frames-max", frames_max)) if value is not None]
         if given:
             raise click.BadParameter("only with --animate", param_hint=" and ".join(given))
-    run = read_h5(run_file)
+    out = out or str(Path(run_file).with_suffix(".gif" if animate else ".png"))
+    check_output(out, [run_file], "plot")
+    if not animate:
+        check_output(Path(out).with_name(Path(out).stem + "_sticks.png"), [run_file], "plot")
+    try:
+        run = read_h5(run_file)
+    except (OSError, KeyError, ValueError) as exc:
+        raise click.BadParameter(f"{run_file}: not a run file that andyc sim wrote ({exc})",
+                                 param_hint="RUN_FILE") from None
     if animate:
         from andyc.plot import animate_run, animation_writer
 
-        out, fps = out or str(Path(run_file).with_suffix(".gif")), fps or 30
+        fps = fps or 30
         if not run.frames:
             raise click.BadParameter(f"{run_file}: this run of {run.model} logged no frames to animate; re-run it "
                                      f"with `andyc sim MODEL.yaml --frames all --out {run_file}`",
@@ -632,7 +711,6 @@ def plot(run_file, out, animate, fps, frames_max):
         click.echo(f"wrote {out} ({info['frames']} frames, {info['seconds']:.1f} s at {info['fps']:.3g} fps, {pace}; "
                    f"rendered in {info['render_seconds']:.1f} s)")
         return
-    out = out or str(Path(run_file).with_suffix(".png"))
     plot_run(run, out)
     click.echo(f"wrote {out}")
     if stick_edges(run):

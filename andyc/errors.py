@@ -17,7 +17,8 @@ class Diagnostic:
 
     def __str__(self) -> str:
         text = f"{self.file}:{self.line}: {self.path or '<document>'}: {self.message}"
-        return f"{text}; {self.hint}" if self.hint else text
+        # Printable: a key or a file name may hold control characters (a terminal's escape sequences).
+        return printable(f"{text}; {self.hint}" if self.hint else text)
 
 
 class SpecError(Exception):
@@ -30,6 +31,13 @@ class SpecError(Exception):
 
 class SimulationError(Exception):
     """A run that cannot start (bad option, inconsistent state)."""
+
+
+def printable(text: str) -> str:
+    """`text` on one line: every character that is not printable (line breaks, NUL, lone surrogates) as its
+    backslash escape, so that text from a model or a user's code cannot start a line of its own."""
+    return "".join(ch if ch.isprintable() else ch.encode("unicode_escape", "backslashreplace").decode("ascii")
+                   for ch in text)
 
 
 def format_path(path) -> str:

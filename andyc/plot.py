@@ -34,6 +34,7 @@ from matplotlib.backend_bases import FigureCanvasBase  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from andyc.runtime.run import Run  # noqa: E402
+from andyc.outputs import write_atomic  # noqa: E402
 
 QUATERNION = ("_qw", "_qx", "_qy", "_qz")
 POSITION = ("_x", "_y", "_z")
@@ -41,12 +42,14 @@ POSITION = ("_x", "_y", "_z")
 
 def plot_run(run: Run, out) -> None:
     """Write the figure of `run` to `out` (PNG)."""
-    figure_for(run).savefig(out, dpi=110)
+    with write_atomic(out) as tmp:
+        figure_for(run).savefig(tmp, dpi=110)
 
 
 def plot_sticks(run: Run, out, count: int = 10) -> None:
     """Write the stick figure of `run` to `out` (PNG); see `sticks_figure`."""
-    sticks_figure(run, count=count).savefig(out, dpi=110)
+    with write_atomic(out) as tmp:
+        sticks_figure(run, count=count).savefig(tmp, dpi=110)
 
 
 def figure_for(run: Run) -> Figure:
@@ -633,7 +636,8 @@ def animate_run(run: Run, out, fps: int = 30, max_frames: int = 300, dpi: int = 
     fig, update = animation_figure(run, samples, dpi)
     anim = animation.FuncAnimation(fig, update, frames=len(samples), blit=False, repeat=False,
                                    cache_frame_data=False)
-    anim.save(out, writer=writer, dpi=dpi, progress_callback=progress)      # before each frame: frames done so far
+    with write_atomic(out) as tmp:
+        anim.save(tmp, writer=writer, dpi=dpi, progress_callback=progress)  # before each frame: frames done so far
     if progress:
         progress(len(samples), len(samples))
     seconds = len(samples) / fps

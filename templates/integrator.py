@@ -42,10 +42,16 @@ def update_inputs(inputs, t, x, p, d, flow, u, data):
 
 
 @njit(cache=True, error_model="numpy")
-def rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, inputs, u, data, p, d, flow, out, M, G, S, k, xt):
+def rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, inputs, u, data, p, d, flow, out, M, G, S, k, xt,
+             scale):
     """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status.
 
-    Stage s evaluates at t + c_s h, x + c_s h k_(s-1), c = (0, 1/2, 1/2, 1).
+    Stage s evaluates at t + c_s h, x + c_s h k_(s-1), c = (0, 1/2, 1/2, 1). A step whose largest
+    entry exceeds GROWTH_LIMIT times `scale` (the largest entry of the states so far, at least 1)
+    is DIVERGED: motion that is followed at all never grows by orders of magnitude in one step; a
+    diverging solution (a constraint turning singular, a step far past the method's stability
+    bound) does, within a few steps. (Against the run's largest entry, not the step start's, so that
+    a stiff oscillator whose speed is large where its position is small does not count as growth.)
     """
     nx = x.shape[0]
     for s in range(4):
@@ -59,11 +65,15 @@ def rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, inputs, u, da
         if status != OK:
             return status
     total = 0.0
+    grown = 0.0
     for j in range(nx):
         out[j] = x[j] + h / 6.0 * (k[0, j] + 2.0 * k[1, j] + 2.0 * k[2, j] + k[3, j])
         total += out[j]
+        grown = max(grown, abs(out[j]))
     if not math.isfinite(total):
         return NONFINITE
+    if grown > GROWTH_LIMIT * scale:
+        return DIVERGED
     if do_project:
         if update_inputs(inputs, t + h, out, p, d, flow, u, data) != OK:
             return INPUT_FAILED
@@ -83,7 +93,7 @@ def crosses(direction, g_start, g_end):
 
 @njit(cache=True, error_model="numpy")
 def locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, inputs, u, data, p, d, flow,
-           g_start, g_end, xb, xc, M, G, S, k, xt, counts):
+           g_start, g_end, xb, xc, M, G, S, k, xt, counts, scale):
     """Root of guard m on the step (t, x) -> t + h, as a bracket [a, b] no wider than tol.
 
     Illinois (modified regula falsi) with a bisection whenever the bracket
@@ -105,7 +115,7 @@ def locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, inputs,
         width = b - a
         counts[1] += 1
         status = rk4_step(mode, do_project, constrain, e0, energy_tol, t, c, x, inputs, u, data, p, d, flow, xc,
-                          M, G, S, k, xt)
+                          M, G, S, k, xt, scale)
         if status == OK:
             status = update_inputs(inputs, t + c, xc, p, d, flow, u, data)
         if status != OK:
@@ -125,17 +135,23 @@ def locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, inputs,
     return a, OK
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i_end, every, t, flow, x, inputs,
             u, data, p, d, out_t, out_x, out_u, out_flow, out_d, row, g0, x_event, M, G, S, k, xt, x1, xb, xc, counts):
     """Integrate from time t (on step i: t0 + i dt <= t < t0 + (i + 1) dt) to the grid point i_end,
     stopping early at a jump or a failure. x, d, g0 and the logs are updated in place; every
     `every`-th grid point is logged at out_*[row] (out_u: the inputs there). counts[0] += steps
-    taken (a step cut by a jump counts twice), counts[1] += trial steps of event location.
+    taken (a step cut by a jump counts twice), counts[1] += trial steps of event location,
+    counts[2] = the rows logged so far. It runs without the GIL, so that a watchdog thread can
+    write those rows should the loop never return (see andyc.runtime.interrupts).
 
     Returns (i, row, status, t, flow, jump): jump is the index of the jump applied at t (x_event
     holds the state just before it), or -1.
     """
+    counts[2] = row
+    scale = 1.0
+    for j in range(x.shape[0]):
+        scale = max(scale, abs(x[j]))
     if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
         return i, row, INPUT_FAILED, t, flow, -1
     for m in range(NJ):
@@ -147,7 +163,7 @@ def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i
         if h > 1e-14 * max(1.0, abs(t_next)):
             counts[0] += 1
             status = rk4_step(mode, do_project, constrain, e0, energy_tol, t, h, x, inputs, u, data, p, d, flow,
-                              x1, M, G, S, k, xt)
+                              x1, M, G, S, k, xt, scale)
             if status != OK:
                 return i, row, status, t, flow, -1
             best, best_tau = -1, h
@@ -160,7 +176,7 @@ def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i
                 g1 = guard(m, t_next, x1, u, p, d)
                 if crosses(JUMP_DIRECTION[m], g0[m], g1):
                     tau, status = locate(m, mode, do_project, constrain, e0, energy_tol, tol, t, h, x, inputs,
-                                         u, data, p, d, flow, g0[m], g1, xb, xc, M, G, S, k, xt, counts)
+                                         u, data, p, d, flow, g0[m], g1, xb, xc, M, G, S, k, xt, counts, scale)
                     if status == OK:
                         status = update_inputs(inputs, t + tau, xb, p, d, flow, u, data)
                     if status != OK:
@@ -179,6 +195,8 @@ def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i
                 status = jump(best, t, x, u, p, d, M, G, S)
                 return i, row, status, t, JUMP_TARGET[best], best
             x[:] = x1
+            for j in range(x.shape[0]):
+                scale = max(scale, abs(x[j]))
         t = t_next
         i += 1
         if i % every == 0:
@@ -190,10 +208,11 @@ def advance(mode, do_project, constrain, e0, energy_tol, event_tol, t0, dt, i, i
             out_flow[row] = flow
             out_d[row] = d
             row += 1
+            counts[2] = row
     return i, row, OK, t, flow, -1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def instant(mode, t, x, inputs, u, data, p, d, flow, xdot, M, G, S):
     """The first jump (in priority order) out of `flow` that happens at once at (t, x), or -1.
 

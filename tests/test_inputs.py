@@ -212,7 +212,7 @@ def test_a_controller_returning_the_wrong_shape_names_the_return_line(compiled, 
 
 @pytest.mark.parametrize("text, message", [
     ("def control(t, x):\n    return 0.0\n", ":1: control(t, x) must take four arguments (t, x, d, p)"),
-    ("def contrl(t, x, d, p):\n    return 0.0\n", ": defines no function control(t, x, d, p)"),
+    ("def contrl(t, x, d, p):\n    return 0.0\n", ":1: defines no function control(t, x, d, p)"),
     ("import numpy as np\n\nK = np.load('missing.npy')\n", ":3: importing the controller raised FileNotFoundError"),
 ])
 def test_a_controller_file_that_cannot_be_used_is_refused(compiled, tmp_path, text, message):

@@ -31,6 +31,7 @@ import numpy as np
 from andyc.analysis.sweep import Point, Reference, divides, run_point
 from andyc.errors import SimulationError
 from andyc.analysis.sweep import reference as reference_run
+from andyc.outputs import write_atomic
 
 ACCURATE, INACCURATE, FAILED = "accurate", "inaccurate", "failed"
 COLOURS = {ACCURATE: "#2ca02c", INACCURATE: "#ffbf00", FAILED: "#d62728"}
@@ -157,7 +158,7 @@ def boundaries(verdicts: list[Verdict]) -> dict:
 
 def write_csv(verdicts: list[Verdict], path: Path) -> None:
     fields = list(asdict(verdicts[0].point)) + ["variant", "verdict", "reason"]
-    with open(path, "w", newline="") as fh:
+    with write_atomic(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["step" if f == "setting" else f for f in fields])
         for v in verdicts:
@@ -194,9 +195,10 @@ def draw_map(verdicts: list[Verdict], ref: Reference, title: str, stem: Path, ax
     fig.suptitle(f"{title}: stability over T = {ref.t_end:g} s")
     axes[0].legend([Line2D([], [], marker="s", ls="", color=c) for c in COLOURS.values()], list(COLOURS),
                    loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
-    paths = [stem.with_suffix(".png"), stem.with_suffix(".svg")]
+    paths = [stem.with_name(stem.name + ".png"), stem.with_name(stem.name + ".svg")]    # (the stem may hold a '.')
     for path in paths:
-        fig.savefig(path, dpi=110)
+        with write_atomic(path) as tmp:
+            fig.savefig(tmp, dpi=110, format=path.suffix[1:])
     return paths
 
 

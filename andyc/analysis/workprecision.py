@@ -21,6 +21,7 @@ from pathlib import Path
 from andyc.analysis.sweep import Point, Reference, divides, run_point
 from andyc.analysis.sweep import reference as reference_run
 from andyc.runtime.simulate import FIXED_STEP
+from andyc.outputs import write_atomic
 
 DEFAULT_TOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
 
@@ -47,7 +48,7 @@ def sweep(model, methods, t_end: float, steps=None, tols=DEFAULT_TOLS, repeats: 
 
 def write_csv(points: list[Point], path: Path) -> None:
     fields = list(asdict(points[0]))
-    with open(path, "w", newline="") as fh:
+    with write_atomic(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(fields)
         for p in points:
@@ -72,7 +73,8 @@ def draw(points: list[Point], ref: Reference, title: str, stem: Path) -> list[Pa
         ax.grid(alpha=0.3, which="both")
     axes[1].legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
     fig.suptitle(textwrap.fill(f"{title}: work-precision over T = {ref.t_end:g} s (reference: {ref.source})", 110))
-    paths = [stem.with_suffix(".png"), stem.with_suffix(".svg")]
+    paths = [stem.with_name(stem.name + ".png"), stem.with_name(stem.name + ".svg")]    # (the stem may hold a '.')
     for path in paths:
-        fig.savefig(path, dpi=110)
+        with write_atomic(path) as tmp:
+            fig.savefig(tmp, dpi=110, format=path.suffix[1:])
     return paths

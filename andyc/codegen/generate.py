@@ -8,9 +8,10 @@ when nothing that matters changed.
 
 from __future__ import annotations
 
+import ast
 import hashlib
-import json
-import os
+import math
+import pprint
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,6 +21,7 @@ import sympy as sp
 
 import andyc
 from andyc.errors import format_path
+from andyc.outputs import check_output, create_once, write_text
 from andyc.codegen.printer import function_body, to_code
 from andyc.symbolic.model import SymbolicModel
 
@@ -62,11 +64,12 @@ def module_path(out_dir, name: str) -> Path:
 def existing_build_key(path: Path) -> str | None:
     """The BUILD_KEY line of a generated module, read without importing it."""
     try:
-        with open(path) as fh:
+        with open(path, encoding="utf-8", errors="replace") as fh:
             for line in fh:
                 if line.startswith("BUILD_KEY = "):
-                    return json.loads(line.split("=", 1)[1])
-    except OSError:
+                    key = ast.literal_eval(line.split("=", 1)[1].strip())
+                    return key if isinstance(key, str) else None
+    except (OSError, ValueError, SyntaxError):
         return None
     return None
 
@@ -100,16 +103,17 @@ def _hybrid_functions(model: SymbolicModel, pool: dict) -> list:
              **{name: f"x[{nq + i}]" for i, name in enumerate(model.spec.speed_names)},
              **{x.name: f"d[{i}]" for i, x in enumerate(model.spec.discrete)}}
     out = []
-    for j in model.hybrid.jumps:
+    for k, j in enumerate(model.hybrid.jumps):
         arrow = f"jump '{j.name}' ({model.hybrid.flows[j.source]} -> {model.hybrid.flows[j.target]})"
+        key = _jump_key(k, j.name)
         out += [
-            _function(model, pool, f"guard_{j.name}", "t, x, u, p, d", f"Guard of {arrow}.",
+            _function(model, pool, f"guard_{key}", "t, x, u, p, d", f"Guard of {arrow}.",
                       [("g", j.guard)], returns="g"),
-            _function(model, pool, f"guard_rate_{j.name}", "t, x, u, p, d, xdot",
+            _function(model, pool, f"guard_rate_{key}", "t, x, u, p, d, xdot",
                       f"d/dt of the guard of {arrow}, given xdot.", [("g", j.guard_rate)], returns="g"),
-            _function(model, pool, f"enabled_{j.name}", "t, x, u, p, d",
+            _function(model, pool, f"enabled_{key}", "t, x, u, p, d",
                       f"Enabling condition of {arrow}: >= 0 where it may happen.", [("e", j.enabled)], returns="e"),
-            _function(model, pool, f"reset_{j.name}", "t, x, u, p, d",
+            _function(model, pool, f"reset_{key}", "t, x, u, p, d",
                       f"Resets of {arrow}, all from the values before the jump.",
                       [(index[name], e) for name, e in j.resets], returns="None"),
         ]
@@ -120,6 +124,12 @@ def _hybrid_functions(model: SymbolicModel, pool: dict) -> list:
                          [(f"U[{f}, {i}]", e) for f, inputs in enumerate(model.hybrid.flow_inputs)
                           for i, e in inputs.items()]))
     return out
+
+
+def _jump_key(k: int, name: str) -> str:
+    """The part of jump k's function names after guard_, reset_, ...: its index keeps them apart (jumps 'x'
+    and 'rate_x' would both give guard_rate_x), its name keeps them readable."""
+    return f"{k}_{name}"
 
 
 def _closed_form(model: SymbolicModel) -> dict | None:
@@ -138,9 +148,9 @@ def _closed_form(model: SymbolicModel) -> dict | None:
                       for name in states]}
 
 
-def _padded(rows: list[list[int]], width: int) -> str:
-    """A (len(rows), width) int64 array literal, -1 past each row's entries."""
-    return repr([r + [-1] * (width - len(r)) for r in rows])
+def _padded(rows: list[list[int]], width: int) -> list:
+    """The entries of a (len(rows), width) int64 array, -1 past each row's entries."""
+    return [r + [-1] * (width - len(r)) for r in rows]
 
 
 def _hybrid_context(model: SymbolicModel) -> dict:
@@ -148,14 +158,14 @@ def _hybrid_context(model: SymbolicModel) -> dict:
     nh = model.constraints.nh
     return {
         "flows": h.flows, "initial_flow": h.initial,
-        "flow_sets_input": repr([[i in inputs for i in range(len(model.inputs))] for inputs in h.flow_inputs]),
-        "flow_rows": _padded(h.flow_rows, nc), "flow_nrows": repr([len(r) for r in h.flow_rows]),
-        "flow_nhrows": repr([sum(1 for i in r if i < nh) for r in h.flow_rows]),
-        "jumps": [{"name": j.name, "source": j.source, "target": j.target, "direction": j.direction,
+        "flow_sets_input": [[i in inputs for i in range(len(model.inputs))] for inputs in h.flow_inputs],
+        "flow_rows": _padded(h.flow_rows, nc), "flow_nrows": [len(r) for r in h.flow_rows],
+        "flow_nhrows": [sum(1 for i in r if i < nh) for r in h.flow_rows],
+        "jumps": [{"name": j.name, "key": _jump_key(k, j.name), "source": j.source, "target": j.target, "direction": j.direction,
                    "priority": j.priority, "impact": bool(j.impact_rows),
-                   "source_name": h.flows[j.source], "target_name": h.flows[j.target]} for j in h.jumps],
+                   "source_name": h.flows[j.source], "target_name": h.flows[j.target]} for k, j in enumerate(h.jumps)],
         "impact_rows": _padded([j.impact_rows for j in h.jumps], nc),
-        "impact_nrows": repr([len(j.impact_rows) for j in h.jumps]),
+        "impact_nrows": [len(j.impact_rows) for j in h.jumps],
     }
 
 
@@ -219,22 +229,22 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
     context = {
         "version": andyc.__version__, "source": Path(spec.file).name, "spec_sha256": spec.sha256,
         "build_key": key, "name": spec.name,
-        "description": (spec.description or "").strip().replace('"""', "'''"),
+        "description": spec.description or "",
         "coordinates": [c.name for c in spec.coordinates],
         "speeds": spec.speed_names,
         "signals": [s.name for s in spec.signals],
         "quaternions": quaternions,
         "parameters": list(spec.parameters),
-        "parameter_defaults": repr([v for _, v in spec.parameters.values()]),
+        "parameter_defaults": [v for _, v in spec.parameters.values()],
         "inputs": list(spec.inputs),
-        "input_defaults": repr([v for _, v in spec.inputs.values()]),
+        "input_defaults": [v for _, v in spec.inputs.values()],
         "input_expressions": spec.input_expressions,
         "frames": frames, "operations": operations,
         "frame_parents": [next(f.parent for f in spec.frames if f.name == name) for name in frames],
         "nh": cons.nh, "nc": cons.nc, "constraint_rows": cons.rows, "multipliers": cons.multipliers,
-        "constraint_gains": repr([(c.name, "holonomic" if c.holonomic else "nonholonomic",
-                                   _gain_parameter(spec, c.stiffness), _gain_parameter(spec, c.damping))
-                                  for c in spec.constraints]),
+        "constraint_gains": [(c.name, "holonomic" if c.holonomic else "nonholonomic",
+                              _gain_parameter(spec, c.stiffness), _gain_parameter(spec, c.damping))
+                             for c in spec.constraints],
         "conserves_energy": spec.conserves_energy,
         "constraint_where": [[spec.source.line(w), format_path(w)] for c in spec.constraints for w in c.row_where],
         "initial": {"unpack": _parameter_unpack(model, initial), "state": values},
@@ -252,60 +262,90 @@ def _gain_parameter(spec, gain) -> str | None:
     return next((name for name, (symbol, _) in spec.parameters.items() if gain == symbol), None)
 
 
+def literal(value) -> str:
+    """Python source of plain data (text, finite numbers, booleans, None, and lists, tuples and dicts of
+    them), written by repr (pprint's, for long values). The templates write every value through this (`| py`), and text from a model
+    file reaches a generated file only this way: as a literal that reads back equal, never as code, and
+    never inside a comment or docstring, where a quote, a backslash or a line break could end it."""
+    _check_plain(value)
+    return pprint.pformat(value, width=110, sort_dicts=False)
+
+
+def _check_plain(value) -> None:
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"{value!r} has no literal in generated code")
+    if isinstance(value, (list, tuple)):
+        for v in value:
+            _check_plain(v)
+    elif isinstance(value, dict):
+        for k, v in value.items():
+            _check_plain(k)
+            _check_plain(v)
+    elif not (value is None or isinstance(value, (str, bool, int, float))):
+        raise TypeError(f"{type(value).__name__} is not plain data")
+
+
 def _environment() -> jinja2.Environment:
-    return jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATES), keep_trailing_newline=True,
-                              undefined=jinja2.StrictUndefined)
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATES), keep_trailing_newline=True,
+                             undefined=jinja2.StrictUndefined, autoescape=False)
+    env.filters["py"] = literal
+    return env
 
 
-_DIRECTION = {-1: "falling", 0: "either way", 1: "rising"}
+_DIRECTION = {-1: "falling", 0: "either", 1: "rising"}
 
 
 def render_jumps(model: SymbolicModel) -> str:
-    """The user's jump template: one documented, empty function per jump."""
+    """The user's jump template: what the model file says of each jump (as data), and one documented, empty
+    function per jump."""
     spec = model.spec
-    jumps = []
+    jumps = {}
     for j in spec.jumps:
         w = j.written
-        resets = ", ".join(f"{k} := {v}" for k, v in (w.get("reset") or {}).items())
-        impact = w.get("impact", "none")
-        impact = impact if isinstance(impact, str) else f"restitution {impact['restitution']}"
-        enabled = w.get("enabled")
-        jumps.append({"name": j.name, "source_name": j.source, "target_name": j.target, "guard": w["guard"],
-                      "direction_name": _DIRECTION[j.direction],
-                      "enabled": " and ".join(enabled) if isinstance(enabled, list) else enabled,
-                      "applied": (f"resets {resets}" if resets else "no resets") + f"; impact {impact}"})
+        jumps[j.name] = {"from": j.source, "to": j.target, "guard": _plain(w["guard"]),
+                         "direction": _DIRECTION[j.direction], "enabled": _plain(w.get("enabled")),
+                         "reset": _plain(w.get("reset") or {}), "impact": _plain(w.get("impact", "none"))}
     states = ([c.name for c in spec.coordinates] + spec.speed_names + [s.name for s in spec.signals])
     return _environment().get_template("jumps.py.j2").render(
         name=spec.name, version=andyc.__version__, source=Path(spec.file).name, jumps=jumps, states=states,
         discrete=[x.name for x in spec.discrete], parameters=list(spec.parameters), inputs=list(spec.inputs))
 
 
+def _plain(value):
+    """A value of the model file as plain data for `literal` (numbers and text as they are, anything else
+    as its text)."""
+    if value is None or isinstance(value, (str, bool, int)) or (isinstance(value, float) and math.isfinite(value)):
+        return value
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    return str(value)
+
+
 def jumps_path(out_dir, name: str) -> Path:
     return Path(out_dir) / name / f"{name}_jumps.py"
 
 
-def _write(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".py.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
-
-
 def generate(model: SymbolicModel, out_dir="build") -> BuildResult:
     """Write the module for `model` into out_dir/<name>/ (always; see pipeline.build for skipping),
-    and the jump template <name>_jumps.py unless it exists (it is the user's)."""
+    and the jump template <name>_jumps.py unless it exists (it is the user's). Both are written whole
+    (andyc.outputs); OutputError, before anything is written, when either would overwrite a model file."""
     start = time.perf_counter()
-    key = build_key(model.spec.sha256)
+    spec = model.spec
+    path = module_path(out_dir, spec.name)
+    jumps = jumps_path(out_dir, spec.name) if spec.jumps else None
+    for target in (path, jumps):
+        if target is not None:
+            check_output(target, spec.files, "generated module" if target == path else "jumps file")
+    key = build_key(spec.sha256)
     source, operations = render(model, key)
-    path = module_path(out_dir, model.spec.name)
-    _write(path, source)
-    result = BuildResult(model.spec.name, path, False, key, {"generate": time.perf_counter() - start}, operations)
-    if model.spec.jumps:
-        result.jumps_path = jumps_path(out_dir, model.spec.name)
-        if result.jumps_path.exists():
-            result.jumps_kept = True
-            text = result.jumps_path.read_text()
-            result.jumps_missing = [j.name for j in model.spec.jumps if f"def {j.name}(" not in text]
-        else:
-            _write(result.jumps_path, render_jumps(model))
+    write_text(path, source)
+    result = BuildResult(spec.name, path, False, key, {"generate": time.perf_counter() - start}, operations)
+    if jumps is not None:
+        result.jumps_path = jumps
+        result.jumps_kept = not create_once(jumps, render_jumps(model))
+        if result.jumps_kept:
+            text = jumps.read_text(encoding="utf-8", errors="replace")
+            result.jumps_missing = [j.name for j in spec.jumps if f"def {j.name}(" not in text]
     return result

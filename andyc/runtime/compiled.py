@@ -11,6 +11,7 @@ import hashlib
 import importlib.util
 import inspect
 import sys
+import traceback
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -136,7 +137,10 @@ def load_compiled(path) -> CompiledModel:
     spec = importlib.util.spec_from_file_location(mod_name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[mod_name] = module
-    spec.loader.exec_module(module)
+    try:
+        spec.loader.exec_module(module)         # this imports the user's <name>_jumps.py too
+    except (Exception, SystemExit) as exc:
+        raise SimulationError(_import_failure(path, exc)) from None
     model = CompiledModel(
         module=module, path=path, name=module.NAME, spec_sha256=module.SPEC_SHA256,
         nq=module.NQ, nv=module.NV, ns=module.NS, nx=module.NX, state_names=tuple(module.STATES),
@@ -163,6 +167,19 @@ def load_compiled(path) -> CompiledModel:
     if model.closed_form is not None:
         model.closed_form(0.0, u, p)
     return model
+
+
+def _import_failure(path: Path, exc: BaseException) -> str:
+    """Why importing the generated module at path failed: most likely in the user's jumps file beside it."""
+    jumps = path.with_name(f"{path.stem}_jumps.py")
+    what = "called sys.exit()" if isinstance(exc, SystemExit) else f"raised {type(exc).__name__}: {exc}"
+    if isinstance(exc, SyntaxError) and exc.filename and Path(exc.filename) == jumps:
+        return f"{jumps}:{exc.lineno}: {exc.msg}; fix it, or delete the file to get a fresh template"
+    line = next((f.lineno for f in reversed(traceback.extract_tb(exc.__traceback__)) if Path(f.filename) == jumps),
+                None)
+    if line is not None:
+        return f"{jumps}:{line}: importing it {what}; fix it, or delete the file to get a fresh template"
+    return f"{path}: importing the generated module {what}; rebuild it with `andyc build --force`"
 
 
 def _sample_arguments(model: CompiledModel):
@@ -197,7 +214,7 @@ def compile_integrator(model: CompiledModel, function=None, data=None) -> None:
     module.advance(0, False, False, 0.0, -1.0, 1e-12, 0.0, 1e-3, 0, 0, 1, 0.0, flow, x.copy(), function, ws.u, data,
                    p, d.copy(), t_log.copy(), x_log.copy(), u_log.copy(), f_log.copy(), d_log.copy(), 1, ws.g0,
                    ws.x_event, ws.M, ws.G, ws.S, ws.k, ws.x_tmp, ws.x_step, ws.x_near, ws.x_trial,
-                   np.zeros(2, dtype=np.int64))
+                   np.zeros(3, dtype=np.int64))
     module.instant(0, 0.0, x.copy(), function, ws.u, data, p, d.copy(), flow, ws.xdot, ws.M, ws.G, ws.S)
     module.update_inputs(function, 0.0, x, p, d, flow, ws.u, data)
     if driven:

@@ -53,6 +53,9 @@ from andyc.errors import SimulationError
 from andyc.spec.expressions import TIME, ExpressionError, parse
 
 RAISED, WRONG_SHAPE = 1.0, 2.0          # failure kinds in the record
+# What the user's code may raise and the run reports: its exceptions, and sys.exit(), which must not end
+# andyc (a KeyboardInterrupt still does).
+USER_ERRORS = (Exception, SystemExit)
 _RECORD = 3                             # kind, t, number of values returned; then x
 
 
@@ -117,11 +120,18 @@ class InputSource:
                     f"{_expected(model)}")
         try:
             c.function(t, x, d.copy(), p.copy())
-        except Exception as exc:        # the user's code: report it, keep the run's data
-            return f"{_where(c.path, _user_line(exc, c.path))}: control raised {type(exc).__name__}: {exc} at t = {t:.9g} s"
+        except USER_ERRORS as exc:        # the user's code: report it, keep the run's data
+            return f"{_where(c.path, _user_line(exc, c.path))}: control {raised(exc)} at t = {t:.9g} s"
         return (f"{c.path}: control raised an exception in compiled code at t = {t:.9g} s (Numba keeps no message), "
                 f"but not when called again as Python there; check indexing past the end of an array, which "
                 f"Numba does not catch")
+
+
+def raised(exc: BaseException) -> str:
+    """What the user's code raised, in words: `ValueError: text`, or that it called sys.exit()."""
+    if isinstance(exc, SystemExit):
+        return f"called sys.exit({'' if exc.code is None else repr(exc.code)})"
+    return f"raised {type(exc).__name__}: {exc}"
 
 
 def _where(path: Path, line: int | None) -> str:
@@ -153,7 +163,7 @@ def _return_line(function, t, x, d, p) -> int | None:
     sys.setprofile(profile)
     try:
         function(t, x, d.copy(), p.copy())
-    except Exception:
+    except USER_ERRORS:
         pass
     finally:
         sys.setprofile(old)
@@ -285,11 +295,18 @@ def read_table(path: Path, name: str, t_end: float | None) -> Table:
     """
     if not path.is_file():
         raise SimulationError(f"{path}: no such file (the table of input {name})")
-    with open(path, newline="") as fh:
-        rows = [(n, row) for n, row in enumerate(csv.reader(fh), start=1)
-                if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            rows = [(n, row) for n, row in enumerate(csv.reader(fh), start=1)
+                    if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
+    except UnicodeDecodeError as exc:
+        line = path.read_bytes()[:exc.start].count(b"\n") + 1
+        raise SimulationError(f"{path}:{line}: not UTF-8 text (the table of input {name}); write it as a CSV "
+                              f"text file") from None
+    except (csv.Error, OSError) as exc:
+        raise SimulationError(f"{path}:1: cannot read the table of input {name}: {exc}") from None
     if not rows:
-        raise SimulationError(f"{path}: empty; write a header row (t,{name}) and one row per time")
+        raise SimulationError(f"{path}:1: empty; write a header row (t,{name}) and one row per time")
     line, header = rows[0]
     header = [h.strip() for h in header]
     time_col = next((i for i, h in enumerate(header) if h in ("t", "time")), None)
@@ -322,13 +339,15 @@ def read_table(path: Path, name: str, t_end: float | None) -> Table:
                                   f"{times[-1]:g}); sort the rows by time, one row per time")
         times.append(cells[0])
         values.append(cells[1])
+    last = rows[-1][0]
     if len(times) < 2:
-        raise SimulationError(f"{path}: {len(times)} data row(s); a table needs two or more (for a constant, "
-                              f"give --input {name}=VALUE)")
+        raise SimulationError(f"{path}:{last}: {len(times)} data row(s); a table needs two or more (for a "
+                              f"constant, give --input {name}=VALUE)")
     if times[0] > 0.0 or (t_end is not None and times[-1] < t_end):
         needed = f"0 .. {t_end:g} s" if t_end is not None else "from t = 0"
-        raise SimulationError(f"{path}: the table covers t = {times[0]:g} .. {times[-1]:g} s but the run needs "
-                              f"{needed}; add rows, or shorten the run")
+        at = rows[1][0] if times[0] > 0.0 else last
+        raise SimulationError(f"{path}:{at}: the table covers t = {times[0]:g} .. {times[-1]:g} s but the run "
+                              f"needs {needed}; add rows, or shorten the run")
     return Table(path, header[col], np.array(times), np.array(values))
 
 
@@ -344,13 +363,12 @@ def load_controller(path: Path, model, p) -> Controller:
     sys.modules[mod_name] = module
     try:
         spec.loader.exec_module(module)
-    except Exception as exc:
-        line = getattr(exc, "lineno", None) if isinstance(exc, SyntaxError) else _user_line(exc, path)
-        raise SimulationError(f"{_where(path, line)}: importing the controller raised {type(exc).__name__}: "
-                              f"{exc}") from None
+    except USER_ERRORS as exc:
+        line = (exc.lineno or 1) if isinstance(exc, SyntaxError) else _user_line(exc, path)
+        raise SimulationError(f"{_where(path, line)}: importing the controller {raised(exc)}") from None
     control = getattr(module, "control", None)
     if not callable(control):
-        raise SimulationError(f"{path}: defines no function control(t, x, d, p); the run calls it for the inputs "
+        raise SimulationError(f"{path}:1: defines no function control(t, x, d, p); the run calls it for the inputs "
                               f"({', '.join(model.input_names)})")
     python = getattr(control, "py_func", control)          # the user may have decorated it with @njit
     line = python.__code__.co_firstlineno
@@ -363,9 +381,9 @@ def load_controller(path: Path, model, p) -> Controller:
     d0 = model.initial_discrete(p)
     try:
         out = python(0.0, x0.copy(), d0.copy(), p.copy())
-    except Exception as exc:
-        raise SimulationError(f"{_where(path, _user_line(exc, path))}: control raised {type(exc).__name__}: {exc} "
-                              f"at t = 0 (the initial state)") from None
+    except USER_ERRORS as exc:
+        raise SimulationError(f"{_where(path, _user_line(exc, path))}: control {raised(exc)} at t = 0 (the "
+                              f"initial state)") from None
     scalar = isinstance(out, (int, float, np.floating, np.integer)) and not isinstance(out, bool)
     shape = np.shape(out) if not scalar else ()
     if not scalar and (len(shape) != 1 or shape[0] != len(model.input_names)):
@@ -383,13 +401,12 @@ def load_controller(path: Path, model, p) -> Controller:
 def _numba_compile(control, python, path: Path):
     """control compiled by Numba for (float64, float64[::1] x 3), or None with a warning naming why."""
     from numba import njit, types
-    from numba.core.errors import NumbaError
 
     array = types.float64[::1]
     jitted = control if hasattr(control, "py_func") else njit(cache=False)(python)
     try:
         jitted.compile((types.float64, array, array, array))
-    except NumbaError as exc:
+    except Exception as exc:        # NumbaError, and the errors Numba raises for bytecode it does not support
         text = str(exc)
         found = re.search(rf'File "[^"]*{re.escape(path.name)}", line (\d+)', text)
         first = next((ln.strip() for ln in text.splitlines() if ln.strip() and not ln.startswith("Failed in")),
@@ -421,20 +438,32 @@ def _compile(model, expressions: dict, tables: dict, ctrl: Controller | None, re
         if ctrl.compiled is None:
             python = ctrl.function
 
+            def guarded(t, x, d, p):
+                # An exception must not leave the object-mode block: raised inside a C callback, it would
+                # stay set behind the compiled integrator's back. The run calls control again as Python
+                # there to say what it raised and where.
+                try:
+                    return np.ascontiguousarray(np.atleast_1d(python(t, x, d, p)), dtype=np.float64), True
+                except BaseException:
+                    return np.zeros(0), False
+
             @njit
             def call_python(t, x, d, p):
-                with objmode(r="float64[::1]"):
-                    r = np.ascontiguousarray(np.atleast_1d(python(t, x, d, p)), dtype=np.float64)
-                return r
+                with objmode(r="float64[::1]", ok="boolean"):
+                    r, ok = guarded(t, x, d, p)
+                return r, ok
             namespace["control"] = call_python
             scalar = False
+            lines += ["    r, ok = control(t, x, d, p)",
+                      "    if not ok:",
+                      f"        return failed(data, {record}, {RAISED}, t, x, 0)"]
         else:
             namespace["control"] = ctrl.compiled
             scalar = ctrl.returns_scalar
-        lines += ["    try:",
-                  "        r = control(t, x, d, p)",
-                  "    except Exception:",
-                  f"        return failed(data, {record}, {RAISED}, t, x, 0)"]
+            lines += ["    try:",
+                      "        r = control(t, x, d, p)",
+                      "    except Exception:",
+                      f"        return failed(data, {record}, {RAISED}, t, x, 0)"]
         if scalar:
             lines += ["    if not SETS[flow, 0]:", "        u[0] = r"]
         else:

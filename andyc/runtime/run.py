@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 
 import andyc
+from andyc.errors import printable
+from andyc.outputs import write_atomic
 
 
 @dataclass
@@ -86,6 +88,11 @@ class Run:
         return [self.jump_names[k] for k in self.events["jump"]]
 
     def attributes(self) -> dict:
+        """The run's metadata as HDF5 attributes; text on one line, control characters and lone surrogates
+        escaped (a status can quote a user's exception or a file name, and HDF5 takes neither NUL nor them)."""
+        return {k: printable(v) if isinstance(v, str) else v for k, v in self._attributes().items()}
+
+    def _attributes(self) -> dict:
         return {"model": self.model, "spec_sha256": self.spec_sha256, "andyc_version": self.andyc_version,
                 "method": self.method, "dt": self.dt, "nq": self.nq, "nv": self.nv, "rtol": self.rtol, "atol": self.atol,
                 "parameters": json.dumps(self.parameters), "inputs": json.dumps(self.inputs),
@@ -94,15 +101,22 @@ class Run:
                 "jump_names": json.dumps(self.jump_names), "frame_parents": json.dumps(self.frame_parents)}
 
     def save(self, path) -> Path:
+        """Write the run to path (.h5 or .csv; a CSV of a hybrid model also writes its events beside it,
+        see events_csv_path), each file under a temporary name renamed into place (andyc.outputs), so an
+        interrupted write never leaves a truncated run file. ValueError for another suffix."""
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        if path.suffix.lower() in (".h5", ".hdf5"):
-            write_h5(self, path)
-        elif path.suffix.lower() == ".csv":
-            write_csv(self, path)
-        else:
+        kind = path.suffix.lower()
+        if kind not in RUN_SUFFIXES:
             raise ValueError(f"unknown run file type '{path.suffix}'; use .h5 or .csv")
+        with write_atomic(path) as tmp:
+            (write_h5 if kind in (".h5", ".hdf5") else write_csv)(self, tmp)
+        if kind == ".csv" and self.jump_names:
+            with write_atomic(events_csv_path(path)) as tmp:
+                write_events_csv(self, tmp)
         return path
+
+
+RUN_SUFFIXES = (".h5", ".hdf5", ".csv")
 
 
 def write_h5(run: Run, path: Path) -> None:
@@ -171,6 +185,8 @@ def read_h5(path) -> Run:
 
 
 def write_csv(run: Run, path: Path) -> None:
+    """The time series as columns, the attributes as `# key: value` lines first (one line each: see
+    Run.attributes)."""
     header = [f"# {k}: {v}" for k, v in run.attributes().items()]
     columns = (["time"] + list(run.state_names) + list(run.discrete_names) + list(run.input_names) + ["flow", "energy"]
                + list(run.multiplier_names)
@@ -181,11 +197,9 @@ def write_csv(run: Run, path: Path) -> None:
     for name, xyz in run.frames.items():
         columns += [f"{name}.x", f"{name}.y", f"{name}.z"]
         data.append(xyz)
-    with open(path, "w") as fh:
+    with open(path, "w", encoding="utf-8", errors="backslashreplace") as fh:
         fh.write("\n".join(header) + "\n")
         np.savetxt(fh, np.hstack(data), delimiter=",", header=",".join(columns), comments="", fmt="%.17g")
-    if run.jump_names:
-        write_events_csv(run, events_csv_path(path))
 
 
 def events_csv_path(path) -> Path:
@@ -197,7 +211,7 @@ def events_csv_path(path) -> Path:
 def write_events_csv(run: Run, path: Path) -> None:
     """One line per jump: time, jump, from, to, then the state and discrete states just after it."""
     ev = run.events
-    with open(path, "w") as fh:
+    with open(path, "w", encoding="utf-8") as fh:
         fh.write(",".join(["time", "jump", "from_flow", "to_flow"] + [f"{n}+" for n in run.state_names]
                           + [f"{n}+" for n in run.discrete_names]) + "\n")
         for r in range(len(ev["time"])):

@@ -17,8 +17,10 @@ to project the state onto the manifold ("project") or to start anyway ("as-is").
 Inputs are constants, expressions, tables or a controller (andyc.runtime.inputs);
 they are evaluated at every stage and logged with the states.
 
-Runs stop, keep their samples and say why when the state becomes non-finite,
-the mass matrix stops being positive definite or a controller fails. Long runs
+Runs stop, keep their samples and say why when the state becomes non-finite
+or grows by orders of magnitude within one step (it diverges), the mass matrix
+stops being positive definite or a controller fails; and when SIGINT or SIGTERM
+arrives or a wall-clock limit passes (andyc.runtime.interrupts). Long runs
 print progress.
 """
 
@@ -28,6 +30,7 @@ import math
 import sys
 import time
 import traceback
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -35,15 +38,19 @@ from scipy import integrate
 
 from andyc.errors import SimulationError
 from andyc.runtime.compiled import CompiledModel, Workspace, compile_integrator
-from andyc.runtime.inputs import InputSource, input_source
+from andyc.runtime.events import EventLog
+from andyc.runtime.inputs import USER_ERRORS, InputSource, input_source, raised
+from andyc.runtime.interrupts import Interrupts
 from andyc.runtime.run import Run
 
-OK, NONFINITE, SINGULAR_MASS, DEPENDENT, INPUT_FAILED = 0, 1, 2, 3, 4     # statuses, as in the generated module
+OK, NONFINITE, SINGULAR_MASS, DEPENDENT, INPUT_FAILED, DIVERGED = 0, 1, 2, 3, 4, 5  # statuses, as in the module
 IDEAL, LAGRANGE, BAUMGARTE = 0, 1, 2                   # how constraint forces are found, as there
 SCIPY_METHODS = {"DOP853": integrate.DOP853, "Radau": integrate.Radau, "LSODA": integrate.LSODA,
                  "RK45": integrate.RK45, "BDF": integrate.BDF}
 FIXED_STEP = ("rk4", "projection", "lagrange", "baumgarte")
 METHODS = FIXED_STEP + tuple(SCIPY_METHODS)
+MAX_STEPS = 1e11            # a day at 10^6 steps per second
+MAX_LOG_BYTES = 16e9
 INIT = ("check", "project", "as-is")
 _MODE = {"rk4": IDEAL, "projection": IDEAL, "lagrange": LAGRANGE, "baumgarte": BAUMGARTE}
 
@@ -78,7 +85,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
              normalize: bool = True, energy_correction: bool | None = None, energy_tol: float = 1e-6,
              init: str = "check", init_tol: float = 1e-6, d0=None, flow0: str | int | None = None,
              event_tol: float = 1e-12, max_instant_jumps: int = 100, zeno_tol: float = 1e-6,
-             stop_after: dict | None = None, controller=None) -> Run:
+             stop_after: dict | None = None, controller=None, interrupts: Interrupts | None = None) -> Run:
     """Integrate `model` from t = 0 to t_end and return the logged Run.
 
     dt is the step of rk4 and the output spacing of the adaptive methods;
@@ -102,6 +109,9 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     zeno_tol seconds ahead). stop_after {jump name: n} ends the run (status
     "finished") right after the n-th occurrence of that jump, with the state
     just after it as the last sample.
+
+    interrupts: what may stop the run from outside (andyc.runtime.interrupts; default: SIGINT and
+    SIGTERM, which then end the run with the status "interrupted: ..." instead of raising).
     """
     if method not in METHODS:
         raise SimulationError(f"unknown method '{method}'; available: {', '.join(METHODS)}")
@@ -113,8 +123,9 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
         raise SimulationError("energy correction needs the projection method and a model that declares "
                               "'conserves_energy: true'" + ("" if model.conserves_energy else
                                                             f" ({model.name} does not)"))
-    if not (t_end > 0 and dt > 0 and every >= 1):
+    if not (math.isfinite(t_end) and math.isfinite(dt) and t_end > 0 and dt > 0 and every >= 1):
         raise SimulationError(f"need t_end > 0, dt > 0 and every >= 1, got t_end={t_end}, dt={dt}, every={every}")
+    _check_size(model, t_end, dt, every)
     p = model.parameters(parameters)
     source = input_source(model, p, inputs, controller, t_end)
     x = np.array(model.initial_state(p) if x0 is None else x0, dtype=np.float64)
@@ -133,44 +144,85 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     if method in ("lagrange", "baumgarte") and model.nc:
         _require_independent_rows(model, method, x, u, p, d, flow)
     bar = Progress(f"{model.name} {method}", t_end, progress)
+    interrupts = interrupts or Interrupts()
     start = time.perf_counter()
+    run_of = _Assembly(model, method, dt, rtol, atol, t_end, p, source, frame_names, events, energy_correction,
+                       initial, start)
     try:
-        if method in FIXED_STEP:
-            log, status, stats = _run_rk4(model, method, x, source, p, d, flow, t_end, dt, every, bar, events,
-                                          energy_correction, energy_tol, normalize)
-        else:
-            log, status, stats = _run_scipy(model, method, x, source, p, d, flow, t_end, dt * every, rtol, atol, bar,
-                                            events)
+        with interrupts.watching():
+            if method in FIXED_STEP:
+                log, status, stats = _run_rk4(model, method, x, source, p, d, flow, t_end, dt, every, bar, events,
+                                              energy_correction, energy_tol, normalize, interrupts, run_of)
+            else:
+                log, status, stats = _run_scipy(model, method, x, source, p, d, flow, t_end, dt * every, rtol, atol,
+                                                bar, events, interrupts, run_of)
+            interrupts.stopped = True
     finally:
         bar.close()
-    stats["wall_seconds"] = time.perf_counter() - start
-    stats["jumps"] = len(events.times)
-    stats.update(initial)
-    t_log, x_log, u_log, f_log, d_log = log
-    n = t_log.shape[0]
-    energy = np.empty(n)
-    model.module.evaluate_energy(t_log, x_log, u_log, p, d_log, energy)
-    phi, c, lam = np.empty((n, model.nh)), np.empty((n, model.nc)), np.empty((n, model.nc))
-    if model.nc:
-        model.module.evaluate_constraints(t_log, x_log, u_log, p, d_log, f_log, phi, c, lam,
-                                          np.empty((model.nv, model.nv)), np.empty(model.nv),
-                                          np.empty((model.module.S_ROWS, model.module.S_WIDTH)))
-    frames_out = {}
-    if frame_names:
-        xyz = np.empty((n, len(model.frame_names), 3))
-        model.module.evaluate_frames(t_log, x_log, u_log, p, d_log, xyz)
-        frames_out = {name: xyz[:, model.frame_names.index(name)] for name in frame_names}
-    return Run(model=model.name, spec_sha256=model.spec_sha256, method=method, dt=dt, nq=model.nq, nv=model.nv,
-               rtol=rtol if method not in FIXED_STEP else 0.0, atol=atol if method not in FIXED_STEP else 0.0,
-               t_end=t_end, parameters=dict(zip(model.parameter_names, map(float, p))),
-               inputs={n: source.drives.get(n, float(v)) for n, v in zip(model.input_names, u_log[0])},
-               state_names=list(model.state_names), time=t_log, state=x_log, input_names=list(model.input_names),
-               input_values=u_log, energy=energy, frames=frames_out, status=status, stats=stats,
-               multiplier_names=list(model.multiplier_names), multipliers=lam, residual_position=phi,
-               residual_velocity=c, energy_correction=bool(energy_correction),
-               flow=f_log, flow_names=list(model.flow_names), discrete_names=list(model.discrete_names),
-               discrete=d_log, events=events.table(), jump_names=list(model.jump_names),
-               frame_parents={name: model.frame_parents[model.frame_names.index(name)] for name in frame_names})
+    return run_of(log, status, stats)
+
+
+@dataclass
+class _Assembly:
+    """Builds the Run of a log: the samples with the energy, the residuals, the multipliers and the frames at
+    each. Called at the end of a run, and by the watchdog on the samples so far (andyc.runtime.interrupts)."""
+    model: CompiledModel
+    method: str
+    dt: float
+    rtol: float
+    atol: float
+    t_end: float
+    p: np.ndarray
+    source: InputSource
+    frame_names: list
+    events: EventLog
+    energy_correction: bool
+    initial: dict               # figures of the initial state's consistency (consistent_initial_state)
+    start: float                # perf_counter() when the run started
+
+    def __call__(self, log, status: str, stats: dict) -> Run:
+        model, p, frame_names, fixed = self.model, self.p, self.frame_names, self.method in FIXED_STEP
+        stats = {**stats, "wall_seconds": time.perf_counter() - self.start, "jumps": len(self.events.times),
+                 **self.initial}
+        t_log, x_log, u_log, f_log, d_log = log
+        n = t_log.shape[0]
+        energy = np.empty(n)
+        model.module.evaluate_energy(t_log, x_log, u_log, p, d_log, energy)
+        phi, c, lam = np.empty((n, model.nh)), np.empty((n, model.nc)), np.empty((n, model.nc))
+        if model.nc:
+            model.module.evaluate_constraints(t_log, x_log, u_log, p, d_log, f_log, phi, c, lam,
+                                              np.empty((model.nv, model.nv)), np.empty(model.nv),
+                                              np.empty((model.module.S_ROWS, model.module.S_WIDTH)))
+        frames_out = {}
+        if frame_names:
+            xyz = np.empty((n, len(model.frame_names), 3))
+            model.module.evaluate_frames(t_log, x_log, u_log, p, d_log, xyz)
+            frames_out = {name: xyz[:, model.frame_names.index(name)] for name in frame_names}
+        held = u_log[0] if n else self.source.held(model.initial_flow)
+        return Run(model=model.name, spec_sha256=model.spec_sha256, method=self.method, dt=self.dt, nq=model.nq,
+                   nv=model.nv, rtol=0.0 if fixed else self.rtol, atol=0.0 if fixed else self.atol, t_end=self.t_end,
+                   parameters=dict(zip(model.parameter_names, map(float, p))),
+                   inputs={n: self.source.drives.get(n, float(v)) for n, v in zip(model.input_names, held)},
+                   state_names=list(model.state_names), time=t_log, state=x_log, input_names=list(model.input_names),
+                   input_values=u_log, energy=energy, frames=frames_out, status=status, stats=stats,
+                   multiplier_names=list(model.multiplier_names), multipliers=lam, residual_position=phi,
+                   residual_velocity=c, energy_correction=bool(self.energy_correction),
+                   flow=f_log, flow_names=list(model.flow_names), discrete_names=list(model.discrete_names),
+                   discrete=d_log, events=self.events.table(), jump_names=list(model.jump_names),
+                   frame_parents={name: model.frame_parents[model.frame_names.index(name)] for name in frame_names})
+
+
+def _check_size(model: CompiledModel, t_end: float, dt: float, every: int) -> None:
+    """Refuse a run whose steps or logged samples no machine could hold, before anything is allocated."""
+    steps = t_end / dt
+    if steps > MAX_STEPS:
+        raise SimulationError(f"t_end / dt = {steps:.3g} steps, past the limit of {MAX_STEPS:.0e}; raise dt or "
+                              f"shorten t_end")
+    width = 2 + model.nx + len(model.input_names) + model.nd
+    size = (steps / every + 2) * width * 8
+    if size > MAX_LOG_BYTES:
+        raise SimulationError(f"the run would log {steps / every:.3g} samples ({size / 1e9:.3g} GB), past the "
+                              f"limit of {MAX_LOG_BYTES / 1e9:g} GB; log fewer with a larger --every, or raise dt")
 
 
 def _flow_index(model: CompiledModel, flow) -> int:
@@ -264,93 +316,16 @@ def consistent_initial_state(model: CompiledModel, x, u, p, d, flow, init: str, 
                           f"corrections); the constraints may have no solution near it: check the initial values")
 
 
-class EventLog:
-    """The jumps of a run, and the three reasons a run stops at one.
-
-    record() logs a jump and returns why the run must stop, or None:
-      - more than max_instant_jumps jumps at one instant (time not advancing
-        by more than the event tolerance), a loop such as a -> b -> a;
-      - Zeno: the last ZENO_WINDOW intervals between jumps each shrink, and
-        the geometric tail they predict, dt_last r / (1 - r) with r the last
-        ratio, puts the accumulation point less than zeno_tol ahead;
-      - stop_after: the n-th occurrence of a named jump (the run finishes).
-    """
-    ZENO_WINDOW = 8
-
-    def __init__(self, model: CompiledModel, event_tol: float, max_instant: int, zeno_tol: float,
-                 stop_after: dict | None):
-        self.model, self.event_tol, self.max_instant, self.zeno_tol = model, event_tol, max_instant, zeno_tol
-        self.stop_after = {}
-        for name, count in (stop_after or {}).items():
-            if name not in model.jump_names:
-                raise SimulationError(f"unknown jump '{name}' in stop_after; jumps of {model.name}: "
-                                      f"{', '.join(model.jump_names) or 'none'}")
-            self.stop_after[model.jump_names.index(name)] = int(count)
-        self.times, self.jumps, self.sources, self.targets = [], [], [], []
-        self.before, self.after, self.discrete = [], [], []
-        self.counts = [0] * model.nj     # occurrences of each jump
-        self.instant = 0
-        self.finished = False           # stopped by stop_after, not by a failure
-
-    def record(self, t, k, x_before, x_after, d_after) -> str | None:
-        jumps = self.model.jump_names
-        same = bool(self.times) and t - self.times[-1] <= self.event_tol * max(1.0, abs(t))
-        self.instant = self.instant + 1 if same else 1
-        self.times.append(float(t))
-        self.jumps.append(int(k))
-        self.sources.append(int(self.model.module.JUMP_SOURCE[k]))
-        self.targets.append(int(self.model.module.JUMP_TARGET[k]))
-        self.before.append(np.array(x_before))
-        self.after.append(np.array(x_after))
-        self.discrete.append(np.array(d_after))
-        self.counts[k] += 1
-        if self.instant > self.max_instant:
-            loop = " -> ".join(jumps[j] for j in self.jumps[-min(6, len(self.jumps)):])
-            return (f"stopped: {self.instant} jumps at t = {t:.12g} s without time advancing (last: {loop}), past "
-                    f"the limit of {self.max_instant}: the guards of these jumps hold again right after each other; "
-                    f"check their directions, enabling conditions and resets")
-        zeno = self.zeno()
-        if zeno is not None:
-            t_inf, ratio = zeno
-            return (f"stopped: Zeno behaviour: the times of jump '{jumps[k]}' accumulate at t = {t_inf:.12g} s "
-                    f"(intervals shrinking by a factor {ratio:.6g} per jump over the last {self.ZENO_WINDOW}; "
-                    f"{len(self.times)} jumps, the last at t = {t:.12g} s, {t_inf - t:.3g} s before the "
-                    f"accumulation point)")
-        if k in self.stop_after and self.counts[k] >= self.stop_after[k]:
-            self.finished = True
-            return "finished"
-        return None
-
-    def zeno(self):
-        """(accumulation time, ratio) when the last jump intervals shrink towards a point within zeno_tol."""
-        n = self.ZENO_WINDOW
-        if len(self.times) < n + 2:
-            return None
-        dts = np.diff(self.times[-(n + 2):])
-        if not np.all(dts > 0) or not np.all(dts[1:] < dts[:-1]):
-            return None
-        ratio = dts[-1] / dts[-2]
-        t_inf = self.times[-1] + dts[-1] * ratio / (1.0 - ratio)
-        return (t_inf, ratio) if t_inf - self.times[-1] < self.zeno_tol else None
-
-    def table(self) -> dict:
-        n, nx, nd = len(self.times), self.model.nx, self.model.nd
-        return {"time": np.array(self.times), "jump": np.array(self.jumps, dtype=np.int32),
-                "from_flow": np.array(self.sources, dtype=np.int32), "to_flow": np.array(self.targets, dtype=np.int32),
-                "state_before": np.array(self.before).reshape(n, nx), "state_after": np.array(self.after).reshape(n, nx),
-                "discrete_after": np.array(self.discrete).reshape(n, nd)}
-
-
 def user_jump(model: CompiledModel, k, t, x, u, p, d) -> str | None:
     """Run the user's function of jump k (<name>_jumps.py); a stop message if it fails."""
     try:
         model.module.user_jump(k, t, x, u, p, d)
-    except Exception as exc:        # the user's code: report it, keep the run's data
+    except USER_ERRORS as exc:      # the user's code: report it, keep the run's data
         path = Path(model.module.__file__).with_name(f"{model.name}_jumps.py")
         line = next((f.lineno for f in reversed(traceback.extract_tb(exc.__traceback__))
                      if Path(f.filename) == path), None)
-        return (f"stopped: {path}{f':{line}' if line else ''}: the function of jump '{model.jump_names[k]}' raised "
-                f"{type(exc).__name__}: {exc} at t = {t:.9g} s")
+        return (f"stopped: {path}{f':{line}' if line else ''}: the function of jump '{model.jump_names[k]}' "
+                f"{raised(exc)} at t = {t:.9g} s")
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(d))):
         return (f"stopped: the function of jump '{model.jump_names[k]}' in {model.name}_jumps.py left the state or "
                 f"the discrete states non-finite at t = {t:.9g} s")
@@ -399,13 +374,15 @@ def _frame_selection(model: CompiledModel, frames) -> list:
 
 
 _STOPPED = {NONFINITE: "the state became non-finite (NaN or Inf)", INPUT_FAILED: "the inputs failed",
+            DIVERGED: "the solution diverges: within one step the state grew past 1000 times its largest value "
+                      "so far (a step far too large for the dynamics, or a singular mass matrix or constraint)",
             SINGULAR_MASS: "the mass matrix is not positive definite",
             DEPENDENT: "the constraint rows are linearly dependent (redundant constraints, or a singular "
                            "configuration); the multipliers are not unique, use --method projection"}
 
 
 def _run_rk4(model, method, x, source, p, d, flow, t_end, dt, every, bar, events, energy_correction, energy_tol,
-             normalize):
+             normalize, interrupts: Interrupts, run_of):
     n_steps = int(round(t_end / dt))
     if abs(n_steps * dt - t_end) > 1e-9 * max(1.0, t_end):
         raise SimulationError(f"t_end = {t_end} is not a whole number of steps dt = {dt}; "
@@ -424,10 +401,22 @@ def _run_rk4(model, method, x, source, p, d, flow, t_end, dt, every, bar, events
     fn, data = source.function_data
     out_t[0], out_x[0], out_u[0], out_f[0], out_d[0] = 0.0, x, inputs_at(model, source, 0.0, x, p, d, flow), flow, d
     i, row, chunk, status, t = 0, 1, 1000, OK, 0.0
-    counts = np.zeros(2, dtype=np.int64)
+    counts = np.zeros(3, dtype=np.int64)            # steps, event trial steps, rows logged (see advance)
+    counts[2] = row
+
+    def partial():
+        """The Run of the rows logged so far, for the watchdog: advance keeps counts[2] up to date."""
+        n = int(counts[2])
+        return run_of(tuple(a[:n].copy() for a in log), "interrupted", _rk4_stats(counts, constrain))
+
+    interrupts.partial = partial
     e0 = module.energy(0.0, x, out_u[0], p, d)
     flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, ws, mode)
     while i < n_steps and status == OK and message is None:
+        message = interrupts.reason()
+        if message is not None:
+            message += f" at t = {t:.9g} s"
+            break
         i_end = min(i + chunk, n_steps)
         tic = time.perf_counter()
         i0 = i
@@ -452,6 +441,8 @@ def _run_rk4(model, method, x, source, p, d, flow, t_end, dt, every, bar, events
         bar(t)
     if status != OK:
         why = source.failure(model, d, p) if status == INPUT_FAILED else f"{_STOPPED[status]} at t = {t:.9g} s"
+        if status == DIVERGED:
+            why += diverging_constraints(model, t, x, ws.u, p, d, flow)
         message = f"stopped: {why}, step {i}; the {row} samples before it are kept"
     elif message is not None and out_t[row - 1] != t:
         out_t[row], out_x[row], out_f[row], out_d[row] = t, x, flow, d
@@ -461,17 +452,43 @@ def _run_rk4(model, method, x, source, p, d, flow, t_end, dt, every, bar, events
     if message is not None and not events.finished and status == OK:
         message += f"; the {row} samples before it are kept"
     status_text = "finished" if message is None or events.finished else message
+    return tuple(a[:row] for a in log), status_text, _rk4_stats(counts, constrain)
+
+
+def _rk4_stats(counts, constrain: bool) -> dict:
     steps, trials = int(counts[0]), int(counts[1])
-    stats = {"steps": steps, "event_trial_steps": trials, "rhs_evaluations": 4 * (steps + trials),
-             "projections": steps + trials if constrain else 0}
-    return tuple(a[:row] for a in log), status_text, stats
+    return {"steps": steps, "event_trial_steps": trials, "rhs_evaluations": 4 * (steps + trials),
+            "projections": steps + trials if constrain else 0}
+
+
+def diverging_constraints(model: CompiledModel, t, x, u, p, d, flow) -> str:
+    """Why a state may have diverged from (t, x), the last sound state, as a clause for the message: the
+    flow's constraint rows nearly dependent there (a singular pose, where the constraint forces that keep
+    the rows grow without bound), or nothing."""
+    rows = _active_rows(model, flow)
+    if not rows:
+        return ""
+    A = np.zeros((model.nc, model.nv))
+    model.module.constraints(t, x, u, p, d, np.empty(model.nh), np.empty(model.nc), A, np.empty(model.nc))
+    M = model.module.mass_matrix(t, x, u, p, d)
+    try:
+        W = A[rows] @ np.linalg.solve(M, A[rows].T)
+        sv = np.linalg.svd(W, compute_uv=False)
+    except np.linalg.LinAlgError:
+        return "; the mass matrix is singular there"
+    if not np.all(np.isfinite(sv)) or sv[-1] < 1e-6 * sv[0]:
+        names = ", ".join(dict.fromkeys(model.constraint_rows[r] for r in rows))
+        return (f"; the constraint rows ({names}) are nearly dependent there (A M^-1 A^T has condition number "
+                f"{sv[0] / max(sv[-1], 1e-300):.3g}): the mechanism reaches a singular pose, where its "
+                f"constraint forces grow without bound")
+    return ""
 
 
 class _Stopped(Exception):
     pass
 
 
-def _run_scipy(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol, bar, events):
+def _run_scipy(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol, bar, events, interrupts, run_of):
     """scipy's solver stepped one step at a time; after each step the guards are checked, a crossing
     is located on the step's dense output (Illinois, to the event tolerance) and the solver restarts
     after the jump."""
@@ -502,6 +519,13 @@ def _run_scipy(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol, 
     out_t, out_x, out_f, out_d = [0.0], [x.copy()], [flow], [d.copy()]
     out_u = [inputs(0.0, x).copy()]
     row, steps, t = 1, 0, 0.0
+
+    def partial():
+        n = min(map(len, (out_t, out_x, out_u, out_f, out_d)))
+        return run_of(_scipy_log(model, out_t[:n], out_x[:n], out_u[:n], out_f[:n], out_d[:n]), "interrupted",
+                      {"steps": steps, "rhs_evaluations": calls[0]})
+
+    interrupts.partial = partial
     try:
         flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, ws, IDEAL)
         while message is None and t < t_end:
@@ -510,6 +534,10 @@ def _run_scipy(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol, 
             watched = [m for m in range(model.nj) if module.JUMP_SOURCE[m] == flow]
             g0 = {m: module.guard(m, t, x, inputs(t, x), p, d) for m in watched}
             while solver.status == "running":
+                message = interrupts.reason()
+                if message is not None:
+                    message += f" at t = {solver.t:.9g} s"
+                    break
                 t_old = solver.t
                 text = solver.step()
                 steps += 1
@@ -552,10 +580,14 @@ def _run_scipy(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol, 
     if message is not None and not events.finished:
         message += f"; the {len(out_t)} samples before it are kept"
     status = "finished" if message is None or events.finished else message
+    return (_scipy_log(model, out_t, out_x, out_u, out_f, out_d), status,
+            {"steps": steps, "rhs_evaluations": calls[0]})
+
+
+def _scipy_log(model, out_t, out_x, out_u, out_f, out_d):
     n = len(out_t)
-    log = (np.array(out_t), np.array(out_x).reshape(n, model.nx), np.array(out_u).reshape(n, len(model.input_names)),
-           np.array(out_f, dtype=np.int64), np.array(out_d).reshape(n, model.nd))
-    return log, status, {"steps": steps, "rhs_evaluations": calls[0]}
+    return (np.array(out_t), np.array(out_x).reshape(n, model.nx), np.array(out_u).reshape(n, len(model.input_names)),
+            np.array(out_f, dtype=np.int64), np.array(out_d).reshape(n, model.nd))
 
 
 def _first_crossing(model, dense, watched, g0, t0, t1, inputs, p, d, event_tol):

@@ -9,6 +9,7 @@ one SpecError carrying all of them, so `andyc check` can print them at once.
 
 from __future__ import annotations
 
+import builtins
 import difflib
 import functools
 import hashlib
@@ -23,7 +24,7 @@ import sympy as sp
 
 from andyc.errors import Diagnostic, SpecError, format_path
 from andyc.spec import urdf
-from andyc.spec.expressions import RESERVED, TIME, ExpressionError, parse, parse_condition
+from andyc.spec.expressions import MODULE_NAMES, RESERVED, TIME, ExpressionError, parse, parse_condition
 from andyc.spec.model import (EITHER, FALLING, RISING, Body, Constraint, Coordinate, Damper, DiscreteState, Flow,
                               Frame, FrameQuantity, Jump, Load, Nonholonomic, Potential, Rotate, Signal, Spec, Speed,
                               Spring, Translate)
@@ -32,6 +33,8 @@ from andyc.spec.yamlpos import SourceMap, load_yaml
 SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "andyc-model.schema.json"
 AXES = {"x": (1, 0, 0), "y": (0, 1, 0), "z": (0, 0, 1),
         "-x": (-1, 0, 0), "-y": (0, -1, 0), "-z": (0, 0, -1)}
+MAX_YAML_BYTES = 2_000_000        # a model of a thousand bodies is ~100 kB; parsing YAML in Python takes ~1 s/MB
+MAX_URDF_BYTES = urdf.MAX_URDF_BYTES
 ELEMENT_SECTIONS = ("bodies", "forces", "torques", "dampers", "springs", "potentials")
 JOINTS = ("dh", "revolute", "prismatic", "ball", "floating", "nonholonomic")
 _KIND = {"parameters": "parameter", "inputs": "input", "coordinates": "coordinate", "speeds": "speed",
@@ -43,6 +46,8 @@ _KIND = {"parameters": "parameter", "inputs": "input", "coordinates": "coordinat
 FRAME_QUANTITIES = {**{a: ("position", i) for i, a in enumerate("xyz")},
                     **{"v" + a: ("velocity", i) for i, a in enumerate("xyz")},
                     **{"w" + a: ("angular_velocity", i) for i, a in enumerate("xyz")}}
+# A jump's function in <model>_jumps.py is named after it: not a builtin, nor a name that file uses.
+JUMP_FILE_NAMES = frozenset(dir(builtins)) | {"math", "np", "JUMPS"}
 QUANTITY_HINT = ("frame quantities: F.x, F.y, F.z (position), F.vx, F.vy, F.vz (velocity), "
                  "F.wx, F.wy, F.wz (angular velocity), for a frame F")
 
@@ -65,6 +70,15 @@ def load(path, unlock: bool = False) -> Spec:
     path = Path(path)
     file = str(path)
     try:
+        if path.exists() and not path.is_file():         # a folder, a pipe (reading it would wait), a device
+            raise SpecError([Diagnostic(file, 1, "", "this is a " + ("folder" if path.is_dir() else "special file")
+                                        + ", not a model file", "give the path of a YAML model or a URDF")])
+        size = path.stat().st_size
+        limit = MAX_URDF_BYTES if path.suffix.lower() == ".urdf" else MAX_YAML_BYTES
+        if size > limit:
+            raise SpecError([Diagnostic(file, 1, "", f"the file has {size / 1e6:.1f} MB, past the limit of "
+                                        f"{limit / 1e6:g} MB for a {'URDF' if limit == MAX_URDF_BYTES else 'model'} "
+                                        "file", "check that this is the model file")])
         raw = path.read_bytes()
     except OSError as exc:
         raise SpecError([Diagnostic(file, 1, "", f"cannot read the file ({exc.strerror})",
@@ -93,7 +107,9 @@ def load(path, unlock: bool = False) -> Spec:
             raise SpecError(sorted(problems, key=lambda d: (d.file, d.line)))
         return _with_urdf(_Builder(data, smap, hashlib.sha256(raw + robot.raw).hexdigest(),
                                    len(robot.data.get("bodies", []))).build(), robot)
-    return _Builder(data, smap, hashlib.sha256(raw).hexdigest()).build()
+    spec = _Builder(data, smap, hashlib.sha256(raw).hexdigest()).build()
+    spec.files = (spec.file,)
+    return spec
 
 
 def _with_urdf(spec: Spec, robot) -> Spec:
@@ -101,6 +117,7 @@ def _with_urdf(spec: Spec, robot) -> Spec:
     joints' bodies are merged before deriving (reduce)."""
     spec.visuals = robot.visuals
     spec.locked = robot.locked
+    spec.files = tuple(dict.fromkeys((spec.file, robot.file)))
     spec.reduce = True
     spec.warnings = robot.warnings + spec.warnings
     return spec
@@ -255,6 +272,8 @@ def _explain(error, path) -> tuple[str, str]:
         if v == "minItems":
             return f"expected at least {lo} item{'s' if lo != 1 else ''}, got {len(inst)}", "add the missing entries"
         return f"expected at most {hi} items, got {len(inst)}", "remove the extra entries"
+    if v == "maxLength":
+        return f"a name of {len(inst)} characters", f"use at most {error.validator_value} characters"
     if v == "pattern":
         return f"{_describe(inst)} is not a valid name", "names start with a letter and use letters, digits and '_'"
     if v in ("enum", "const"):
@@ -280,6 +299,7 @@ class _Builder:
         self.problems: list[Diagnostic] = []
         self.warnings: list[Diagnostic] = []
         self.used: set[sp.Symbol] = set()
+        self.quantity_names: dict[tuple, str] = {}     # (frame, attribute, in frame) -> its symbol's name
 
     def error(self, where, message, hint=""):
         self.problems.append(self.smap.diag(where, message, hint))
@@ -300,9 +320,10 @@ class _Builder:
     def vector(self, values, where, names, context):
         return sp.Matrix([self.expr(v, where + (i,), names, context) for i, v in enumerate(values)])
 
-    def constant(self, value, where):
-        """An expression of parameters only, with its value at the defaults."""
-        e = self.expr(value, where, self.param_names, "only parameters are allowed here")
+    def constant(self, value, where, allow_time: bool = False):
+        """An expression of parameters only, with its value at the defaults (allow_time: t too, for the
+        callers that say themselves why t cannot be used)."""
+        e = self.expr(value, where, self.param_names, "only parameters are allowed here", allow_time=allow_time)
         try:
             return e, float(e.subs(self.defaults))
         except (TypeError, ValueError):
@@ -339,7 +360,7 @@ class _Builder:
                        for name, entry in (d.get("speeds") or {}).items()]
         self.discrete = []
         for name, value in (d.get("discrete") or {}).items():
-            initial = self.constant(value, ("discrete", name))[0]
+            initial = self.constant(value, ("discrete", name), allow_time=True)[0]
             if TIME in initial.free_symbols:        # (the initial values are computed before t exists)
                 self.error(("discrete", name), f"the initial value {value!r} of discrete state '{name}' depends on t",
                            "give a number or an expression of parameters")
@@ -401,8 +422,13 @@ class _Builder:
                     input_expressions=self.input_expressions, closed_form=closed_form)
 
     def check_names(self):
-        """Every name is unique across the model and not reserved."""
+        """Every name is unique across the model and not reserved; the model's name is no Python module's."""
         d = self.data
+        if keyword.iskeyword(d["name"]) or d["name"] in MODULE_NAMES:
+            self.error(("name",), f"'{d['name']}' is the name of a Python "
+                       + ("keyword" if keyword.iskeyword(d["name"]) else "module")
+                       + f": the generated module {d['name']}.py could not be imported by it, or would hide it",
+                       "choose another name")
         seen: dict[str, tuple] = {}
         self.declared = {}          # name -> its section, for messages
         entries = [(("parameters", n), n) for n in (d.get("parameters") or {})]
@@ -590,6 +616,9 @@ class _Builder:
 
     def axis(self, value, where) -> sp.Matrix:
         vec = AXES[value] if isinstance(value, str) else value
+        if not all(math.isfinite(float(x)) for x in vec):
+            self.error(where, f"the axis {vec} is not finite", "give a direction such as [0, 0, 1] or z")
+            return sp.Matrix([0, 0, 1])
         norm = math.sqrt(sum(float(x) ** 2 for x in vec))
         if norm < 1e-12:
             self.error(where, "the axis is zero", "give a direction such as [0, 0, 1] or z")
@@ -856,9 +885,23 @@ class _Builder:
         if kind != "position" and owner == "world":
             raise ExpressionError(f"'{written}' is always 0: the world frame does not move",
                                   "use the velocity of a moving frame")
-        sym = sp.Symbol(f"fq_{owner}_{attribute}" + ("" if in_frame == "world" else f"_in_{in_frame}"), real=True)
+        sym = sp.Symbol(self.quantity_name(owner, attribute, in_frame), real=True)
         quantities[sym] = FrameQuantity(owner, kind, axis, in_frame)
         return sym
+
+    def quantity_name(self, owner: str, attribute: str, in_frame: str) -> str:
+        """The symbol name of a frame quantity, one per (frame, attribute, in frame) in the whole model: names
+        may contain '_in_' themselves, so a name already given to another quantity gets a numbered suffix."""
+        key = (owner, attribute, in_frame)
+        if key not in self.quantity_names:
+            base = f"fq_{owner}_{attribute}" + ("" if in_frame == "world" else f"_in_{in_frame}")
+            taken = set(self.quantity_names.values())
+            name, n = base, 1
+            while name in taken:
+                n += 1
+                name = f"{base}_{n}"
+            self.quantity_names[key] = name
+        return self.quantity_names[key]
 
     # hybrid automaton -----------------------------------------------------
     def hybrid(self, constraints) -> tuple[list, list, int]:
@@ -883,7 +926,7 @@ class _Builder:
             inputs = {}
             for name, value in (f.get("inputs") or {}).items():
                 if self.known(name, list(self.inputs), where + ("inputs", name), "input"):
-                    inputs[name] = self.constant(value, where + ("inputs", name))[0]
+                    inputs[name] = self.constant(value, where + ("inputs", name), allow_time=True)[0]
                     if TIME in inputs[name].free_symbols:
                         self.error(where + ("inputs", name), f"the value {value!r} of input '{name}' in flow "
                                    f"'{f['name']}' depends on t", "a flow sets its inputs to constants: a number "
@@ -973,6 +1016,9 @@ class _Builder:
         flow_names = [f.name for f in flows]
         ok = self.known(j["from"], flow_names, where + ("from",), "flow")
         ok = self.known(j["to"], flow_names, where + ("to",), "flow") and ok
+        if j["name"] in JUMP_FILE_NAMES:
+            self.error(where + ("name",), f"'{j['name']}' cannot name a jump: the jump's function in the jumps file "
+                       f"(<model>_jumps.py) would hide Python's '{j['name']}'", "choose another name")
         earlier = [k for k, x in enumerate(self.data["hybrid"]["jumps"][:i]) if x["name"] == j["name"]]
         if earlier:
             first = ("hybrid", "jumps", earlier[0], "name")
@@ -1056,7 +1102,7 @@ class _Builder:
         else:
             path = where + ("impact", "restitution")
             before = len(self.problems)
-            restitution, e = self.constant(spec["restitution"], path)
+            restitution, e = self.constant(spec["restitution"], path, allow_time=True)
             if len(self.problems) > before:         # a bad expression is reported already
                 pass
             elif TIME in restitution.free_symbols:
@@ -1084,7 +1130,7 @@ class _Builder:
     def gain(self, gains: dict, key: str, where) -> sp.Expr:
         path = where + ("gains", key)
         before = len(self.problems)
-        value, number = self.constant(gains.get(key, 0), path)
+        value, number = self.constant(gains.get(key, 0), path, allow_time=True)
         if len(self.problems) > before:             # a bad expression is reported already
             return value
         if TIME in value.free_symbols:

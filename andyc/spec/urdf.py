@@ -59,7 +59,7 @@ from pathlib import Path
 import numpy as np
 
 from andyc.errors import Diagnostic, SpecError, format_path
-from andyc.spec.expressions import RESERVED
+from andyc.spec.expressions import MODULE_NAMES, RESERVED
 from andyc.spec.urdfxml import LIST_SECTIONS, MAP_SECTIONS, ONE_DOF, MergedSourceMap, UrdfSourceMap, XmlReader
 from andyc.spec.yamlpos import SourceMap
 
@@ -75,6 +75,10 @@ class UrdfModel:
     visuals: list               # of dict: link, frame, geometry, filename/size, scale, origin, material
     raw: bytes                  # the URDF's bytes (for the spec hash)
     locked: tuple = ()          # the joints held at given values, by their URDF name
+    file: str = ""              # the URDF's path
+
+
+MAX_URDF_BYTES = 50_000_000       # robots are large, and lxml reads them fast
 
 
 def identifier(name: str, kind: str) -> str:
@@ -174,7 +178,8 @@ class _Converter:
         self.entry(("name",), self.r.root, "robot")
         self.entry(("parameters", "g"), self.r.root, "robot")
         self.entry(("gravity",), self.r.root, "robot")
-        self.data["name"] = identifier(self.robot.name or "robot", "robot")
+        name = identifier(self.robot.name or "robot", "robot")
+        self.data["name"] = name + "_robot" if name in MODULE_NAMES else name
         self.coordinate_of = self.coordinates(order, root)
         for link in order:
             self.link_frame(link, root)
@@ -250,6 +255,9 @@ class _Converter:
         label = f"joint[{jname}].mimic"
         master = m.get("joint")
         broken = ("0", None, 0.0)
+        if master == jname:
+            self.r.error(m, label, f"joint '{jname}' mimics itself", "name another joint, or remove the mimic")
+            return broken
         if jname in trail:
             self.r.error(m, label, "mimic joints form a loop: " + " -> ".join(trail + [jname]),
                          "one of them must be an independent joint")
@@ -529,6 +537,9 @@ def read(path, options=None, option_error=None, raw: bytes | None = None) -> Urd
     file = str(path)
     if raw is None:
         try:
+            if path.stat().st_size > MAX_URDF_BYTES:
+                raise SpecError([Diagnostic(file, 1, "", f"the URDF has {path.stat().st_size / 1e6:.1f} MB, past "
+                                            f"the limit of {MAX_URDF_BYTES / 1e6:g} MB", "check that this is the URDF")])
             raw = path.read_bytes()
         except OSError as exc:
             raise SpecError([Diagnostic(file, 1, "", f"cannot read the URDF ({exc.strerror})", "check the path")])
@@ -587,7 +598,8 @@ def read(path, options=None, option_error=None, raw: bytes | None = None) -> Urd
         del data["dampers"]
     if not data["bodies"]:
         del data["bodies"]
-    return UrdfModel(data, UrdfSourceMap(file, converter.entries), warnings, converter.visuals, raw, tuple(o.lock))
+    return UrdfModel(data, UrdfSourceMap(file, converter.entries), warnings, converter.visuals, raw, tuple(o.lock),
+                     file)
 
 
 def merge(data: dict, smap: SourceMap, yaml_path: Path) -> tuple[dict, SourceMap, UrdfModel]:

@@ -90,12 +90,24 @@ class XmlReader:
         self.file = file
         self.problems: list[Diagnostic] = []
         from lxml import etree
+        # A document type can declare entities: an external one reads other files into the robot's names,
+        # nested ones expand a few bytes into gigabytes. A URDF needs neither, and yourdfpy's own parse,
+        # which comes after this one, would expand them.
+        doctype = raw.find(b"<!DOCTYPE")
+        if doctype >= 0:
+            raise SpecError([Diagnostic(file, raw.count(b"\n", 0, doctype) + 1, "",
+                                        "a document type declaration (<!DOCTYPE ...>) in a URDF",
+                                        "remove it: andyc reads URDFs without DTDs or entities")])
         try:
-            self.root = etree.fromstring(raw, etree.XMLParser(remove_comments=True, resolve_entities=False))
+            self.root = etree.fromstring(raw, etree.XMLParser(remove_comments=True, resolve_entities=False,
+                                                              no_network=True))
         except etree.XMLSyntaxError as exc:
             line = exc.lineno or (exc.position[0] if exc.position else 1)
             raise SpecError([Diagnostic(file, line, "", f"invalid XML: {exc.msg}",
                                         "fix the XML syntax at this line (an unclosed tag or a stray character)")])
+        if self.root.getroottree().docinfo.doctype:       # written in another encoding than the check above saw
+            raise SpecError([Diagnostic(file, 1, "", "a document type declaration (<!DOCTYPE ...>) in a URDF",
+                                        "remove it: andyc reads URDFs without DTDs or entities")])
 
     def error(self, element, label: str, message: str, hint: str = ""):
         self.problems.append(Diagnostic(self.file, element.sourceline or 1, label, message, hint))

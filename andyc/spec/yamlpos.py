@@ -4,6 +4,11 @@ PyYAML's composed node tree carries start marks; we construct the plain data
 with the safe loader and walk the node tree beside it to map each document
 path to its (1-based) line. Duplicate keys, which PyYAML would silently
 collapse, are reported instead.
+
+Anchors and aliases are allowed, but a document whose aliases expand past
+MAX_VALUES values ("billion laughs": a few hundred bytes that expand to
+billions of nodes) or refer to themselves is refused before anything walks
+the expanded tree, and so is one nested deeper than MAX_NESTING.
 """
 
 from __future__ import annotations
@@ -13,6 +18,9 @@ import re
 import yaml
 
 from andyc.errors import Diagnostic, SpecError, format_path
+
+MAX_VALUES = 200_000        # values in the document with its aliases expanded (a large URDF-derived model: ~10^4)
+MAX_NESTING = 100           # levels of mappings and lists (a model nests about 6 deep)
 
 
 class SourceMap:
@@ -50,6 +58,48 @@ _Loader.add_implicit_resolver(
     "tag:yaml.org,2002:float",
     re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
     list("-+0123456789."))
+
+
+def _check_expansion(root, file: str) -> None:
+    """Refuse a node graph whose aliases expand past MAX_VALUES values, refer to their own anchor, or nest
+    past MAX_NESTING; in time linear in the distinct nodes (each node's expanded size is computed once)."""
+    if root is None:
+        return
+    size: dict[int, int] = {}
+    open_nodes: set[int] = set()
+    stack = [(root, 1, False)]
+    while stack:
+        node, depth, children_done = stack.pop()
+        key = id(node)
+        if children_done:
+            open_nodes.discard(key)
+            size[key] = 1 + sum(size[id(c)] for c in _children(node))
+            if size[key] > MAX_VALUES:
+                raise SpecError([Diagnostic(file, node.start_mark.line + 1, "",
+                                            f"the document expands to more than {MAX_VALUES} values through its "
+                                            f"anchors and aliases (&name, *name)",
+                                            "write the values out, or use fewer aliases of aliases")])
+            continue
+        if key in size:
+            continue
+        if key in open_nodes:
+            raise SpecError([Diagnostic(file, node.start_mark.line + 1, "",
+                                        "an alias (*name) refers to a value that contains it",
+                                        "an alias may refer only to a value defined before it, outside it")])
+        if depth > MAX_NESTING:
+            raise SpecError([Diagnostic(file, node.start_mark.line + 1, "", "the document is nested too deeply",
+                                        f"nest mappings and lists at most {MAX_NESTING} levels deep")])
+        open_nodes.add(key)
+        stack.append((node, depth, True))
+        stack.extend((c, depth + 1, False) for c in _children(node) if id(c) not in size)
+
+
+def _children(node) -> list:
+    if isinstance(node, yaml.MappingNode):
+        return [n for pair in node.value for n in pair]
+    if isinstance(node, yaml.SequenceNode):
+        return list(node.value)
+    return []
 
 
 def _walk(node, path, lines, dups):
@@ -114,11 +164,15 @@ def load_yaml(text: str, file: str):
     """
     try:
         node = yaml.compose(text, Loader=_Loader)
+        _check_expansion(node, file)
         data = yaml.load(text, Loader=_Loader)
     except yaml.MarkedYAMLError as exc:
         raise SpecError([_syntax_error(exc, text, file)])
     except yaml.YAMLError as exc:
         raise SpecError([Diagnostic(file, 1, "", f"invalid YAML: {exc}", "fix the syntax")])
+    except RecursionError:          # PyYAML's composer recurses once per level
+        raise SpecError([Diagnostic(file, 1, "", "the document is nested too deeply to read",
+                                    f"nest mappings and lists at most {MAX_NESTING} levels deep")])
     lines: dict[tuple, int] = {}
     dups: list = []
     if node is not None:
