@@ -22,6 +22,7 @@ from andyc.codegen.generate import render, render_jumps
 from andyc.runtime.run import Run
 from andyc.symbolic.eom import equations
 from andyc.symbolic.eom import render as render_eom
+from tests.conftest import yaml_text
 
 MODEL = """\
 name: breakout
@@ -66,20 +67,6 @@ def payload(marker) -> str:
     return (f'x """; {run}; _ = """ \'\'\'; {run}; _ = \'\'\' \' " \\ \\N{{ \\x \\u12 \\'
             f'\n{run}\n# \r{run}\r\n\t{run} \x00 \ud800 \udc80 \u2028{run}\u2029 \x0c'
             f' {{{{ 7*7 }}}} {{% raw %}} \\"""{run}"""\\')
-
-
-def yaml_text(text: str) -> str:
-    """`text` as a YAML double-quoted scalar (every character escaped that YAML needs escaped)."""
-    out = []
-    for ch in text:
-        code = ord(ch)
-        if ch in '"\\':
-            out.append("\\" + ch)
-        elif code < 0x20 or 0xD800 <= code <= 0xDFFF or code in (0x2028, 0x2029):
-            out.append(f"\\u{code:04x}")
-        else:
-            out.append(ch)
-    return '"' + "".join(out) + '"'
 
 
 def generated(spec) -> dict:

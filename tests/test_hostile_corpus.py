@@ -26,7 +26,7 @@ import pytest
 from click.testing import CliRunner
 
 from andyc.cli import main
-from tests.conftest import MODELS
+from tests.conftest import MODELS, yaml_text
 
 MARKER = "PWNED"
 RUN = f'__import__("os").system("touch {MARKER}")'
@@ -95,12 +95,6 @@ def ball(old: str, new: str) -> dict:
 
 def model_case(id, old, new, says="", codes=(1,)):
     return Case(id, ["check", "{d}/m.yaml"], ball(old, new), codes, "m.yaml", ("m.yaml",), says)
-
-
-def quoted(text: str) -> str:
-    """text as a YAML double-quoted scalar."""
-    return '"' + "".join("\\" + c if c in '"\\' else f"\\u{ord(c):04x}" if ord(c) < 32 or 0xD800 <= ord(c) < 0xE000
-                         else c for c in text) + '"'
 
 
 def alias_bomb(levels=9, width=9) -> str:
@@ -236,7 +230,7 @@ SCHEMA_CASES = [
 # -- 3. Expressions ---------------------------------------------------------------------------------
 
 def expr_case(id, text, says="", where="mass: m}", template="mass: {}}}"):
-    return model_case(f"expr-{id}", where, template.format(quoted(text)), says)
+    return model_case(f"expr-{id}", where, template.format(yaml_text(text)), says)
 
 
 EXPRESSION_CASES = [
@@ -312,13 +306,13 @@ PAYLOAD = f'x """; {RUN}; _ = """ \'\'\'; {RUN} \\ \\N{{ \n{RUN}\n# \r{RUN}\x00 
 TEXT_CASES = [
     # Free text is data: these models are valid (exit 0), and nothing they hold runs when built.
     Case("description-payload-check", ["check", "{d}/m.yaml"],
-         ball("description: A point mass on a prismatic joint, bouncing.", f"description: {quoted(PAYLOAD)}"),
+         ball("description: A point mass on a prismatic joint, bouncing.", f"description: {yaml_text(PAYLOAD)}"),
          (0,), unchanged=("m.yaml",)),
     Case("file-name-payload-check", ["check", '{d}/evil"""\'#\\ name.yaml'], {'evil"""\'#\\ name.yaml': BALL},
          (0,)),
     Case("description-and-file-name-build", ["build", '{d}/evil"""\'# name.yaml', "-o", "{d}/build"],
          {'evil"""\'# name.yaml': BALL.replace("description: A point mass on a prismatic joint, bouncing.",
-                                               f"description: {quoted(PAYLOAD)}")}, (0,)),
+                                               f"description: {yaml_text(PAYLOAD)}")}, (0,)),
 ]
 
 # -- 5. URDF ----------------------------------------------------------------------------------------

@@ -67,6 +67,7 @@ class Interrupts:
     def watching(self):
         """Install the signal handlers and the watchdog for the duration of a run (main thread only;
         elsewhere, and when nothing is to be watched, a plain block)."""
+        self.start = time.monotonic()          # the limit is on the run, not on the compiling before it
         if threading.current_thread() is not threading.main_thread():
             yield self
             return
