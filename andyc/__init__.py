@@ -8,16 +8,24 @@ The pipeline has four stages, each handing one object to the next::
     simulate(compiled)    -> Run             (andyc.runtime)
 
 `build` and `compile_model` chain the first three; the CLI is a thin layer
-over these functions.
+over these functions. The names are imported on first use, so that a command
+that only checks a model (or prints the version) never imports SciPy or Numba.
 """
 
 __version__ = "0.1.0"
 
-from andyc.errors import Diagnostic, SpecError  # noqa: E402
-from andyc.pipeline import build, compile_model, derive, generate, load  # noqa: E402
-from andyc.runtime.simulate import simulate  # noqa: E402
+_NAMES = {"Diagnostic": "andyc.errors", "SpecError": "andyc.errors",
+          "load": "andyc.pipeline", "derive": "andyc.pipeline", "generate": "andyc.pipeline",
+          "build": "andyc.pipeline", "compile_model": "andyc.pipeline", "simulate": "andyc.runtime.simulate"}
 
-__all__ = [
-    "__version__", "Diagnostic", "SpecError",
-    "load", "derive", "generate", "build", "compile_model", "simulate",
-]
+__all__ = ["__version__", *_NAMES]
+
+
+def __getattr__(name):
+    if name not in _NAMES:
+        raise AttributeError(f"module 'andyc' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(_NAMES[name]), name)
+    globals()[name] = value
+    return value

@@ -18,9 +18,7 @@ import andyc
 from andyc.cli_values import COUNT, NON_NEGATIVE, POSITIVE, TOLERANCE, Number, floats, parse_sets
 from andyc.errors import SimulationError, SpecError, printable
 from andyc.outputs import OutputError, check_folder, check_output, write_atomic, write_text
-from andyc.runtime.compiled import compile_integrator, integrator_compiled
-from andyc.runtime.inputs import InputWarning
-from andyc.runtime.simulate import MAX_STEPS, METHODS
+from andyc.runtime.methods import FIXED_STEP, MAX_STEPS, METHODS
 
 
 def _fail_spec(exc: SpecError) -> None:
@@ -73,18 +71,20 @@ def _reduction(file, spec, model) -> str:
 
 
 def _progress(label: str, unit: str):
-    """A progress callback (done, total) for long work: silent for the first second, then on a terminal one
-    line rewritten once a second, elsewhere a line every 10 s; the last call ends the line."""
+    """A progress callback (done, total) for long work, on a terminal only (stderr): silent for the first
+    second, then one line rewritten once a second; the last call ends the line. Elsewhere (a pipe, a log,
+    a test) it prints nothing, so that output never depends on how fast the machine is."""
     import time
 
-    tty, start, shown = sys.stderr.isatty(), time.monotonic(), [0.0]
+    if not sys.stderr.isatty():
+        return lambda done, total: None
+    start, shown = time.monotonic(), [0.0]
 
     def show(done: int, total: int) -> None:
         seconds = time.monotonic() - start
-        if seconds > 1 and ((done == total and shown[0]) or seconds - shown[0] >= (1 if tty else 10)):
+        if seconds > 1 and ((done == total and shown[0]) or seconds - shown[0] >= 1):
             shown[0] = seconds
-            click.echo(("\r" if tty else "") + f"{label}: {done} of {total} {unit}, {seconds:.0f} s", err=True,
-                       nl=not tty or done == total)
+            click.echo(f"\r{label}: {done} of {total} {unit}, {seconds:.0f} s", err=True, nl=done == total)
     return show
 
 
@@ -339,6 +339,8 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
 
     SIGINT (Ctrl-C) or SIGTERM stop the run and write the samples so far, with the status "interrupted";
     the exit code is then 130 or 143."""
+    from andyc.runtime.compiled import compile_integrator, integrator_compiled
+    from andyc.runtime.inputs import InputWarning
     from andyc.runtime.interrupts import Interrupts
     from andyc.runtime.run import RUN_SUFFIXES
 
@@ -618,7 +620,7 @@ def stability(file, methods, steps, horizons, tol, blowup, residual_tol, gains, 
     overrides = parse_sets(sets)
     chosen = _methods(methods, "--methods") if methods else (
         ["rk4", "projection", "lagrange", "baumgarte"] if model.nc else ["rk4"])
-    adaptive = [m for m in chosen if m not in ("rk4", "projection", "lagrange", "baumgarte")]
+    adaptive = [m for m in chosen if m not in FIXED_STEP]
     if adaptive:
         raise click.BadParameter(f"{', '.join(adaptive)}: the scan is over steps, for fixed-step methods",
                                  param_hint="--methods")

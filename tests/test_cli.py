@@ -56,3 +56,14 @@ def test_sim_usage_errors_exit_2_with_a_message(args, message, build_dir, tmp_pa
     proc = andyc_cli("sim", MODELS / "double_pendulum.yaml", "--t-end", 0.01, "-o", build_dir, *args, cwd=tmp_path)
     assert proc.returncode == 2
     assert message in proc.stderr and "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("args", [["--version"], ["check", str(MODELS / "double_pendulum.yaml")]])
+def test_version_and_check_import_neither_numba_nor_scipy_nor_matplotlib(args):
+    """Start-up: these commands need neither the compiler nor the integrators nor the plots."""
+    code = ("import sys\nfrom andyc.cli import main\ntry:\n    main(sys.argv[1:])\nexcept SystemExit as exc:\n"
+            "    code = exc.code\nprint(sorted(m for m in ('numba', 'scipy', 'matplotlib', 'h5py') if m in sys.modules))\n"
+            "sys.exit(code)\n")
+    proc = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip().splitlines()[-1] == "[]"

@@ -112,6 +112,16 @@ def test_scipy_methods_agree_with_rk4(compiled, method):
     assert np.max(abs(run.state - reference.state)) < 1e-6
 
 
+@pytest.mark.parametrize("t_end, dt", [(0.3, 0.1), (0.7, 0.1), (1.0, 0.3)])
+def test_the_adaptive_methods_last_sample_is_at_t_end(compiled, t_end, dt):
+    """3 * 0.1 is 0.30000000000000004 > 0.3: the grid's last point must still be logged, at t_end."""
+    run = andyc.simulate(compiled("double_pendulum"), t_end, dt=dt, method="DOP853")
+    assert run.finished and run.time[-1] == t_end
+    expected = [k * dt for k in range(int(t_end / dt + 1e-9) + 1)]
+    assert np.allclose(run.time[:len(expected)], expected, rtol=0, atol=1e-15)
+    assert len(run.time) == len(expected) + (expected[-1] < t_end - 1e-12)
+
+
 def test_rebuild_is_skipped_when_the_spec_is_unchanged(tmp_path):
     path = tmp_path / "pendulum.yaml"
     path.write_text((MODELS / "pendulum_a01.yaml").read_text())

@@ -25,9 +25,9 @@ from andyc.outputs import check_output, create_once, write_text
 from andyc.codegen.printer import function_body, to_code
 from andyc.symbolic.model import SymbolicModel
 
-ROOT = Path(__file__).resolve().parents[2]
-TEMPLATES = ROOT / "templates"
-_GENERATOR_SOURCES = ["andyc/symbolic", "andyc/codegen", "andyc/spec", "templates"]
+PACKAGE = Path(__file__).resolve().parents[1]
+TEMPLATES = PACKAGE / "templates"
+_GENERATOR_SOURCES = ["symbolic", "codegen", "spec", "templates", "schemas"]
 
 
 @dataclass
@@ -46,9 +46,9 @@ class BuildResult:
 def generator_fingerprint() -> str:
     h = hashlib.sha256(andyc.__version__.encode())
     for rel in _GENERATOR_SOURCES:
-        for path in sorted((ROOT / rel).rglob("*")):
+        for path in sorted((PACKAGE / rel).rglob("*")):
             if path.suffix in (".py", ".j2", ".json") and path.is_file():
-                h.update(path.relative_to(ROOT).as_posix().encode())
+                h.update(path.relative_to(PACKAGE).as_posix().encode())
                 h.update(path.read_bytes())
     return h.hexdigest()
 

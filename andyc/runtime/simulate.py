@@ -41,16 +41,12 @@ from andyc.runtime.compiled import CompiledModel, Workspace, compile_integrator
 from andyc.runtime.events import EventLog
 from andyc.runtime.inputs import USER_ERRORS, InputSource, input_source, raised
 from andyc.runtime.interrupts import Interrupts
+from andyc.runtime.methods import ADAPTIVE, FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
 from andyc.runtime.run import Run
 
 OK, NONFINITE, SINGULAR_MASS, DEPENDENT, INPUT_FAILED, DIVERGED = 0, 1, 2, 3, 4, 5  # statuses, as in the module
 IDEAL, LAGRANGE, BAUMGARTE = 0, 1, 2                   # how constraint forces are found, as there
-SCIPY_METHODS = {"DOP853": integrate.DOP853, "Radau": integrate.Radau, "LSODA": integrate.LSODA,
-                 "RK45": integrate.RK45, "BDF": integrate.BDF}
-FIXED_STEP = ("rk4", "projection", "lagrange", "baumgarte")
-METHODS = FIXED_STEP + tuple(SCIPY_METHODS)
-MAX_STEPS = 1e11            # a day at 10^6 steps per second
-MAX_LOG_BYTES = 16e9
+SCIPY_METHODS = {name: getattr(integrate, name) for name in ADAPTIVE}
 INIT = ("check", "project", "as-is")
 _MODE = {"rk4": IDEAL, "projection": IDEAL, "lagrange": LAGRANGE, "baumgarte": BAUMGARTE}
 
@@ -513,7 +509,8 @@ def _run_scipy(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol, 
         return xdot.copy()
 
     n_out = int(math.floor(t_end / dt_out + 1e-9)) + 1
-    grid = np.arange(n_out) * dt_out
+    # (3 * 0.1 is 0.30000000000000004: a grid point a rounding past t_end is t_end, or the last sample is lost)
+    grid = np.minimum(np.arange(n_out) * dt_out, t_end)
     if grid[-1] < t_end - 1e-12 * t_end:
         grid = np.append(grid, t_end)
     out_t, out_x, out_f, out_d = [0.0], [x.copy()], [flow], [d.copy()]

@@ -30,7 +30,7 @@ from andyc.spec.model import (EITHER, FALLING, RISING, Body, Constraint, Coordin
                               Spring, Translate)
 from andyc.spec.yamlpos import SourceMap, load_yaml
 
-SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "andyc-model.schema.json"
+SCHEMA_PATH = Path(__file__).resolve().parents[1] / "schemas" / "andyc-model.schema.json"
 AXES = {"x": (1, 0, 0), "y": (0, 1, 0), "z": (0, 0, 1),
         "-x": (-1, 0, 0), "-y": (0, -1, 0), "-z": (0, 0, -1)}
 MAX_YAML_BYTES = 2_000_000        # a model of a thousand bodies is ~100 kB; parsing YAML in Python takes ~1 s/MB
@@ -192,7 +192,7 @@ _ALTERNATIVES = {
 def _explain_one_of(error, path) -> list[tuple]:
     """jsonschema says only 'not valid under any of the given schemas'; say which and why."""
     kind = next((name for name, s in _defs().items() if s == error.schema), None)
-    what, how = _ALTERNATIVES.get(kind, ("value", "see schemas/andyc-model.schema.json"))
+    what, how = _ALTERNATIVES.get(kind, ("value", "see andyc's model schema, andyc/schemas/andyc-model.schema.json"))
     branches = error.schema[error.validator]
     inst = error.instance
     if all("required" in b for b in branches):
@@ -258,7 +258,7 @@ def _explain(error, path) -> tuple[str, str]:
             return f"expected a number or an expression, got {_describe(inst)}", \
                 'write a number, or an expression such as "L/2"'
         how = next((how for kind, (_, how) in _ALTERNATIVES.items() if _defs()[kind] == sch),
-                   _TYPE_HINTS.get(want[0], "see schemas/andyc-model.schema.json"))
+                   _TYPE_HINTS.get(want[0], "see andyc's model schema, andyc/schemas/andyc-model.schema.json"))
         if len(path) == 2 and path[0] in ("coordinates", "speeds") and want == ["object"]:
             value = inst if isinstance(inst, (int, float, str)) and not isinstance(inst, bool) else 0
             how = f"write {{initial: {value}}}" + (", with 'velocity:' for the initial rate"
@@ -281,7 +281,7 @@ def _explain(error, path) -> tuple[str, str]:
         return f"{_describe(inst)} is not allowed here", "use one of: " + ", ".join(map(str, allowed))
     if v == "minProperties":
         return "must not be empty", "declare at least one entry"
-    return error.message, "see schemas/andyc-model.schema.json"
+    return error.message, "see andyc's model schema, andyc/schemas/andyc-model.schema.json"
 
 
 # -- meaning ------------------------------------------------------------------

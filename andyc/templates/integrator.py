@@ -1,5 +1,5 @@
 # -- the integrator ---------------------------------------------------------------
-# (andyc's templates/integrator.py, included verbatim: a fixed-step RK4 loop with
+# (andyc/templates/integrator.py, included verbatim: a fixed-step RK4 loop with
 # event location over this module's functions, compiled and cached with them.)
 #
 # advance() steps along the grid t0 + i dt and returns after a block of steps or
