@@ -183,13 +183,14 @@ def build(file, out_dir, force):
     check_folder(out_dir, [file])
     model, result = _compiled(file, out_dir, force)
     t = result.timings
+    compile = (f"compile {t['compile']:.2f} s ({_plural(result.compiled, 'function')} compiled)" if result.compiled
+               else f"loaded from Numba's cache in {t['compile']:.2f} s")
     if result.skipped:
-        click.echo(f"{result.module_path}: up to date (spec and andyc unchanged); compile {t['compile']:.2f} s")
+        click.echo(f"{result.module_path}: up to date (spec and andyc unchanged); {compile}")
     else:
         ops = sum(result.operations.values())
         click.echo(f"{result.module_path}: built; derive {t['derive']:.2f} s, generate {t['generate']:.2f} s, "
-                   f"compile {t['compile']:.2f} s; {ops} operations "
-                   f"({', '.join(f'{k} {v}' for k, v in result.operations.items())})")
+                   f"{compile}; {ops} operations ({', '.join(f'{k} {v}' for k, v in result.operations.items())})")
     _report_jumps_file(result)
 
 
@@ -339,7 +340,6 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
 
     SIGINT (Ctrl-C) or SIGTERM stop the run and write the samples so far, with the status "interrupted";
     the exit code is then 130 or 143."""
-    from andyc.runtime.compiled import compile_integrator, integrator_compiled
     from andyc.runtime.inputs import InputWarning
     from andyc.runtime.interrupts import Interrupts
     from andyc.runtime.run import RUN_SUFFIXES
@@ -382,9 +382,9 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
     read += [model.path, result.jumps_path]
     for out in outs:
         check_output(out, read, "run file")
-    if not integrator_compiled(model):
-        click.echo(f"{model.name}: compiling the integrator (once per build; Numba caches it) ...", err=True)
-        compile_integrator(model)
+    if result.compiled:
+        click.echo(f"{model.name}: compiled {_plural(result.compiled, 'function')} in {result.timings['compile']:.1f} s "
+                   f"(once per build: Numba caches them)", err=True)
     params = {k: v for k, v in overrides.items() if k not in model.input_names}
     for name in (k for k in overrides if k in model.input_names):
         if name in inputs:

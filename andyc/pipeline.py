@@ -8,6 +8,8 @@ and lets Numba compile (or load its cache).
 from __future__ import annotations
 
 import time
+
+import numpy as np
 from andyc.codegen.generate import BuildResult, build_key, existing_build_key, jumps_path, module_path
 from andyc.codegen.generate import generate as _generate
 from andyc.spec.load import load as _load
@@ -35,12 +37,19 @@ def build(path, out_dir="build", force: bool = False) -> BuildResult:
 
 
 def compile_model(path, out_dir="build", force: bool = False):
-    """Build (if needed) and import a model; returns (CompiledModel, BuildResult)."""
-    from andyc.runtime.compiled import load_compiled
+    """Build (if needed), import a model and compile all that a run needs (its functions and its
+    integrator, or load them from Numba's cache); returns (CompiledModel, BuildResult), with the
+    number of functions Numba compiled (not loaded) in result.compiled."""
+    from andyc.runtime.compiled import compilations, compile_integrator, load_compiled
 
     result = build(path, out_dir, force)
     t0 = time.perf_counter()
     compiled = load_compiled(result.module_path)
+    compile_integrator(compiled)
+    if compiled.input_expressions:          # the integrator's variant that calls the model's input callback
+        data = np.zeros(compiled.nf * len(compiled.input_names) + 3 + compiled.nx)
+        compile_integrator(compiled, compiled.module.model_inputs, data)
     result.timings["compile"] = time.perf_counter() - t0
+    result.compiled = compilations(compiled)
     return compiled, result
 

@@ -128,13 +128,13 @@ def test_importing_the_hostile_module_and_its_jumps_file_runs_no_payload(files):
         assert module.DESCRIPTION == text     # the text is data, read back equal
         assert module.INPUT_EXPRESSIONS == {"F": text}
         assert module.SOURCE.startswith('evil"""')
-        jumps = sys.modules[spec.name + "_jumps"]
+        jumps = sys.modules[module.MODULE_NAME + "_jumps"]
         assert jumps.JUMPS["bounce"]["guard"] == text and jumps.JUMPS["bounce"]["reset"] == {"n": text}
         for function in module.USER_JUMPS:
             assert function(0.0, None, None, None, None) is None
     finally:
-        sys.modules.pop(spec.name, None)
-        sys.modules.pop(spec.name + "_jumps", None)
+        for name in (spec.name, module.MODULE_NAME, module.MODULE_NAME + "_jumps"):
+            sys.modules.pop(name, None)
     assert not marker.exists()
 
 

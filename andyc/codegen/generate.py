@@ -41,6 +41,7 @@ class BuildResult:
     jumps_path: Path | None = None                  # the user's <name>_jumps.py, when the model has jumps
     jumps_kept: bool = False                        # it existed and was left as it was
     jumps_missing: list = field(default_factory=list)  # jumps without a function in a kept file
+    compiled: int = 0                               # functions Numba compiled (not loaded from its cache)
 
 
 def generator_fingerprint() -> str:
@@ -59,6 +60,11 @@ def build_key(spec_sha256: str) -> str:
 
 def module_path(out_dir, name: str) -> Path:
     return Path(out_dir) / name / f"{name}.py"
+
+
+def module_name(name: str, key: str) -> str:
+    """The name a generated module takes in sys.modules, one per build (see MODULE_NAME in the template)."""
+    return f"andyc_{name}_{key[:16]}"
 
 
 def existing_build_key(path: Path) -> str | None:
@@ -119,6 +125,12 @@ def _hybrid_functions(model: SymbolicModel, pool: dict) -> list:
         ]
     out.append(_function(model, pool, "restitution", "p, e", "Coefficient of restitution of each jump's impact.",
                          [(f"e[{k}]", j.restitution) for k, j in enumerate(model.hybrid.jumps)]))
+    inputs = list(model.spec.inputs)
+    for name, expr in model.spec.driven_inputs.items():
+        k = inputs.index(name)
+        out.append(_function(model, pool, f"input_{k}_{name}", "t, x, p, d",
+                             f"Input {name}, as the model drives it: INPUT_EXPRESSIONS[{name!r}].", [("v", expr)],
+                             returns="v"))
     out.append(_function(model, pool, "flow_inputs", "p, U",
                          "Input values a flow sets, into U (flows, inputs); other entries are left as they are.",
                          [(f"U[{f}, {i}]", e) for f, inputs in enumerate(model.hybrid.flow_inputs)
@@ -228,7 +240,7 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
     operations = {f["name"]: f["operations"] for f in functions}
     context = {
         "version": andyc.__version__, "source": Path(spec.file).name, "spec_sha256": spec.sha256,
-        "build_key": key, "name": spec.name,
+        "build_key": key, "name": spec.name, "module_name": module_name(spec.name, key),
         "description": spec.description or "",
         "coordinates": [c.name for c in spec.coordinates],
         "speeds": spec.speed_names,
@@ -239,6 +251,8 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         "inputs": list(spec.inputs),
         "input_defaults": [v for _, v in spec.inputs.values()],
         "input_expressions": spec.input_expressions,
+        "driven_inputs": [{"index": list(spec.inputs).index(n), "function": f"input_{list(spec.inputs).index(n)}_{n}"}
+                          for n in spec.driven_inputs],
         "frames": frames, "operations": operations,
         "frame_parents": [next(f.parent for f in spec.frames if f.name == name) for name in frames],
         "nh": cons.nh, "nc": cons.nc, "constraint_rows": cons.rows, "multipliers": cons.multipliers,

@@ -7,7 +7,6 @@ nothing is allocated inside the integration loop.
 
 from __future__ import annotations
 
-import hashlib
 import importlib.util
 import inspect
 import sys
@@ -132,8 +131,7 @@ class Workspace:
 def load_compiled(path) -> CompiledModel:
     """Import a generated module and compile its functions (or load Numba's cache)."""
     path = Path(path).resolve()
-    # A stable, importable name: Numba's cache re-imports the module by it.
-    mod_name = f"andyc_build_{path.stem}_{hashlib.sha1(str(path).encode()).hexdigest()[:10]}"
+    mod_name = f"andyc_loading_{path.stem}"
     spec = importlib.util.spec_from_file_location(mod_name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[mod_name] = module
@@ -141,6 +139,11 @@ def load_compiled(path) -> CompiledModel:
         spec.loader.exec_module(module)         # this imports the user's <name>_jumps.py too
     except (Exception, SystemExit) as exc:
         raise SimulationError(_import_failure(path, exc)) from None
+    finally:
+        sys.modules.pop(mod_name, None)
+    # The name the module gives itself, which Numba's cache refers to its functions by (this build's, not
+    # an earlier one's of the same name, which the module's own setdefault would have kept).
+    sys.modules[module.MODULE_NAME] = module
     model = CompiledModel(
         module=module, path=path, name=module.NAME, spec_sha256=module.SPEC_SHA256,
         nq=module.NQ, nv=module.NV, ns=module.NS, nx=module.NX, state_names=tuple(module.STATES),
@@ -180,6 +183,17 @@ def _import_failure(path: Path, exc: BaseException) -> str:
     if line is not None:
         return f"{jumps}:{line}: importing it {what}; fix it, or delete the file to get a fresh template"
     return f"{path}: importing the generated module {what}; rebuild it with `andyc build --force`"
+
+
+def compilations(model: CompiledModel) -> int:
+    """How many functions of the module Numba has compiled in this process, rather than loaded from its
+    cache (the misses of its cache)."""
+    total = 0
+    for value in vars(model.module).values():
+        misses = getattr(getattr(value, "stats", None), "cache_misses", None)
+        if misses is not None:
+            total += sum(misses.values())
+    return total
 
 
 def _sample_arguments(model: CompiledModel):

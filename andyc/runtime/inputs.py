@@ -12,7 +12,9 @@ carries what the function reads:
     data = [ U (NF x NU)  |  failure record (3 + NX)  |  tables ]
 
 U holds the constant inputs of each flow (the run's values, then the inputs a
-flow sets itself). When no input is driven, the function is None and the
+flow sets itself). The model's own input expressions are compiled into the
+generated module (input_<k>_<name>, and the callback model_inputs, used as it is
+when the run drives no input itself); the run's own drives are added here. When no input is driven, the function is None and the
 integrator holds u = U[flow] (see the module's integrator). Driven inputs are
 written over U's values, except where the current flow sets them: the model's
 flow wins over the run.
@@ -219,12 +221,12 @@ def input_source(model, p, values: dict | None = None, controller=None, t_end: f
     for name in values:
         if name not in names:
             raise SimulationError(f"unknown input '{name}'; inputs of {model.name}: {', '.join(names) or 'none'}")
-    if controller is None:
-        values = {**dict(model.input_expressions), **values}     # the model's own expressions, unless overridden
+    # The model's own expressions, unless the run drives the input otherwise: compiled into the module.
+    own = {} if controller is not None else {n: text for n, text in model.input_expressions if n not in values}
     numbers = {n: v for n, v in values.items() if _is_number(v)}
     u0 = model.inputs({n: float(v) for n, v in numbers.items()})
     U = model.flow_inputs(u0, p)
-    drives = {}
+    drives = {n: f"expression {text}" for n, text in own.items()}
     expressions, tables = {}, {}
     for name, value in values.items():
         if name in numbers:
@@ -258,7 +260,10 @@ def input_source(model, p, values: dict | None = None, controller=None, t_end: f
     data = np.ascontiguousarray(np.concatenate(data))
     if not drives:
         return InputSource(None, data, nx, model.nf, record)
-    function = _compile(model, expressions, offsets, ctrl, record)
+    if own and not (expressions or tables or ctrl):
+        function = model.module.model_inputs                # the module's own callback
+    else:
+        function = _compile(model, expressions, offsets, ctrl, record, list(own))
     return InputSource(function, data, nx, model.nf, record, drives, ctrl)
 
 
@@ -418,8 +423,9 @@ def _numba_compile(control, python, path: Path):
     return jitted
 
 
-def _compile(model, expressions: dict, tables: dict, ctrl: Controller | None, record: int):
-    """Write, then compile, the callback: the held values, then each driven input unless the flow sets it."""
+def _compile(model, expressions: dict, tables: dict, ctrl: Controller | None, record: int, own: list):
+    """Write, then compile, the callback: the held values, then each driven input unless the flow sets it
+    (`own`: the inputs the module's own expressions drive, by name)."""
     from numba import cfunc, njit, objmode
 
     interpolate, failed = _helpers()
@@ -428,12 +434,16 @@ def _compile(model, expressions: dict, tables: dict, ctrl: Controller | None, re
              f"    for i in range({nu}):",
              f"        u[i] = data[flow * {nu} + i]"]
     index = {n: i for i, n in enumerate(model.input_names)}
+    functions = dict(zip(model.module.INPUT_EXPRESSIONS, model.module.INPUT_FUNCTIONS))
+    for name in own:
+        lines += [f"    if not SETS[flow, {index[name]}]:", f"        u[{index[name]}] = {functions[name]}(t, x, p, d)"]
     for name, code in expressions.items():
         lines += [f"    if not SETS[flow, {index[name]}]:", f"        u[{index[name]}] = {code}"]
     for name, (start, n) in tables.items():
         lines += [f"    if not SETS[flow, {index[name]}]:", f"        u[{index[name]}] = interpolate(data, {start}, {n}, t)"]
     namespace = {"math": math, "np": np, "SETS": np.ascontiguousarray(model.module.FLOW_SETS_INPUT),
-                 "interpolate": interpolate, "failed": failed}
+                 "interpolate": interpolate, "failed": failed,
+                 **{f: getattr(model.module, f) for f in model.module.INPUT_FUNCTIONS}}
     if ctrl is not None:
         if ctrl.compiled is None:
             python = ctrl.function

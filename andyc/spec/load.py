@@ -373,12 +373,13 @@ class _Builder:
         # Nonholonomic velocities may also use every speed: coordinate rates as <name>_dot.
         self.rate_names = {**{f"{c.name}_dot": c.v for c in coords}, **{s.name: s.v for s in self.speeds}}
         self.signals: list[Signal] = []
-        self.input_expressions = {}
+        self.input_expressions, self.driven_inputs = {}, {}
         for n, v in (d.get("inputs") or {}).items():
             if isinstance(v, str):
-                self.expr(v, ("inputs", n), {**self.kin_names, **self.rate_names},
-                          "an input's expression uses t, parameters, coordinates, speeds (<coordinate>_dot) and "
-                          "discrete states")
+                self.driven_inputs[n] = self.expr(
+                    v, ("inputs", n), {**self.kin_names, **self.rate_names},
+                    "an input's expression uses t, parameters, coordinates, speeds (<coordinate>_dot) and "
+                    "discrete states")
                 self.input_expressions[n] = v
 
         frames = self.frames()
@@ -419,7 +420,8 @@ class _Builder:
                     loads=loads, dampers=dampers, springs=springs, potentials=potentials,
                     constraints=constraints, conserves_energy=conserves, discrete=self.discrete, flows=flows,
                     jumps=jumps, initial_flow=initial_flow, warnings=self.warnings,
-                    input_expressions=self.input_expressions, closed_form=closed_form)
+                    input_expressions=self.input_expressions, driven_inputs=self.driven_inputs,
+                    closed_form=closed_form)
 
     def check_names(self):
         """Every name is unique across the model and not reserved; the model's name is no Python module's."""

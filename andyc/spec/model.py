@@ -247,6 +247,7 @@ class Spec:
     locked: tuple = ()          # URDF joints held at given values (urdf: {lock: ...}), by their URDF name
     reduce: bool = False        # merge the bodies fixed to one moving frame before deriving (andyc.symbolic.reduce)
     input_expressions: dict = field(default_factory=dict)  # input name -> the expression text that drives it
+    driven_inputs: dict = field(default_factory=dict)  # input name -> that expression, parsed (sp.Expr)
     files: tuple = ()           # the files the model was read from (the model file; a URDF it names)
     closed_form: dict = field(default_factory=dict)  # state name -> x_i(t) of t, parameters and held inputs
 
