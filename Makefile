@@ -27,6 +27,7 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) bench/run.py
+	$(PY) bench/latency.py
 
 clean:
 	rm -rf build runs .pytest_cache

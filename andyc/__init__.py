@@ -15,7 +15,7 @@ that only checks a model (or prints the version) never imports SciPy or Numba.
 __version__ = "0.1.0"
 
 _NAMES = {"Diagnostic": "andyc.errors", "SpecError": "andyc.errors",
-          "load": "andyc.pipeline", "derive": "andyc.pipeline", "generate": "andyc.pipeline",
+          "load": "andyc.spec.load", "derive": "andyc.symbolic", "generate": "andyc.codegen.generate",
           "build": "andyc.pipeline", "compile_model": "andyc.pipeline", "simulate": "andyc.runtime.simulate"}
 
 __all__ = ["__version__", *_NAMES]

@@ -177,7 +177,7 @@ def check(files):
 @main.command()
 @click.argument("file", type=click.Path(dir_okay=False))
 @click.option("-o", "--out-dir", default="build", show_default=True, help="Build folder; writes DIR/<name>/<name>.py.")
-@click.option("--force", is_flag=True, help="Rebuild even if the spec is unchanged.")
+@click.option("--force", is_flag=True, help="Derive, generate and compile again, even if the equations are unchanged; replaces the build of another model file of the same name.")
 def build(file, out_dir, force):
     """Derive the equations of motion of FILE and generate its module."""
     check_folder(out_dir, [file])
@@ -186,7 +186,7 @@ def build(file, out_dir, force):
     compile = (f"compile {t['compile']:.2f} s ({_plural(result.compiled, 'function')} compiled)" if result.compiled
                else f"loaded from Numba's cache in {t['compile']:.2f} s")
     if result.skipped:
-        click.echo(f"{result.module_path}: up to date (spec and andyc unchanged); {compile}")
+        click.echo(f"{result.module_path}: up to date (equations and andyc unchanged); {compile}")
     else:
         ops = sum(result.operations.values())
         click.echo(f"{result.module_path}: built; derive {t['derive']:.2f} s, generate {t['generate']:.2f} s, "

@@ -105,6 +105,18 @@ def write_text(path, text: str) -> Path:
     return Path(path)
 
 
+def update_text(path, text: str) -> bool:
+    """write_text, unless the file holds `text` already (then it is not touched: its time stamp is
+    what Numba's cache checks); True when written."""
+    try:
+        if Path(path).read_text(encoding="utf-8") == text:
+            return False
+    except (OSError, UnicodeDecodeError):
+        pass
+    write_text(path, text)
+    return True
+
+
 def create_once(path, text: str) -> bool:
     """Write `text` to path only if no file is there, even against a concurrent writer: the whole file is
     written under a temporary name, then linked to path, which fails when path exists. True when written."""

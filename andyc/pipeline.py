@@ -1,37 +1,100 @@
 """The stages, chained: load -> derive -> generate -> compile.
 
-`build` skips derive and generate when the module on disk carries the same
-build key (same spec bytes, same andyc); `compile_model` imports the module
-and lets Numba compile (or load its cache).
+`build` skips derive and generate when the build folder holds equations of the
+same build key (what shapes the equations, and the same andyc), and then only
+rewrites the runtime data in <name>.py if it changed; `compile_model` imports
+the module and lets Numba compile (or load its cache).
 """
 
 from __future__ import annotations
 
+import hashlib
+import re
 import time
+from pathlib import Path
 
 import numpy as np
-from andyc.codegen.generate import BuildResult, build_key, existing_build_key, jumps_path, module_path
-from andyc.codegen.generate import generate as _generate
-from andyc.spec.load import load as _load
-from andyc.symbolic import derive as _derive
 
-load = _load
-derive = _derive
-generate = _generate
+from andyc.codegen.buildfiles import BuildResult, build_key, equations_path, jumps_path, module_path, written_constant
+from andyc.outputs import OutputError
+
+# A YAML model's top-level `name:` line, to find its build before reading the model (see unchanged).
+_NAME_LINE = re.compile(rb"^name:[ \t]*([A-Za-z_][A-Za-z0-9_]*)[ \t]*(?:#.*)?$", re.MULTILINE)
+
+
+def unchanged(path, out_dir="build") -> BuildResult | None:
+    """The build of the YAML model `path` in out_dir/<name>/ when it was made from these very bytes (the
+    model file, and the URDF it names) by this andyc, else None: found from the files' bytes and the
+    build's written constants, without reading the model (so without importing SymPy), which makes a
+    warm `andyc sim` fast. The name comes from the file's `name:` line; a name read wrongly only misses
+    this shortcut (the build found must name this file and hash its bytes)."""
+    path = Path(path)
+    try:
+        if path.suffix.lower() not in (".yaml", ".yml") or path.stat().st_size > 2_000_000:
+            return None
+        found = _NAME_LINE.search(path.read_bytes())
+        if found is None:
+            return None
+        name = found.group(1).decode()
+        front = module_path(out_dir, name)
+        files, key = written_constant(front, "SPEC_FILES"), written_constant(front, "BUILD_KEY")
+        if (written_constant(front, "SOURCE_PATH") != str(path.resolve()) or not isinstance(files, list)
+                or not isinstance(key, str) or written_constant(equations_path(out_dir, name), "BUILD_KEY") != key
+                or build_key(str(written_constant(front, "MEANING_SHA256"))) != key):
+            return None
+        digest = hashlib.sha256(b"".join(Path(f).read_bytes() for f in files)).hexdigest()
+    except (OSError, TypeError):
+        return None
+    jumps = jumps_path(out_dir, name) if written_constant(front, "JUMPS_FILE") else None
+    if digest != written_constant(front, "SPEC_SHA256") or (jumps is not None and not jumps.exists()):
+        return None
+    return BuildResult(name, front, True, key, jumps_path=jumps, jumps_kept=jumps is not None)
+
+
+def load(path, unlock: bool = False):
+    from andyc.spec.load import load as _load
+    return _load(path, unlock)
+
+
+def derive(spec):
+    from andyc.symbolic import derive as _derive
+    return _derive(spec)
+
+
+def generate(model, out_dir="build", force: bool = False) -> BuildResult:
+    from andyc.codegen.generate import generate as _generate
+    return _generate(model, out_dir, force)
 
 
 def build(path, out_dir="build", force: bool = False) -> BuildResult:
-    """Load, derive and generate `path` into out_dir/<name>/, unless up to date."""
+    """Load, derive and generate `path` into out_dir/<name>/, unless its equations are up to date
+    (then only <name>.py's runtime data is rewritten, if it changed: result.skipped).
+
+    OutputError when out_dir/<name>/ holds the build of another model file of the same name (unless
+    `force`): two models never overwrite each other's build silently."""
     t0 = time.perf_counter()
+    result = None if force else unchanged(path, out_dir)
+    if result is not None:
+        result.timings = {"load": time.perf_counter() - t0}
+        return result
     spec = load(path)
     t_load = time.perf_counter() - t0
-    key = build_key(spec.sha256)
+    key = build_key(spec.meaning_sha256)
     target = module_path(out_dir, spec.name)
+    other = written_constant(target, "SOURCE_PATH")
+    if not force and other is not None and other != str(Path(spec.file).resolve()):
+        raise OutputError(f"{target.parent}: holds the build of '{spec.name}' from {other}, and {spec.file} has "
+                          f"the same name; give one of them another `name:`, build it into another folder "
+                          f"(-o DIR), or pass --force to replace that build")
     jumps = jumps_path(out_dir, spec.name) if spec.jumps else None
-    if not force and existing_build_key(target) == key and (jumps is None or jumps.exists()):
+    if not force and written_constant(equations_path(out_dir, spec.name), "BUILD_KEY") == key and (
+            jumps is None or jumps.exists()):
+        from andyc.codegen.generate import write_front
+
+        write_front(spec, out_dir, key)
         return BuildResult(spec.name, target, True, key, {"load": t_load}, jumps_path=jumps, jumps_kept=True)
     model = derive(spec)
-    result = generate(model, out_dir)
+    result = generate(model, out_dir, force)
     result.timings = {"load": t_load, "derive": model.derive_seconds, **result.timings}
     return result
 

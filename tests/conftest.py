@@ -1,4 +1,6 @@
-"""Shared fixtures: models are built once per session into a temporary build folder."""
+"""Shared fixtures. The shipped models are built into one build folder that every worker and every run
+of the suite shares (build/tests: a build is reused by meaning, and Numba's cache with it, so a model
+compiles once, not once per worker and run); other models into a temporary folder per session."""
 
 from pathlib import Path
 
@@ -8,6 +10,7 @@ import andyc
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
+SHIPPED_BUILD = ROOT / "build" / "tests"
 
 
 @pytest.fixture(scope="session")
@@ -16,14 +19,22 @@ def build_dir(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
-def compiled(build_dir):
-    """compiled(name_or_path) -> CompiledModel, built once per session."""
+def shipped_build():
+    """The build folder of the shipped models, shared by workers and runs (see the module's docstring)."""
+    SHIPPED_BUILD.mkdir(parents=True, exist_ok=True)
+    return SHIPPED_BUILD
+
+
+@pytest.fixture(scope="session")
+def compiled(build_dir, shipped_build):
+    """compiled(name_or_path) -> CompiledModel, built once per session (a shipped model: once for all)."""
     cache = {}
 
     def get(model):
         path = Path(model) if str(model).endswith((".yaml", ".yml")) else MODELS / f"{model}.yaml"
         if path not in cache:
-            cache[path] = andyc.compile_model(path, build_dir)[0]
+            shipped = path.resolve().parent == MODELS
+            cache[path] = andyc.compile_model(path, shipped_build if shipped else build_dir)[0]
         return cache[path]
 
     return get

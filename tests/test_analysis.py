@@ -66,10 +66,10 @@ def test_the_sweep_shows_rk4_is_fourth_order(compiled):
     assert all(p.rhs == 4 * round(5.0 / p.setting) for p in points if p.method == "rk4")
 
 
-def test_cli_bench_and_stability_write_their_tables_and_diagrams(tmp_path, build_dir):
+def test_cli_bench_and_stability_write_their_tables_and_diagrams(tmp_path, shipped_build):
     runner = CliRunner()
     result = runner.invoke(main, ["bench", str(MODELS / "stiff_spring.yaml"), "--t-end", "1", "--repeats", "1",
-                                  "--tols", "geom:1e-4:1e-10:5", "-o", str(tmp_path), "--build-dir", str(build_dir)])
+                                  "--tols", "geom:1e-4:1e-10:5", "-o", str(tmp_path), "--build-dir", str(shipped_build)])
     assert result.exit_code == 0, result.output
     with open(tmp_path / "stiff_spring_work_precision.csv") as fh:
         rows = list(csv.DictReader(fh))
@@ -79,7 +79,7 @@ def test_cli_bench_and_stability_write_their_tables_and_diagrams(tmp_path, build
     for suffix in (".png", ".svg"):
         assert (tmp_path / f"stiff_spring_work_precision{suffix}").stat().st_size > 5000
     result = runner.invoke(main, ["stability", str(MODELS / "stiff_spring.yaml"), "--steps", "0.02,0.025,0.03",
-                                  "--horizon", "3", "-o", str(tmp_path), "--build-dir", str(build_dir)])
+                                  "--horizon", "3", "-o", str(tmp_path), "--build-dir", str(shipped_build)])
     assert result.exit_code == 0, result.output
     assert "rk4: largest accurate step none; fails from h = 0.03 s (blew up" in result.output
     assert (tmp_path / "stiff_spring_stability_T3.png").exists()
@@ -140,11 +140,11 @@ def test_baumgarte_gains_past_rk4s_real_bound_fail(ball):
         assert below and all(v.verdict != FAILED for v in below)
 
 
-def test_cli_scans_baumgarte_gains_into_a_map(tmp_path, build_dir):
+def test_cli_scans_baumgarte_gains_into_a_map(tmp_path, shipped_build):
     runner = CliRunner()
     result = runner.invoke(main, ["stability", str(MODELS / "ball_in_bowl.yaml"), "--methods", "baumgarte",
                                   "--gains", "1,100", "--steps", "0.02,0.005", "--horizon", "1", "-o", str(tmp_path),
-                                  "--build-dir", str(build_dir)])
+                                  "--build-dir", str(shipped_build)])
     assert result.exit_code == 0, result.output
     with open(tmp_path / "ball_in_bowl_stability_T1.csv") as fh:
         rows = list(csv.DictReader(fh))
@@ -153,8 +153,8 @@ def test_cli_scans_baumgarte_gains_into_a_map(tmp_path, build_dir):
     assert "baumgarte at Baumgarte w = 100: " in result.output
     assert (tmp_path / "ball_in_bowl_stability_T1.svg").stat().st_size > 5000
     result = runner.invoke(main, ["stability", str(MODELS / "stiff_spring.yaml"), "--gains", "1,10",
-                                  "--build-dir", str(build_dir)])
+                                  "--build-dir", str(shipped_build)])
     assert result.exit_code == 2 and "has no constraints, so no Baumgarte gains to scan" in result.output
     result = runner.invoke(main, ["stability", str(MODELS / "stiff_spring.yaml"), "--scan", "kk=1,2",
-                                  "--build-dir", str(build_dir)])
+                                  "--build-dir", str(shipped_build)])
     assert result.exit_code == 2 and "NAME a parameter of stiff_spring (m, k, x0)" in result.output

@@ -18,7 +18,7 @@ import sys
 import pytest
 
 import andyc
-from andyc.codegen.generate import render, render_jumps
+from andyc.codegen.generate import render, render_front, render_jumps
 from andyc.runtime.run import Run
 from andyc.symbolic.eom import equations
 from andyc.symbolic.eom import render as render_eom
@@ -73,7 +73,8 @@ def generated(spec) -> dict:
     """Every file andyc generates from a model, by name: Python sources and the eom texts."""
     model = andyc.derive(spec)
     eq = equations(model)
-    return {"module.py": render(model, "key")[0], "jumps.py": render_jumps(model),
+    return {"module.py": render_front(spec, "key"), "equations.py": render(model, "key")[0],
+            "jumps.py": render_jumps(model),
             "eom.py": render_eom(eq, "sympy"), "eom.json": render_eom(eq, "json"),
             "eom.tex": render_eom(eq, "latex", standalone=True)}
 
@@ -107,7 +108,7 @@ def files(tmp_path_factory):
     return generated(andyc.load(benign)), generated(spec), text, marker, folder
 
 
-@pytest.mark.parametrize("name", ["module.py", "jumps.py", "eom.py"])
+@pytest.mark.parametrize("name", ["module.py", "equations.py", "jumps.py", "eom.py"])
 def test_generated_python_has_the_benign_shape(files, name):
     benign, hostile, _, marker, _ = files
     assert shape(hostile[name]) == shape(benign[name])
@@ -119,6 +120,7 @@ def test_importing_the_hostile_module_and_its_jumps_file_runs_no_payload(files):
     build = folder / "build" / "breakout"
     build.mkdir(parents=True)
     (build / "breakout.py").write_text(hostile["module.py"], encoding="utf-8")
+    (build / "breakout_equations.py").write_text(hostile["equations.py"], encoding="utf-8")
     (build / "breakout_jumps.py").write_text(hostile["jumps.py"], encoding="utf-8")
     spec = importlib.util.spec_from_file_location("andyc_breakout_test", build / "breakout.py")
     module = importlib.util.module_from_spec(spec)
@@ -128,12 +130,12 @@ def test_importing_the_hostile_module_and_its_jumps_file_runs_no_payload(files):
         assert module.DESCRIPTION == text     # the text is data, read back equal
         assert module.INPUT_EXPRESSIONS == {"F": text}
         assert module.SOURCE.startswith('evil"""')
-        jumps = sys.modules[module.MODULE_NAME + "_jumps"]
+        jumps = sys.modules[spec.name + "_jumps"]
         assert jumps.JUMPS["bounce"]["guard"] == text and jumps.JUMPS["bounce"]["reset"] == {"n": text}
         for function in module.USER_JUMPS:
             assert function(0.0, None, None, None, None) is None
     finally:
-        for name in (spec.name, module.MODULE_NAME, module.MODULE_NAME + "_jumps"):
+        for name in (spec.name, module.MODULE_NAME, spec.name + "_jumps"):
             sys.modules.pop(name, None)
     assert not marker.exists()
 

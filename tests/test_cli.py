@@ -29,10 +29,10 @@ def test_build_then_up_to_date(tmp_path):
     assert "up to date" in second.stdout
 
 
-def test_sim_writes_h5_and_csv_and_plot_draws_them(tmp_path, build_dir):
+def test_sim_writes_h5_and_csv_and_plot_draws_them(tmp_path, shipped_build):
     h5, csv, png = tmp_path / "run.h5", tmp_path / "run.csv", tmp_path / "run.png"
     proc = andyc_cli("sim", MODELS / "double_pendulum.yaml", "--t-end", 2, "--dt", 1e-3, "--every", 10,
-                     "--set", "m2=0.7", "--frames", "tip", "--out", h5, "--out", csv, "-o", build_dir)
+                     "--set", "m2=0.7", "--frames", "tip", "--out", h5, "--out", csv, "-o", shipped_build)
     assert proc.returncode == 0, proc.stderr
     assert "2000 steps" in proc.stdout and "energy" in proc.stdout
     with h5py.File(h5) as f:
@@ -52,8 +52,8 @@ def test_sim_writes_h5_and_csv_and_plot_draws_them(tmp_path, build_dir):
     (["--frames", "hand"], "unknown frame(s) hand"),
     (["--out", "run.txt"], "unknown run file type '.txt'"),
 ])
-def test_sim_usage_errors_exit_2_with_a_message(args, message, build_dir, tmp_path):
-    proc = andyc_cli("sim", MODELS / "double_pendulum.yaml", "--t-end", 0.01, "-o", build_dir, *args, cwd=tmp_path)
+def test_sim_usage_errors_exit_2_with_a_message(args, message, shipped_build, tmp_path):
+    proc = andyc_cli("sim", MODELS / "double_pendulum.yaml", "--t-end", 0.01, "-o", shipped_build, *args, cwd=tmp_path)
     assert proc.returncode == 2
     assert message in proc.stderr and "Traceback" not in proc.stderr
 

@@ -604,5 +604,5 @@ def _import_built(folder: Path) -> None:
         spec.loader.exec_module(module)
         assert module.DESCRIPTION.startswith('x """')
     finally:
-        for name in (spec.name, getattr(module, "MODULE_NAME", ""), getattr(module, "MODULE_NAME", "") + "_jumps"):
+        for name in (spec.name, getattr(module, "MODULE_NAME", ""), spec.name + "_jumps"):
             sys.modules.pop(name, None)

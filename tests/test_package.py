@@ -50,7 +50,7 @@ def test_the_wheel_carries_the_templates_and_the_schema(installed):
     assert where.returncode == 0, where.stderr
     folder, templates, schema = where.stdout.splitlines()
     assert "site-packages" in folder and not folder.startswith(str(ROOT))
-    assert templates == str(["integrator.py", "jumps.py.j2", "module.py.j2"]) and schema == "True"
+    assert templates == str(["equations.py.j2", "integrator.py", "jumps.py.j2", "module.py.j2"]) and schema == "True"
 
 
 def test_check_build_and_sim_run_from_the_wheel_in_another_folder(installed):

@@ -128,7 +128,7 @@ def test_rebuild_is_skipped_when_the_spec_is_unchanged(tmp_path):
     first = andyc.build(path, tmp_path / "build")
     second = andyc.build(path, tmp_path / "build")
     assert not first.skipped and second.skipped
-    path.write_text(path.read_text().replace("L: 1.0", "L: 2.0"))
+    path.write_text(path.read_text().replace("translation: [L, 0, 0]", "translation: [2*L, 0, 0]"))
     third = andyc.build(path, tmp_path / "build")
     assert not third.skipped and third.build_key != first.build_key
 
@@ -187,5 +187,5 @@ def test_generated_code_does_not_depend_on_the_hash_seed(tmp_path):
         env = {**os.environ, "PYTHONHASHSEED": seed}
         subprocess.run([sys.executable, "-m", "andyc.cli", "build", str(MODELS / "chain3d.yaml"), "-o", str(out)],
                        check=True, capture_output=True, env=env)
-        texts.append((out / "chain3d" / "chain3d.py").read_text())
+        texts.append([(out / "chain3d" / name).read_text() for name in ("chain3d.py", "chain3d_equations.py")])
     assert texts[0] == texts[1]

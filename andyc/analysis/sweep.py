@@ -16,7 +16,8 @@ import numpy as np
 import andyc
 from andyc.errors import SimulationError
 from andyc.runtime.inputs import input_source
-from andyc.runtime.simulate import FIXED_STEP, SCIPY_METHODS
+from andyc.runtime.methods import ADAPTIVE
+from andyc.runtime.simulate import FIXED_STEP
 
 REFERENCE_TOL = 1e-13
 REFERENCE_SAMPLES = 200          # the reference's samples: its amplitude (scale) and its jumps
@@ -151,7 +152,7 @@ def run_point(model, ref: Reference, method: str, setting: float, repeats: int =
     """Run `method` at `setting` to ref.t_end and compare with the reference."""
     if method in FIXED_STEP:
         kwargs = {"dt": setting}
-    elif method in SCIPY_METHODS:
+    elif method in ADAPTIVE:
         kwargs = {"dt": ref.t_end / REFERENCE_SAMPLES, "rtol": setting, "atol": setting}
     else:
         raise SimulationError(f"unknown method '{method}'")

@@ -1,19 +1,20 @@
 """SymbolicModel -> build/<name>/<name>.py.
 
-The math goes through `function_body` (cse + ordering); the template only
-wraps it. The build key hashes the spec, the andyc version and the sources of
-the stages that shape the generated code, so a rebuild is skipped exactly
-when nothing that matters changed.
+The math goes through `function_body` (cse + ordering); the templates only
+wrap it. A build is two files: <name>_equations.py, all that Numba compiles,
+which depends only on what shapes the equations, and <name>.py, which loads it
+and holds the runtime data (defaults, initial values, the description). The
+build key hashes what shapes the equations (andyc.spec.meaning), the andyc
+version and the sources of the stages that shape the generated code, so that
+derivation is skipped exactly when nothing that matters changed, and an edit
+of runtime data rewrites <name>.py only, leaving Numba's cache valid.
 """
 
 from __future__ import annotations
 
-import ast
-import hashlib
 import math
 import pprint
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import jinja2
@@ -21,63 +22,13 @@ import sympy as sp
 
 import andyc
 from andyc.errors import format_path
-from andyc.outputs import check_output, create_once, write_text
+from andyc.outputs import check_output, create_once, update_text, write_text
+from andyc.codegen.buildfiles import (PACKAGE, BuildResult, build_key, equations_path, jumps_path, module_name,
+                                     module_path)
 from andyc.codegen.printer import function_body, to_code
 from andyc.symbolic.model import SymbolicModel
 
-PACKAGE = Path(__file__).resolve().parents[1]
 TEMPLATES = PACKAGE / "templates"
-_GENERATOR_SOURCES = ["symbolic", "codegen", "spec", "templates", "schemas"]
-
-
-@dataclass
-class BuildResult:
-    name: str
-    module_path: Path
-    skipped: bool
-    build_key: str
-    timings: dict = field(default_factory=dict)     # seconds per stage
-    operations: dict = field(default_factory=dict)  # function -> sympy op count
-    jumps_path: Path | None = None                  # the user's <name>_jumps.py, when the model has jumps
-    jumps_kept: bool = False                        # it existed and was left as it was
-    jumps_missing: list = field(default_factory=list)  # jumps without a function in a kept file
-    compiled: int = 0                               # functions Numba compiled (not loaded from its cache)
-
-
-def generator_fingerprint() -> str:
-    h = hashlib.sha256(andyc.__version__.encode())
-    for rel in _GENERATOR_SOURCES:
-        for path in sorted((PACKAGE / rel).rglob("*")):
-            if path.suffix in (".py", ".j2", ".json") and path.is_file():
-                h.update(path.relative_to(PACKAGE).as_posix().encode())
-                h.update(path.read_bytes())
-    return h.hexdigest()
-
-
-def build_key(spec_sha256: str) -> str:
-    return hashlib.sha256((spec_sha256 + generator_fingerprint()).encode()).hexdigest()
-
-
-def module_path(out_dir, name: str) -> Path:
-    return Path(out_dir) / name / f"{name}.py"
-
-
-def module_name(name: str, key: str) -> str:
-    """The name a generated module takes in sys.modules, one per build (see MODULE_NAME in the template)."""
-    return f"andyc_{name}_{key[:16]}"
-
-
-def existing_build_key(path: Path) -> str | None:
-    """The BUILD_KEY line of a generated module, read without importing it."""
-    try:
-        with open(path, encoding="utf-8", errors="replace") as fh:
-            for line in fh:
-                if line.startswith("BUILD_KEY = "):
-                    key = ast.literal_eval(line.split("=", 1)[1].strip())
-                    return key if isinstance(key, str) else None
-    except (OSError, ValueError, SyntaxError):
-        return None
-    return None
 
 
 def _unpack(model: SymbolicModel, used: set) -> list[str]:
@@ -90,10 +41,10 @@ def _unpack(model: SymbolicModel, used: set) -> list[str]:
     return lines
 
 
-def _parameter_unpack(model: SymbolicModel, exprs: list) -> str:
-    """Lines reading from p the parameters `exprs` use (for the initial-value functions)."""
+def _parameter_unpack(parameters: list, exprs: list) -> str:
+    """Lines reading from p the parameters (symbols, in order) that `exprs` use (for the initial values)."""
     used = set().union(*(e.free_symbols for e in exprs))
-    return "\n".join(f"    {s} = p[{i}]" for i, s in enumerate(model.parameters) if s in used)
+    return "\n".join(f"    {s} = p[{i}]" for i, s in enumerate(parameters) if s in used)
 
 
 def _function(model, pool, name, args, doc, outputs, returns=None):
@@ -127,10 +78,9 @@ def _hybrid_functions(model: SymbolicModel, pool: dict) -> list:
                          [(f"e[{k}]", j.restitution) for k, j in enumerate(model.hybrid.jumps)]))
     inputs = list(model.spec.inputs)
     for name, expr in model.spec.driven_inputs.items():
-        k = inputs.index(name)
-        out.append(_function(model, pool, f"input_{k}_{name}", "t, x, p, d",
-                             f"Input {name}, as the model drives it: INPUT_EXPRESSIONS[{name!r}].", [("v", expr)],
-                             returns="v"))
+        out.append(_function(model, pool, _input_function(inputs, name), "t, x, p, d",
+                             f"Input {name}, as the model drives it (INPUT_EXPRESSIONS in {model.spec.name}.py).",
+                             [("v", expr)], returns="v"))
     out.append(_function(model, pool, "flow_inputs", "p, U",
                          "Input values a flow sets, into U (flows, inputs); other entries are left as they are.",
                          [(f"U[{f}, {i}]", e) for f, inputs in enumerate(model.hybrid.flow_inputs)
@@ -155,9 +105,7 @@ def _closed_form(model: SymbolicModel) -> dict | None:
         return None
     states = [c.name for c in spec.coordinates] + spec.speed_names + [s.name for s in spec.signals]
     body = function_body([(f"x[{i}]", spec.closed_form[name]) for i, name in enumerate(states)], {})
-    return {"unpack": _unpack(model, body.inputs), "lines": body.lines, "outputs": body.outputs,
-            "where": [[spec.source.line(("closed_form", name)), format_path(("closed_form", name))]
-                      for name in states]}
+    return {"unpack": _unpack(model, body.inputs), "lines": body.lines, "outputs": body.outputs}
 
 
 def _padded(rows: list[list[int]], width: int) -> list:
@@ -182,7 +130,8 @@ def _hybrid_context(model: SymbolicModel) -> dict:
 
 
 def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
-    """The module's source text and the operation count of each function."""
+    """The text of <name>_equations.py (everything Numba compiles: it depends only on what the equations
+    depend on) and the operation count of each function."""
     spec = model.spec
     pool = dict(model.assignments)
     n = model.dof
@@ -230,29 +179,20 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
     for f in functions:
         if f["name"] in ("dynamics", "dynamics_constraints"):
             f["outputs"] += [(t, str(src)) for t, src in mirror]
-    initial = ([c.initial for c in spec.coordinates] + [c.velocity for c in spec.coordinates]
-               + [s.initial for s in spec.speeds] + [s.initial for s in spec.signals])
-    values = [to_code(e) for e in initial]
-    # Each quaternion signal: the index of its w component in x.
     nx_before = len(model.q) + n
-    quaternions = [nx_before + i for i, s in enumerate(spec.signals) if s.component == "qw"]
-    discrete = [x.initial for x in spec.discrete]
+    quaternions = [nx_before + i for i, s in enumerate(spec.signals) if s.component == "qw"]   # index of each w
     operations = {f["name"]: f["operations"] for f in functions}
+    inputs = list(spec.inputs)
     context = {
-        "version": andyc.__version__, "source": Path(spec.file).name, "spec_sha256": spec.sha256,
-        "build_key": key, "name": spec.name, "module_name": module_name(spec.name, key),
-        "description": spec.description or "",
+        "version": andyc.__version__, "build_key": key, "name": spec.name, "module_name": module_name(spec.name, key),
         "coordinates": [c.name for c in spec.coordinates],
         "speeds": spec.speed_names,
         "signals": [s.name for s in spec.signals],
         "quaternions": quaternions,
         "parameters": list(spec.parameters),
-        "parameter_defaults": [v for _, v in spec.parameters.values()],
-        "inputs": list(spec.inputs),
-        "input_defaults": [v for _, v in spec.inputs.values()],
-        "input_expressions": spec.input_expressions,
-        "driven_inputs": [{"index": list(spec.inputs).index(n), "function": f"input_{list(spec.inputs).index(n)}_{n}"}
-                          for n in spec.driven_inputs],
+        "inputs": inputs,
+        "driven_inputs": [{"index": inputs.index(n), "function": _input_function(inputs, n)} for n in spec.driven_inputs],
+        "input_functions": {n: _input_function(inputs, n) for n in spec.driven_inputs},
         "frames": frames, "operations": operations,
         "frame_parents": [next(f.parent for f in spec.frames if f.name == name) for name in frames],
         "nh": cons.nh, "nc": cons.nc, "constraint_rows": cons.rows, "multipliers": cons.multipliers,
@@ -260,15 +200,44 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
                               _gain_parameter(spec, c.stiffness), _gain_parameter(spec, c.damping))
                              for c in spec.constraints],
         "conserves_energy": spec.conserves_energy,
-        "constraint_where": [[spec.source.line(w), format_path(w)] for c in spec.constraints for w in c.row_where],
-        "initial": {"unpack": _parameter_unpack(model, initial), "state": values},
-        "initial_discrete": {"unpack": _parameter_unpack(model, discrete), "values": [to_code(e) for e in discrete]},
         "discrete": [x.name for x in spec.discrete],
         "closed_form": _closed_form(model),
         **_hybrid_context(model),
         "functions": functions,
     }
-    return _environment().get_template("module.py.j2").render(**context), operations
+    return _environment().get_template("equations.py.j2").render(**context), operations
+
+
+def render_front(spec, key: str) -> str:
+    """The text of <name>.py: it loads <name>_equations.py (of the build `key`) and holds the model's
+    runtime data, which the equations do not depend on (andyc.spec.meaning): the defaults, the initial
+    values (as code: they are expressions of the parameters), the description and where each
+    constraint row and closed-form state is written in the model file. Needs only the Spec, so that
+    a build whose equations are unchanged rewrites it without deriving."""
+    parameters = [symbol for symbol, _ in spec.parameters.values()]
+    initial = ([c.initial for c in spec.coordinates] + [c.velocity for c in spec.coordinates]
+               + [s.initial for s in spec.speeds] + [s.initial for s in spec.signals])
+    discrete = [x.initial for x in spec.discrete]
+    states = [c.name for c in spec.coordinates] + spec.speed_names + [s.name for s in spec.signals]
+    return _environment().get_template("module.py.j2").render(
+        version=andyc.__version__, name=spec.name, build_key=key, module_name=module_name(spec.name, key),
+        source=Path(spec.file).name, source_path=str(Path(spec.file).resolve()), spec_sha256=spec.sha256,
+        spec_files=[str(Path(f).resolve()) for f in spec.files], meaning_sha256=spec.meaning_sha256,
+        description=spec.description or "",
+        coordinates=[c.name for c in spec.coordinates], speeds=spec.speed_names,
+        signals=[s.name for s in spec.signals], constrained=bool(spec.constraints),
+        jumps=[j.name for j in spec.jumps], flows=[f.name for f in spec.flows],
+        parameter_defaults=[v for _, v in spec.parameters.values()],
+        input_defaults=[v for _, v in spec.inputs.values()], input_expressions=spec.input_expressions,
+        constraint_where=[[spec.source.line(w), format_path(w)] for c in spec.constraints for w in c.row_where],
+        initial={"unpack": _parameter_unpack(parameters, initial), "state": [to_code(e) for e in initial]},
+        initial_discrete={"unpack": _parameter_unpack(parameters, discrete), "values": [to_code(e) for e in discrete]},
+        closed_form_where=[[spec.source.line(("closed_form", n)), format_path(("closed_form", n))] for n in states]
+        if spec.closed_form else [])
+
+
+def _input_function(inputs: list, name: str) -> str:
+    return f"input_{inputs.index(name)}_{name}"
 
 
 def _gain_parameter(spec, gain) -> str | None:
@@ -337,24 +306,30 @@ def _plain(value):
     return str(value)
 
 
-def jumps_path(out_dir, name: str) -> Path:
-    return Path(out_dir) / name / f"{name}_jumps.py"
+def write_front(spec, out_dir, key: str) -> bool:
+    """Write <name>.py (render_front) unless it holds that text already; True when written."""
+    path = module_path(out_dir, spec.name)
+    check_output(path, spec.files, "generated module")
+    return update_text(path, render_front(spec, key))
 
 
-def generate(model: SymbolicModel, out_dir="build") -> BuildResult:
-    """Write the module for `model` into out_dir/<name>/ (always; see pipeline.build for skipping),
-    and the jump template <name>_jumps.py unless it exists (it is the user's). Both are written whole
-    (andyc.outputs); OutputError, before anything is written, when either would overwrite a model file."""
+def generate(model: SymbolicModel, out_dir="build", force: bool = False) -> BuildResult:
+    """Write the build of `model` into out_dir/<name>/: <name>_equations.py, <name>.py, and the jump
+    template <name>_jumps.py unless it exists (it is the user's); see pipeline.build for when this is
+    skipped. A file that would get the text it has is left as it is (its time stamp, which Numba's cache
+    checks, included), unless `force` (then Numba compiles again). Each is written whole (andyc.outputs); OutputError, before anything is written,
+    when one would overwrite a model file."""
     start = time.perf_counter()
     spec = model.spec
-    path = module_path(out_dir, spec.name)
+    path, equations = module_path(out_dir, spec.name), equations_path(out_dir, spec.name)
     jumps = jumps_path(out_dir, spec.name) if spec.jumps else None
-    for target in (path, jumps):
+    for target, what in ((path, "generated module"), (equations, "generated module"), (jumps, "jumps file")):
         if target is not None:
-            check_output(target, spec.files, "generated module" if target == path else "jumps file")
-    key = build_key(spec.sha256)
+            check_output(target, spec.files, what)
+    key = build_key(spec.meaning_sha256)
     source, operations = render(model, key)
-    write_text(path, source)
+    (write_text if force else update_text)(equations, source)
+    write_front(spec, out_dir, key)
     result = BuildResult(spec.name, path, False, key, {"generate": time.perf_counter() - start}, operations)
     if jumps is not None:
         result.jumps_path = jumps

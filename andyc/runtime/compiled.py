@@ -129,7 +129,8 @@ class Workspace:
 
 
 def load_compiled(path) -> CompiledModel:
-    """Import a generated module and compile its functions (or load Numba's cache)."""
+    """Import a generated module <name>.py (which imports its <name>_equations.py) and compile its
+    functions (or load Numba's cache)."""
     path = Path(path).resolve()
     mod_name = f"andyc_loading_{path.stem}"
     spec = importlib.util.spec_from_file_location(mod_name, path)
@@ -140,10 +141,7 @@ def load_compiled(path) -> CompiledModel:
     except (Exception, SystemExit) as exc:
         raise SimulationError(_import_failure(path, exc)) from None
     finally:
-        sys.modules.pop(mod_name, None)
-    # The name the module gives itself, which Numba's cache refers to its functions by (this build's, not
-    # an earlier one's of the same name, which the module's own setdefault would have kept).
-    sys.modules[module.MODULE_NAME] = module
+        sys.modules.pop(mod_name, None)     # (it registers its equations under the name their cache knows)
     model = CompiledModel(
         module=module, path=path, name=module.NAME, spec_sha256=module.SPEC_SHA256,
         nq=module.NQ, nv=module.NV, ns=module.NS, nx=module.NX, state_names=tuple(module.STATES),
@@ -234,6 +232,10 @@ def compile_integrator(model: CompiledModel, function=None, data=None) -> None:
     if driven:
         return
     module.evaluate_energy(t_log, x_log, u_log, p, d_log, np.zeros(1))
+    model.flow_inputs(u, p)                             # what simulate() calls before it integrates
+    if model.nc:
+        module.constraints(0.0, x, u, p, d, np.empty(model.nh), np.empty(model.nc), np.empty((model.nc, model.nv)),
+                           np.empty(model.nc))
     if model.nc:
         module.evaluate_constraints(t_log, x_log, u_log, p, d_log, f_log, np.zeros((1, model.nh)),
                                     np.zeros((1, model.nc)), np.zeros((1, model.nc)), ws.M, ws.G, ws.S)

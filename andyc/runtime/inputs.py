@@ -48,11 +48,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import sympy as sp
 
-from andyc.codegen.printer import to_code
 from andyc.errors import SimulationError
-from andyc.spec.expressions import TIME, ExpressionError, parse
 
 RAISED, WRONG_SHAPE = 1.0, 2.0          # failure kinds in the record
 # What the user's code may raise and the run reports: its exceptions, and sys.exit(), which must not end
@@ -279,6 +276,11 @@ def _is_number(value) -> bool:
 
 def _expression_code(model, name: str, text: str) -> str:
     """An input's expression as code over t, x[i], p[j], d[k] (parsed through the whitelist)."""
+    import sympy as sp              # here: a run that drives no input by a command-line expression needs no SymPy
+
+    from andyc.codegen.printer import to_code
+    from andyc.spec.expressions import TIME, ExpressionError, parse
+
     symbols = {}
     code = {}
     for kind, names in (("x", model.state_names), ("p", model.parameter_names), ("d", model.discrete_names)):
@@ -434,7 +436,7 @@ def _compile(model, expressions: dict, tables: dict, ctrl: Controller | None, re
              f"    for i in range({nu}):",
              f"        u[i] = data[flow * {nu} + i]"]
     index = {n: i for i, n in enumerate(model.input_names)}
-    functions = dict(zip(model.module.INPUT_EXPRESSIONS, model.module.INPUT_FUNCTIONS))
+    functions = model.module.INPUT_FUNCTIONS                # input name -> its function in the module
     for name in own:
         lines += [f"    if not SETS[flow, {index[name]}]:", f"        u[{index[name]}] = {functions[name]}(t, x, p, d)"]
     for name, code in expressions.items():
@@ -443,7 +445,7 @@ def _compile(model, expressions: dict, tables: dict, ctrl: Controller | None, re
         lines += [f"    if not SETS[flow, {index[name]}]:", f"        u[{index[name]}] = interpolate(data, {start}, {n}, t)"]
     namespace = {"math": math, "np": np, "SETS": np.ascontiguousarray(model.module.FLOW_SETS_INPUT),
                  "interpolate": interpolate, "failed": failed,
-                 **{f: getattr(model.module, f) for f in model.module.INPUT_FUNCTIONS}}
+                 **{f: getattr(model.module, f) for f in functions.values()}}
     if ctrl is not None:
         if ctrl.compiled is None:
             python = ctrl.function

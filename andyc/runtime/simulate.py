@@ -34,19 +34,22 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy import integrate
 
 from andyc.errors import SimulationError
 from andyc.runtime.compiled import CompiledModel, Workspace, compile_integrator
 from andyc.runtime.events import EventLog
 from andyc.runtime.inputs import USER_ERRORS, InputSource, input_source, raised
 from andyc.runtime.interrupts import Interrupts
-from andyc.runtime.methods import ADAPTIVE, FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
+from andyc.runtime.methods import FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
 from andyc.runtime.run import Run
 
 OK, NONFINITE, SINGULAR_MASS, DEPENDENT, INPUT_FAILED, DIVERGED = 0, 1, 2, 3, 4, 5  # statuses, as in the module
 IDEAL, LAGRANGE, BAUMGARTE = 0, 1, 2                   # how constraint forces are found, as there
-SCIPY_METHODS = {name: getattr(integrate, name) for name in ADAPTIVE}
+def scipy_method(name: str):
+    """The solve_ivp solver class of an adaptive method (SciPy is imported only by a run that uses one)."""
+    from scipy import integrate
+
+    return getattr(integrate, name)
 INIT = ("check", "project", "as-is")
 _MODE = {"rk4": IDEAL, "projection": IDEAL, "lagrange": LAGRANGE, "baumgarte": BAUMGARTE}
 
@@ -527,7 +530,7 @@ def _run_scipy(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol, 
         flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, ws, IDEAL)
         while message is None and t < t_end:
             current[0] = flow
-            solver = SCIPY_METHODS[method](fun, t, x, t_end, rtol=rtol, atol=atol)
+            solver = scipy_method(method)(fun, t, x, t_end, rtol=rtol, atol=atol)
             watched = [m for m in range(model.nj) if module.JUMP_SOURCE[m] == flow]
             g0 = {m: module.guard(m, t, x, inputs(t, x), p, d) for m in watched}
             while solver.status == "running":

@@ -24,6 +24,7 @@ import sympy as sp
 
 from andyc.errors import Diagnostic, SpecError, format_path
 from andyc.spec import urdf
+from andyc.spec.meaning import meaning_sha256
 from andyc.spec.expressions import MODULE_NAMES, RESERVED, TIME, ExpressionError, parse, parse_condition
 from andyc.spec.model import (EITHER, FALLING, RISING, Body, Constraint, Coordinate, Damper, DiscreteState, Flow,
                               Frame, FrameQuantity, Jump, Load, Nonholonomic, Potential, Rotate, Signal, Spec, Speed,
@@ -86,7 +87,7 @@ def load(path, unlock: bool = False) -> Spec:
     if path.suffix.lower() == ".urdf":              # a URDF: its own reader, the same builder
         robot = urdf.read(path, raw=raw)
         return _with_urdf(_Builder(robot.data, robot.source, hashlib.sha256(raw).hexdigest(),
-                                   len(robot.data.get("bodies", []))).build(), robot)
+                                   len(robot.data.get("bodies", []))).build(), robot, robot.data)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
@@ -106,15 +107,19 @@ def load(path, unlock: bool = False) -> Spec:
         if problems:
             raise SpecError(sorted(problems, key=lambda d: (d.file, d.line)))
         return _with_urdf(_Builder(data, smap, hashlib.sha256(raw + robot.raw).hexdigest(),
-                                   len(robot.data.get("bodies", []))).build(), robot)
+                                   len(robot.data.get("bodies", []))).build(), robot, data)
     spec = _Builder(data, smap, hashlib.sha256(raw).hexdigest()).build()
     spec.files = (spec.file,)
+    spec.meaning_sha256 = meaning_sha256(data)
     return spec
 
 
-def _with_urdf(spec: Spec, robot) -> Spec:
+def _with_urdf(spec: Spec, robot, data: dict) -> Spec:
     """The URDF's visual references and warnings (unused elements) on the Spec; its fixed and locked
-    joints' bodies are merged before deriving (reduce)."""
+    joints' bodies are merged before deriving (reduce). `data`: the document the Spec was built from
+    (the URDF's, merged with the YAML's keys)."""
+    # The URDF's bytes count whole: what the reader takes from them is more than the document shows.
+    spec.meaning_sha256 = meaning_sha256({**data, "reduce": True, "urdf_sha256": hashlib.sha256(robot.raw).hexdigest()})
     spec.visuals = robot.visuals
     spec.locked = robot.locked
     spec.files = tuple(dict.fromkeys((spec.file, robot.file)))

@@ -248,6 +248,7 @@ class Spec:
     reduce: bool = False        # merge the bodies fixed to one moving frame before deriving (andyc.symbolic.reduce)
     input_expressions: dict = field(default_factory=dict)  # input name -> the expression text that drives it
     driven_inputs: dict = field(default_factory=dict)  # input name -> that expression, parsed (sp.Expr)
+    meaning_sha256: str = ""    # what shapes the equations (andyc.spec.meaning): the build key's part
     files: tuple = ()           # the files the model was read from (the model file; a URDF it names)
     closed_form: dict = field(default_factory=dict)  # state name -> x_i(t) of t, parameters and held inputs
 

@@ -1,0 +1,75 @@
+"""The files of a build, their paths and keys, read without SymPy or Jinja (andyc.pipeline reads them
+to tell whether a build is up to date before it loads anything heavier)."""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import andyc
+
+PACKAGE = Path(__file__).resolve().parents[1]
+_GENERATOR_SOURCES = ["symbolic", "codegen", "spec", "templates", "schemas"]
+
+
+@dataclass
+class BuildResult:
+    name: str
+    module_path: Path
+    skipped: bool
+    build_key: str
+    timings: dict = field(default_factory=dict)     # seconds per stage
+    operations: dict = field(default_factory=dict)  # function -> sympy op count
+    jumps_path: Path | None = None                  # the user's <name>_jumps.py, when the model has jumps
+    jumps_kept: bool = False                        # it existed and was left as it was
+    jumps_missing: list = field(default_factory=list)  # jumps without a function in a kept file
+    compiled: int = 0                               # functions Numba compiled (not loaded from its cache)
+
+
+def generator_fingerprint() -> str:
+    h = hashlib.sha256(andyc.__version__.encode())
+    for rel in _GENERATOR_SOURCES:
+        for path in sorted((PACKAGE / rel).rglob("*")):
+            if path.suffix in (".py", ".j2", ".json") and path.is_file():
+                h.update(path.relative_to(PACKAGE).as_posix().encode())
+                h.update(path.read_bytes())
+    return h.hexdigest()
+
+
+def build_key(meaning_sha256: str) -> str:
+    """The key of a build: what the model's equations depend on (Spec.meaning_sha256) and andyc's own
+    generator. Equal keys, equal <name>_equations.py."""
+    return hashlib.sha256((meaning_sha256 + generator_fingerprint()).encode()).hexdigest()
+
+
+def module_path(out_dir, name: str) -> Path:
+    return Path(out_dir) / name / f"{name}.py"
+
+
+def module_name(name: str, key: str) -> str:
+    """The name <name>_equations.py takes in sys.modules, one per build key: Numba's cache refers to its
+    functions by it, so andyc and a plain `import <name>` use one cache (see _equations in module.py.j2)."""
+    return f"andyc_{name}_{key[:16]}"
+
+
+def equations_path(out_dir, name: str) -> Path:
+    return Path(out_dir) / name / f"{name}_equations.py"
+
+
+def written_constant(path: Path, constant: str):
+    """The value of a generated file's `CONSTANT = <literal>` line (BUILD_KEY, SOURCE_PATH, SPEC_FILES),
+    read without importing the file; None when there is no such file or line."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            for line in fh:
+                if line.startswith(f"{constant} = "):
+                    return ast.literal_eval(line.split("=", 1)[1].split("  #")[0].strip())
+    except (OSError, ValueError, SyntaxError):
+        return None
+    return None
+
+
+def jumps_path(out_dir, name: str) -> Path:
+    return Path(out_dir) / name / f"{name}_jumps.py"

@@ -1,0 +1,171 @@
+"""Latency of the command line, as a user meets it: `andyc --version`, `andyc check`, and the first
+result of `andyc sim` cold (a fresh build folder and a fresh Numba cache) and warm (the same command
+again), for the shipped models and the panda URDF with its fingers locked (issue 19).
+
+Every figure is the wall time of a whole `andyc` process, started as a user starts it
+(`python -m andyc.cli`), so imports count. The cold build is split by stage from what `andyc build`
+prints in a second fresh folder (load + derive + generate, then Numba); `andyc sim` then runs in that
+folder (for an andyc that compiles its integrator only when a run needs it, that is where it does).
+
+    python bench/latency.py                     the table (about 5 minutes on 2 cores)
+    python bench/latency.py --root OTHER_TREE   the same for another checkout of andyc (before/after)
+    python bench/latency.py --models double_pendulum --repeats 3
+    python bench/latency.py --functions passive_walker      where Numba's seconds go, function by function
+
+Targets on the idle 2-core machine: cold first result <= 10 s (double_pendulum, swing_bar,
+ball_in_bowl, passive_walker), <= 30 s (panda); warm sim <= 1 s; --version <= 0.3 s; check <= 1.5 s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+MODELS = ["double_pendulum", "swing_bar", "ball_in_bowl", "passive_walker", "panda"]
+TARGETS = {"double_pendulum": 10, "swing_bar": 10, "ball_in_bowl": 10, "passive_walker": 10, "panda": 30}
+SIM = ["--t-end", "1", "--dt", "1e-3", "--out", "run.csv"]
+
+
+def _panda(folder: Path) -> Path:
+    from andyc.reference.robots import robots_dir
+
+    path = folder / "panda.yaml"
+    path.write_text(f"name: panda\nurdf:\n  file: {robots_dir() / 'panda_description/urdf/panda.urdf'}\n"
+                    "  lock: {panda_finger_joint1: 0.02}\n")
+    return path
+
+
+def _andyc(root: Path, args, cwd: Path, env: dict) -> tuple[float, str]:
+    """Wall seconds of one `andyc ...` process and what it printed (both streams)."""
+    start = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "andyc.cli", *map(str, args)], cwd=cwd, capture_output=True,
+                          text=True, env={**env, "PYTHONPATH": str(root)})
+    seconds = time.perf_counter() - start
+    if proc.returncode != 0:
+        raise SystemExit(f"andyc {' '.join(map(str, args))} failed ({proc.returncode}):\n{proc.stderr}")
+    return seconds, proc.stdout + proc.stderr
+
+
+def _stage(text: str, name: str) -> float:
+    found = re.search(rf"{name} ([0-9.]+) s", text)
+    return float(found.group(1)) if found else float("nan")
+
+
+def measure(root: Path, model: str, work: Path) -> dict:
+    """One model's row: cold sim, its split (load+derive+generate, Numba in build, compiling in sim), warm sim."""
+    path = _panda(work) if model == "panda" else root / "models" / f"{model}.yaml"
+    row = {}
+    for run in ("cold", "split"):
+        folder = work / run
+        folder.mkdir()
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(folder / "numba-cache")}   # a fresh Numba cache too
+        if run == "cold":
+            row["cold"], _ = _andyc(root, ["sim", path, *SIM], folder, env)
+            row["warm"], _ = _andyc(root, ["sim", path, *SIM], folder, env)
+        else:
+            wall, text = _andyc(root, ["build", path], folder, env)
+            row["build"], row["derive"], row["generate"] = wall, _stage(text, "derive"), _stage(text, "generate")
+            row["numba_build"] = _stage(text, "compile") if "compile" in text else _stage(text, "cache in")
+            row["sim_after_build"], _ = _andyc(root, ["sim", path, *SIM], folder, env)
+    return row
+
+
+PROFILE = """
+import json, sys, time
+from collections import defaultdict
+from numba.core import event
+import andyc
+from andyc.runtime.compiled import compile_integrator, load_compiled
+
+path, out = sys.argv[1], sys.argv[2]
+t0 = time.perf_counter()
+result = andyc.build(path, out)
+t1 = time.perf_counter()
+with event.install_recorder("numba:compile") as compiles, event.install_recorder("numba:llvm_lock") as llvm:
+    model = load_compiled(result.module_path)
+    compile_integrator(model)
+t2 = time.perf_counter()
+# Exclusive seconds per function: a compilation's interval less those of the compilations nested in it
+# (a caller types its callees, which compile inside it).
+own, stack = defaultdict(float), []
+for stamp, ev in compiles.buffer:
+    name = ev.data["dispatcher"].py_func.__name__
+    if ev.is_start:
+        stack.append([name, stamp, 0.0])
+    else:
+        name, start, nested = stack.pop()
+        own[name] += stamp - start - nested
+        if stack:
+            stack[-1][2] += stamp - start
+llvm_s = sum(b[0] - a[0] for a, b in zip(llvm.buffer[::2], llvm.buffer[1::2]))
+print(json.dumps({"build": t1 - t0, "numba": t2 - t1, "llvm": llvm_s, "own": own}))
+"""
+
+
+def profile(root: Path, model: str) -> None:
+    """Numba's compile time per generated function, in one cold process: exclusive seconds (typing,
+    lowering and LLVM of that function alone), largest first."""
+    import json
+
+    with tempfile.TemporaryDirectory(prefix="andyc-profile-") as tmp:
+        tmp = Path(tmp)
+        path = _panda(tmp) if model == "panda" else root / "models" / f"{model}.yaml"
+        env = {**os.environ, "PYTHONPATH": str(root), "NUMBA_CACHE_DIR": str(tmp / "numba-cache")}
+        proc = subprocess.run([sys.executable, "-c", PROFILE, str(path), str(tmp / "build")], capture_output=True,
+                              text=True, env=env, cwd=tmp)
+        if proc.returncode != 0:
+            raise SystemExit(proc.stderr)
+        r = json.loads(proc.stdout.splitlines()[-1])
+    print(f"{model}: build (load, derive, generate) {r['build']:.1f} s; Numba {r['numba']:.1f} s, "
+          f"of which LLVM {r['llvm']:.1f} s")
+    total = sum(r["own"].values())
+    for name, seconds in sorted(r["own"].items(), key=lambda kv: -kv[1])[:15]:
+        print(f"  {name:28s} {seconds:6.2f} s  {100 * seconds / total:4.0f}%")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--root", type=Path, default=ROOT, help="the andyc checkout to measure (default: this one)")
+    parser.add_argument("--models", default=",".join(MODELS))
+    parser.add_argument("--repeats", type=int, default=1, help="cold rows per model (each in fresh folders)")
+    parser.add_argument("--functions", metavar="MODEL", help="only the per-function compile profile of MODEL")
+    args = parser.parse_args(argv)
+    root = args.root.resolve()
+    if args.functions:
+        profile(root, args.functions)
+        return 0
+    with tempfile.TemporaryDirectory(prefix="andyc-latency-") as tmp:
+        tmp = Path(tmp)
+        env = dict(os.environ)
+        version = min(_andyc(root, ["--version"], tmp, env)[0] for _ in range(3))
+        check = min(_andyc(root, ["check", root / "models" / "passive_walker.yaml"], tmp, env)[0] for _ in range(3))
+        print(f"andyc at {root}")
+        print(f"andyc --version: {version:.2f} s (target 0.3 s); andyc check passive_walker: {check:.2f} s "
+              "(target 1.5 s); best of 3")
+        print()
+        print(f"{'model':16s} {'cold sim':>9s} {'target':>6s} | {'build':>6s} {'derive':>6s} {'gen':>5s} "
+              f"{'numba':>6s} {'then sim':>8s} | {'warm sim':>8s}")
+        for model in args.models.split(","):
+            for k in range(args.repeats):
+                work = tmp / f"{model}-{k}"
+                work.mkdir()
+                r = measure(root, model, work)
+                print(f"{model:16s} {r['cold']:8.1f}s {TARGETS.get(model, 0):5d}s | {r['build']:5.1f}s "
+                      f"{r['derive']:5.1f}s {r['generate']:4.1f}s {r['numba_build']:5.1f}s "
+                      f"{r['sim_after_build']:7.1f}s | {r['warm']:7.2f}s", flush=True)
+    print()
+    print("cold sim: `andyc sim` in a fresh build folder with a fresh NUMBA_CACHE_DIR (build, compile, a 1 s run);")
+    print("build: `andyc build` in another fresh folder, of which derive, generate (andyc's figures) and numba")
+    print("(compile or cache load); then sim: `andyc sim` after it; warm sim: the cold command again.")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,127 @@
+"""A build is reused by meaning (issue 19): comments, key order, whitespace, parameter defaults and
+initial values leave the compiled equations (and Numba's cache of them) untouched, and the new
+values are used; an edit of an equation rebuilds; two models of one name never share a build."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import andyc
+from andyc.codegen.buildfiles import equations_path, written_constant
+from andyc.outputs import OutputError
+from andyc.pipeline import unchanged
+from andyc.runtime.compiled import compilations
+from andyc.spec.meaning import meaning_sha256
+
+PENDULUM = """\
+name: cached_pendulum
+description: A point mass on a massless link.
+parameters:
+  L: 1.0
+  m: 1.0
+  g: 9.81
+coordinates:
+  theta: {initial: 0.5}
+gravity: [0, -g, 0]
+frames:
+  - {name: link, parent: world, revolute: theta, axis: z}
+  - {name: tip, parent: link, translation: [L, 0, 0]}
+bodies:
+  - {name: bob, frame: tip, mass: m}
+"""
+
+# The same model: comments, another order of the keys (not of the parameters: that is their index in p) and layout, other defaults, another initial value and
+# description; the equations are the same.
+EDITED = """\
+# a comment that was not there
+name: cached_pendulum
+description: "Edited: the same pendulum."
+coordinates:
+  theta:
+    initial: 0.25 + 0.5      # another initial value
+gravity: [0, -g, 0]
+frames:
+  - {name: link, parent: world, revolute: theta, axis: z}
+  - {parent: link, name: tip, translation: [L, 0, 0]}
+bodies: [{name: bob, frame: tip, mass: m}]
+parameters: {L: 1.5, m: 2.0, g: 9.81}
+"""
+
+
+def _stamps(folder):
+    return {p.name: p.stat().st_mtime_ns for p in folder.rglob("*") if p.is_file() and p.name.endswith(
+        ("_equations.py", ".nbi", ".nbc"))}
+
+
+def test_runtime_data_edits_reuse_the_build_and_an_equation_edit_rebuilds(tmp_path):
+    path, build = tmp_path / "pendulum.yaml", tmp_path / "build"
+    path.write_text(PENDULUM)
+    first, result = andyc.compile_model(path, build)
+    assert not result.skipped and result.compiled > 0
+    folder = result.module_path.parent
+    stamps = _stamps(folder)
+    assert any(name.endswith(".nbc") for name in stamps)
+
+    path.write_text(EDITED)
+    edited, again = andyc.compile_model(path, build)
+    assert again.skipped and again.compiled == 0 and again.build_key == result.build_key
+    assert _stamps(folder) == stamps                      # neither the equations nor Numba's cache touched
+    # The new values are what the module and a run use.
+    assert list(edited.parameter_defaults) == [1.5, 2.0, 9.81]
+    assert edited.module.initial_state()[0] == 0.75
+    assert edited.module.DESCRIPTION == "Edited: the same pendulum."
+    run = andyc.simulate(edited, 1.0, dt=1e-3)
+    assert compilations(edited) == 0                      # compile_model compiled (loaded) all that a run needs
+    # Against the closed form's invariant: energy m g L sin(theta) + m (L theta')^2 / 2 at the new values.
+    theta, omega = run.state[-1]
+    energy = 2.0 * 9.81 * 1.5 * np.sin(theta) + 2.0 * (1.5 * omega) ** 2 / 2
+    assert abs(energy - 2.0 * 9.81 * 1.5 * np.sin(0.75)) < 1e-6
+
+    path.write_text(EDITED.replace("gravity: [0, -g, 0]", "gravity: [0, -2*g, 0]"))
+    _, rebuilt = andyc.compile_model(path, build)
+    assert not rebuilt.skipped and rebuilt.build_key != result.build_key and rebuilt.compiled > 0
+
+    # The same bytes again: the build is found without reading the model, and a warm `andyc sim`
+    # imports neither SymPy nor SciPy (nor the schema's and templates' libraries).
+    assert unchanged(path, build).build_key == rebuilt.build_key
+    script = ("import sys\nfrom andyc.cli import main\ntry:\n"
+              f"    main(['sim', {str(path)!r}, '-o', {str(build)!r}, '--t-end', '0.1', '--out', 'run.csv'])\n"
+              "except SystemExit as exc:\n    assert exc.code in (0, None), exc.code\n"
+              "print(sorted(m for m in ('sympy', 'scipy.integrate', 'jinja2', 'jsonschema') if m in sys.modules))")
+    proc = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.splitlines()[-1] == "[]" and (tmp_path / "run.csv").exists()
+    path.write_text(path.read_text() + "# one more comment\n")
+    assert unchanged(path, build) is None and andyc.build(path, build).skipped   # other bytes: read, not derived
+
+
+def test_the_meaning_ignores_runtime_data_but_not_an_expression():
+    import yaml
+
+    base = yaml.safe_load(PENDULUM)
+    assert meaning_sha256(base) == meaning_sha256(yaml.safe_load(EDITED))
+    # The order of the parameters is their index in p: it is part of the meaning.
+    for edit in ({"inputs": {"F": "sin(t)"}}, {"frames": base["frames"][:1]}, {"gravity": [0, 0, "-g"]},
+                 {"parameters": {"g": 9.81, "m": 1.0, "L": 1.0}}):
+        assert meaning_sha256({**base, **edit}) != meaning_sha256(base)
+    # An input's default is runtime data; an input's expression is an equation.
+    assert meaning_sha256({**base, "inputs": {"F": 1.0}}) == meaning_sha256({**base, "inputs": {"F": 2.0}})
+
+
+def test_two_models_of_one_name_never_share_a_build_folder(tmp_path):
+    build = tmp_path / "build"
+    first, second = tmp_path / "a.yaml", tmp_path / "b.yaml"
+    first.write_text(PENDULUM)
+    second.write_text(PENDULUM.replace("mass: m", "mass: 2*m"))
+    result = andyc.build(first, build)
+    key = written_constant(equations_path(build, "cached_pendulum"), "BUILD_KEY")
+    with pytest.raises(OutputError, match=r"holds the build of 'cached_pendulum' from .*a\.yaml.*b\.yaml has the "
+                                          r"same name.*--force"):
+        andyc.build(second, build)
+    assert written_constant(equations_path(build, "cached_pendulum"), "BUILD_KEY") == key == result.build_key
+    assert written_constant(result.module_path, "SOURCE_PATH") == str(first.resolve())
+    replaced = andyc.build(second, build, force=True)
+    assert replaced.build_key != key
+    assert written_constant(result.module_path, "SOURCE_PATH") == str(second.resolve())
