@@ -56,7 +56,9 @@ def _stamps(folder):
 
 
 def test_runtime_data_edits_reuse_the_build_and_an_equation_edit_rebuilds(tmp_path):
-    path, build = tmp_path / "pendulum.yaml", tmp_path / "build"
+    # A long path: the build's constants stay one line each however long (written_constant reads lines).
+    path, build = tmp_path / ("a_folder_with_a_long_name_" * 5) / "pendulum.yaml", tmp_path / "build"
+    path.parent.mkdir()
     path.write_text(PENDULUM)
     first, result = andyc.compile_model(path, build)
     assert not result.skipped and result.compiled > 0
@@ -85,6 +87,7 @@ def test_runtime_data_edits_reuse_the_build_and_an_equation_edit_rebuilds(tmp_pa
 
     # The same bytes again: the build is found without reading the model, and a warm `andyc sim`
     # imports neither SymPy nor SciPy (nor the schema's and templates' libraries).
+    assert written_constant(rebuilt.module_path, "SPEC_FILES") == [str(path.resolve())]
     assert unchanged(path, build).build_key == rebuilt.build_key
     script = ("import sys\nfrom andyc.cli import main\ntry:\n"
               f"    main(['sim', {str(path)!r}, '-o', {str(build)!r}, '--t-end', '0.1', '--out', 'run.csv'])\n"

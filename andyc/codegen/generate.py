@@ -245,13 +245,15 @@ def _gain_parameter(spec, gain) -> str | None:
     return next((name for name, (symbol, _) in spec.parameters.items() if gain == symbol), None)
 
 
-def literal(value) -> str:
+def literal(value, one_line: bool = False) -> str:
     """Python source of plain data (text, finite numbers, booleans, None, and lists, tuples and dicts of
-    them), written by repr (pprint's, for long values). The templates write every value through this (`| py`), and text from a model
-    file reaches a generated file only this way: as a literal that reads back equal, never as code, and
-    never inside a comment or docstring, where a quote, a backslash or a line break could end it."""
+    them), written by repr (pprint's, for long values, unless `one_line`: `| py(true)`, for the constants
+    that buildfiles.written_constant reads line by line). The templates write every value through this
+    (`| py`), and text from a model file reaches a generated file only this way: as a literal that reads
+    back equal, never as code, and never inside a comment or docstring, where a quote, a backslash or a
+    line break could end it."""
     _check_plain(value)
-    return pprint.pformat(value, width=110, sort_dicts=False)
+    return repr(value) if one_line else pprint.pformat(value, width=110, sort_dicts=False)
 
 
 def _check_plain(value) -> None:
