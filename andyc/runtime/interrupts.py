@@ -83,6 +83,10 @@ class Interrupts:
             yield self
         finally:
             done.set()
+            try:                                # wake the watchdog's select now, not at its next 0.1 s poll
+                writer.send(b"\0")             # (0 is no signal's number)
+            except OSError:
+                pass
             watchdog.join()
             signal.set_wakeup_fd(old_fd)
             for s, handler in previous.items():
