@@ -17,6 +17,7 @@ import numpy as np
 
 from andyc.codegen.buildfiles import BuildResult, build_key, equations_path, jumps_path, module_path, written_constant
 from andyc.outputs import OutputError
+from andyc.spec.yamlpos import MAX_YAML_BYTES
 
 # A YAML model's top-level `name:` line, to find its build before reading the model (see unchanged).
 _NAME_LINE = re.compile(rb"^name:[ \t]*([A-Za-z_][A-Za-z0-9_]*)[ \t]*(?:#.*)?$", re.MULTILINE)
@@ -30,7 +31,7 @@ def unchanged(path, out_dir="build") -> BuildResult | None:
     this shortcut (the build found must name this file and hash its bytes)."""
     path = Path(path)
     try:
-        if path.suffix.lower() not in (".yaml", ".yml") or path.stat().st_size > 2_000_000:
+        if path.suffix.lower() not in (".yaml", ".yml") or path.stat().st_size > MAX_YAML_BYTES:
             return None
         found = _NAME_LINE.search(path.read_bytes())
         if found is None:

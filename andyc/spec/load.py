@@ -29,12 +29,11 @@ from andyc.spec.expressions import MODULE_NAMES, RESERVED, TIME, ExpressionError
 from andyc.spec.model import (EITHER, FALLING, RISING, Body, Constraint, Coordinate, Damper, DiscreteState, Flow,
                               Frame, FrameQuantity, Jump, Load, Nonholonomic, Potential, Rotate, Signal, Spec, Speed,
                               Spring, Translate)
-from andyc.spec.yamlpos import SourceMap, load_yaml
+from andyc.spec.yamlpos import MAX_YAML_BYTES, SourceMap, load_yaml
 
 SCHEMA_PATH = Path(__file__).resolve().parents[1] / "schemas" / "andyc-model.schema.json"
 AXES = {"x": (1, 0, 0), "y": (0, 1, 0), "z": (0, 0, 1),
         "-x": (-1, 0, 0), "-y": (0, -1, 0), "-z": (0, 0, -1)}
-MAX_YAML_BYTES = 2_000_000        # a model of a thousand bodies is ~100 kB; parsing YAML in Python takes ~1 s/MB
 MAX_URDF_BYTES = urdf.MAX_URDF_BYTES
 ELEMENT_SECTIONS = ("bodies", "forces", "torques", "dampers", "springs", "potentials")
 JOINTS = ("dh", "revolute", "prismatic", "ball", "floating", "nonholonomic")

@@ -21,6 +21,7 @@ from andyc.errors import Diagnostic, SpecError, format_path
 
 MAX_VALUES = 200_000        # values in the document with its aliases expanded (a large URDF-derived model: ~10^4)
 MAX_NESTING = 100           # levels of mappings and lists (a model nests about 6 deep)
+MAX_YAML_BYTES = 2_000_000  # a model of a thousand bodies is ~100 kB; parsing YAML in Python takes ~1 s/MB
 
 
 class SourceMap:
