@@ -11,6 +11,7 @@ folder (for an andyc that compiles its integrator only when a run needs it, that
     python bench/latency.py --root OTHER_TREE   the same for another checkout of andyc (before/after)
     python bench/latency.py --models double_pendulum --repeats 3
     python bench/latency.py --functions passive_walker      where Numba's seconds go, function by function
+    python bench/latency.py --speed-ab OTHER_TREE           same-run A/B of RK4 steps/s against another checkout
 
 Targets on the idle 2-core machine: cold first result <= 10 s (double_pendulum, swing_bar,
 ball_in_bowl, passive_walker), <= 30 s (panda); warm sim <= 1 s; --version <= 0.3 s; check <= 1.5 s.
@@ -137,14 +138,53 @@ def profile(root: Path, model: str) -> None:
         print(f"  {name:28s} {seconds:6.2f} s  {100 * seconds / total:4.0f}%")
 
 
+SPEED = """
+import json, sys, andyc
+model = andyc.compile_model(sys.argv[1], sys.argv[2])[0]
+andyc.simulate(model, 0.01, dt=1e-3, progress=False)
+best = min(andyc.simulate(model, 100.0, dt=1e-3, every=1000, progress=False).stats["wall_seconds"] for _ in range(3))
+print(json.dumps(100.0 / 1e-3 / best))
+"""
+
+
+def speed_ab(root: Path, other: Path, rounds: int = 5) -> None:
+    """RK4 steps/s (best of three 100 s runs at 1e-3 s) of the swing bar and the passive walker, this
+    checkout (B) against `other` (A), alternated A/B, B/A over `rounds` processes each: the ratio B/A
+    of each round, median, min and max (the machine is noisy; only ratios of one run compare)."""
+    import statistics
+
+    with tempfile.TemporaryDirectory(prefix="andyc-ab-") as tmp:
+        for model in ("swing_bar", "passive_walker"):
+            rates = {"A": [], "B": []}
+            for k in range(rounds):
+                for label in ("AB" if k % 2 == 0 else "BA"):
+                    tree = other if label == "A" else root
+                    proc = subprocess.run([sys.executable, "-c", SPEED, str(tree / "models" / f"{model}.yaml"),
+                                           str(Path(tmp) / label)], capture_output=True, text=True, cwd=tmp,
+                                          env={**os.environ, "PYTHONPATH": str(tree)})
+                    if proc.returncode != 0:
+                        raise SystemExit(proc.stderr)
+                    rates[label].append(float(proc.stdout.split()[-1]))
+            a, b = rates["A"], rates["B"]
+            ratio = [y / x for x, y in zip(a, b)]
+            print(f"{model}: A {statistics.median(a):.3g} RK4 steps/s ({min(a):.3g} .. {max(a):.3g}), "
+                  f"B {statistics.median(b):.3g} ({min(b):.3g} .. {max(b):.3g}); B/A median "
+                  f"{statistics.median(ratio):.2f} ({min(ratio):.2f} .. {max(ratio):.2f})", flush=True)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--root", type=Path, default=ROOT, help="the andyc checkout to measure (default: this one)")
     parser.add_argument("--models", default=",".join(MODELS))
     parser.add_argument("--repeats", type=int, default=1, help="cold rows per model (each in fresh folders)")
     parser.add_argument("--functions", metavar="MODEL", help="only the per-function compile profile of MODEL")
+    parser.add_argument("--speed-ab", metavar="OTHER_TREE", type=Path,
+                        help="only the A/B of simulation speed: OTHER_TREE (A) against --root (B)")
     args = parser.parse_args(argv)
     root = args.root.resolve()
+    if args.speed_ab:
+        speed_ab(root, args.speed_ab.resolve())
+        return 0
     if args.functions:
         profile(root, args.functions)
         return 0
