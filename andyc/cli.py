@@ -177,7 +177,8 @@ def check(files):
 @main.command()
 @click.argument("file", type=click.Path(dir_okay=False))
 @click.option("-o", "--out-dir", default="build", show_default=True, help="Build folder; writes DIR/<name>/<name>.py.")
-@click.option("--force", is_flag=True, help="Derive, generate and compile again, even if the equations are unchanged; replaces the build of another model file of the same name.")
+@click.option("--force", is_flag=True, help="Derive, generate and compile again, even if the equations are "
+              "unchanged; replaces the build of another model file of the same name.")
 def build(file, out_dir, force):
     """Derive the equations of motion of FILE and generate its module."""
     check_folder(out_dir, [file])

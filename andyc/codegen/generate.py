@@ -103,7 +103,7 @@ def _closed_form(model: SymbolicModel) -> dict | None:
     spec = model.spec
     if not spec.closed_form:
         return None
-    states = [c.name for c in spec.coordinates] + spec.speed_names + [s.name for s in spec.signals]
+    states = _state_names(spec)
     body = function_body([(f"x[{i}]", spec.closed_form[name]) for i, name in enumerate(states)], {})
     return {"unpack": _unpack(model, body.inputs), "lines": body.lines, "outputs": body.outputs}
 
@@ -218,7 +218,7 @@ def render_front(spec, key: str) -> str:
     initial = ([c.initial for c in spec.coordinates] + [c.velocity for c in spec.coordinates]
                + [s.initial for s in spec.speeds] + [s.initial for s in spec.signals])
     discrete = [x.initial for x in spec.discrete]
-    states = [c.name for c in spec.coordinates] + spec.speed_names + [s.name for s in spec.signals]
+    states = _state_names(spec)
     return _environment().get_template("module.py.j2").render(
         version=andyc.__version__, name=spec.name, build_key=key, module_name=module_name(spec.name, key),
         source=Path(spec.file).name, source_path=str(Path(spec.file).resolve()), spec_sha256=spec.sha256,
@@ -234,6 +234,11 @@ def render_front(spec, key: str) -> str:
         initial_discrete={"unpack": _parameter_unpack(parameters, discrete), "values": [to_code(e) for e in discrete]},
         closed_form_where=[[spec.source.line(("closed_form", n)), format_path(("closed_form", n))] for n in states]
         if spec.closed_form else [])
+
+
+def _state_names(spec) -> list:
+    """The names of x, in order: coordinates, speeds (coordinate rates, then declared), signals."""
+    return [c.name for c in spec.coordinates] + spec.speed_names + [s.name for s in spec.signals]
 
 
 def _input_function(inputs: list, name: str) -> str:
@@ -290,7 +295,7 @@ def render_jumps(model: SymbolicModel) -> str:
         jumps[j.name] = {"from": j.source, "to": j.target, "guard": _plain(w["guard"]),
                          "direction": _DIRECTION[j.direction], "enabled": _plain(w.get("enabled")),
                          "reset": _plain(w.get("reset") or {}), "impact": _plain(w.get("impact", "none"))}
-    states = ([c.name for c in spec.coordinates] + spec.speed_names + [s.name for s in spec.signals])
+    states = _state_names(spec)
     return _environment().get_template("jumps.py.j2").render(
         name=spec.name, version=andyc.__version__, source=Path(spec.file).name, jumps=jumps, states=states,
         discrete=[x.name for x in spec.discrete], parameters=list(spec.parameters), inputs=list(spec.inputs))
@@ -319,8 +324,8 @@ def generate(model: SymbolicModel, out_dir="build", force: bool = False) -> Buil
     """Write the build of `model` into out_dir/<name>/: <name>_equations.py, <name>.py, and the jump
     template <name>_jumps.py unless it exists (it is the user's); see pipeline.build for when this is
     skipped. A file that would get the text it has is left as it is (its time stamp, which Numba's cache
-    checks, included), unless `force` (then Numba compiles again). Each is written whole (andyc.outputs); OutputError, before anything is written,
-    when one would overwrite a model file."""
+    checks, included), unless `force` (then Numba compiles again). Each is written whole (andyc.outputs);
+    OutputError, before anything is written, when one would overwrite a model file."""
     start = time.perf_counter()
     spec = model.spec
     path, equations = module_path(out_dir, spec.name), equations_path(out_dir, spec.name)

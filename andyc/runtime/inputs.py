@@ -14,7 +14,8 @@ carries what the function reads:
 U holds the constant inputs of each flow (the run's values, then the inputs a
 flow sets itself). The model's own input expressions are compiled into the
 generated module (input_<k>_<name>, and the callback model_inputs, used as it is
-when the run drives no input itself); the run's own drives are added here. When no input is driven, the function is None and the
+when the run drives no input itself); the run's own drives are added here.
+When no input is driven, the function is None and the
 integrator holds u = U[flow] (see the module's integrator). Driven inputs are
 written over U's values, except where the current flow sets them: the model's
 flow wins over the run.
