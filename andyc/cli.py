@@ -509,6 +509,11 @@ def _scanned(model, text: str) -> tuple[str, list]:
 
 def _compiled(file, out_dir, force: bool = False):
     """(CompiledModel, BuildResult) of FILE; a model error is printed as andyc check does (exit 1)."""
+    from andyc.codegen.buildfiles import numerics_compiled
+
+    if sys.stderr.isatty() and not numerics_compiled():
+        click.echo("andyc: compiling the integrator every model shares, once for this installation (about a "
+                   "minute; a new model then compiles in seconds) ...", err=True)
     try:
         return andyc.compile_model(file, out_dir, force)
     except SpecError as exc:

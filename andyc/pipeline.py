@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import hashlib
 import re
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from andyc.codegen.buildfiles import BuildResult, build_key, equations_path, jumps_path, module_path, written_constant
+from andyc.codegen.buildfiles import (BuildResult, build_key, equations_path, jumps_path, module_name, module_path,
+                                     numerics_package, numerics_path, written_constant)
 from andyc.outputs import OutputError
 from andyc.spec.yamlpos import MAX_YAML_BYTES
 
@@ -48,6 +50,8 @@ def unchanged(path, out_dir="build") -> BuildResult | None:
         return None
     jumps = jumps_path(out_dir, name) if written_constant(front, "JUMPS_FILE") else None
     if digest != written_constant(front, "SPEC_SHA256") or (jumps is not None and not jumps.exists()):
+        return None
+    if not (numerics_path(out_dir, name) / "__init__.py").exists():
         return None
     return BuildResult(name, front, True, key, jumps_path=jumps, jumps_kept=jumps is not None)
 
@@ -108,12 +112,24 @@ def compile_model(path, out_dir="build", force: bool = False):
 
     result = build(path, out_dir, force)
     t0 = time.perf_counter()
+    before = _compiled_so_far(result)
     compiled = load_compiled(result.module_path)
     compile_integrator(compiled)
     if compiled.input_expressions:          # the integrator's variant that calls the model's input callback
         data = np.zeros(compiled.nf * len(compiled.input_names) + 3 + compiled.nx)
-        compile_integrator(compiled, compiled.module.model_inputs, data)
+        compile_integrator(compiled, compiled.module.MODEL_INPUTS, data)
     result.timings["compile"] = time.perf_counter() - t0
-    result.compiled = compilations(compiled)
+    result.compiled = compilations(compiled) - before
     return compiled, result
 
+
+
+def _compiled_so_far(result: BuildResult) -> int:
+    """What Numba has compiled in this process of the build's modules, where they are imported already (its
+    equations, by their name; the algorithms, which every build of this andyc shares)."""
+    from andyc.runtime.compiled import leaf_compilations, numerics_compilations
+
+    numerics = sys.modules.get(numerics_package())
+    equations = sys.modules.get(module_name(result.name, result.build_key))
+    return ((numerics_compilations(numerics) if numerics is not None else 0)
+            + (leaf_compilations(equations) if equations is not None else 0))

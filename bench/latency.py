@@ -3,14 +3,16 @@ result of `andyc sim` cold (a fresh build folder and a fresh Numba cache) and wa
 again), for the shipped models and the panda URDF with its fingers locked (issue 19).
 
 Every figure is the wall time of a whole `andyc` process, started as a user starts it
-(`python -m andyc.cli`), so imports count. The cold build is split by stage from what `andyc build`
-prints in a second fresh folder (load + derive + generate, then Numba); `andyc sim` then runs in that
-folder (for an andyc that compiles its integrator only when a run needs it, that is where it does).
+(`python -m andyc.cli`), so imports count. The algorithms every model shares (andyc/numerics) compile
+once per installation into andyc's cache (ANDYC_CACHE_DIR): the table first times that, with an
+empty cache, then every model cold with it filled, as a user meets a new model. The cold build is
+split by stage from what `andyc build` prints in a second fresh folder (load + derive + generate,
+then Numba); `andyc sim` then runs in that folder.
 
     python bench/latency.py                     the table (about 5 minutes on 2 cores)
     python bench/latency.py --root OTHER_TREE   the same for another checkout of andyc (before/after)
     python bench/latency.py --models double_pendulum --repeats 3
-    python bench/latency.py --functions passive_walker      where Numba's seconds go, function by function
+    python bench/latency.py --functions passive_walker      where Numba's seconds go, leaf by leaf
     python bench/latency.py --speed-ab OTHER_TREE           same-run A/B of RK4 steps/s against another checkout
 
 Targets on the idle 2-core machine: cold first result <= 10 s (double_pendulum, swing_bar,
@@ -59,14 +61,16 @@ def _stage(text: str, name: str) -> float:
     return float(found.group(1)) if found else float("nan")
 
 
-def measure(root: Path, model: str, work: Path) -> dict:
-    """One model's row: cold sim, its split (load+derive+generate, Numba in build, compiling in sim), warm sim."""
+def measure(root: Path, model: str, work: Path, shared: Path) -> dict:
+    """One model's row: cold sim, its split (load+derive+generate, Numba in build, then sim), warm sim; andyc's
+    shared numerics from `shared` (ANDYC_CACHE_DIR)."""
     path = _panda(work) if model == "panda" else root / "models" / f"{model}.yaml"
     row = {}
     for run in ("cold", "split"):
         folder = work / run
         folder.mkdir()
-        env = {**os.environ, "NUMBA_CACHE_DIR": str(folder / "numba-cache")}   # a fresh Numba cache too
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(folder / "numba-cache"),   # a fresh Numba cache too
+               "ANDYC_CACHE_DIR": str(shared)}
         if run == "cold":
             row["cold"], _ = _andyc(root, ["sim", path, *SIM], folder, env)
             row["warm"], _ = _andyc(root, ["sim", path, *SIM], folder, env)
@@ -78,64 +82,64 @@ def measure(root: Path, model: str, work: Path) -> dict:
     return row
 
 
+def first_use(root: Path, work: Path, shared: Path) -> float:
+    """Wall seconds of the first `andyc sim` after installing andyc: an empty cache of the shared numerics
+    (filled for every later model) and a fresh build of the double pendulum."""
+    work.mkdir()
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(work / "numba-cache"), "ANDYC_CACHE_DIR": str(shared)}
+    return _andyc(root, ["sim", root / "models" / "double_pendulum.yaml", *SIM], work, env)[0]
+
+
 PROFILE = """
 import json, sys, time
-from collections import defaultdict
-from numba.core import event
+from numba.core import ccallback
 import andyc
 from andyc.runtime.compiled import compile_integrator, load_compiled
 
 path, out = sys.argv[1], sys.argv[2]
+leaves, compile_leaf = {}, ccallback.CFunc.compile
+
+
+def timed(self):
+    start = time.perf_counter()
+    compile_leaf(self)
+    leaves[self._pyfunc.__name__] = time.perf_counter() - start
+
+
+ccallback.CFunc.compile = timed
 t0 = time.perf_counter()
 result = andyc.build(path, out)
 t1 = time.perf_counter()
-with event.install_recorder("numba:compile") as compiles, event.install_recorder("numba:llvm_lock") as llvm:
-    model = load_compiled(result.module_path)
-    compile_integrator(model)
+model = load_compiled(result.module_path)         # compiles the leaves (and loads the shared numerics)
 t2 = time.perf_counter()
-# Exclusive seconds per function: a compilation's interval less those of the compilations nested in it
-# (a caller types its callees, which compile inside it).
-own, stack = defaultdict(float), []
-for stamp, ev in compiles.buffer:
-    name = ev.data["dispatcher"].py_func.__name__
-    if ev.is_start:
-        stack.append([name, stamp, 0.0])
-    else:
-        name, start, nested = stack.pop()
-        own[name] += stamp - start - nested
-        if stack:
-            stack[-1][2] += stamp - start
-llvm_s = sum(b[0] - a[0] for a, b in zip(llvm.buffer[::2], llvm.buffer[1::2]))
-# The functions whose body is the model's own math (the rest is the same in every model).
-generated = [name for name in own if name in model.module.OPERATIONS or name.startswith(
-    ("guard_", "enabled_", "reset_", "input_", "closed_form"))]
-print(json.dumps({"build": t1 - t0, "numba": t2 - t1, "llvm": llvm_s, "own": own, "generated": generated}))
+compile_integrator(model)
+t3 = time.perf_counter()
+own = {k: v for k, v in leaves.items() if k in model.module.OPERATIONS}
+print(json.dumps({"build": t1 - t0, "import": t2 - t1, "integrator": t3 - t2, "leaves": own}))
 """
 
 
-def profile(root: Path, model: str) -> None:
-    """Numba's compile time per generated function, in one cold process: exclusive seconds (typing,
-    lowering and LLVM of that function alone), largest first."""
+def profile(root: Path, model: str, shared: Path) -> None:
+    """Numba's compile time per leaf (the model's own functions), in one process with a fresh Numba cache
+    and andyc's shared numerics already compiled (`shared`, ANDYC_CACHE_DIR), largest first."""
     import json
 
     with tempfile.TemporaryDirectory(prefix="andyc-profile-") as tmp:
         tmp = Path(tmp)
         path = _panda(tmp) if model == "panda" else root / "models" / f"{model}.yaml"
-        env = {**os.environ, "PYTHONPATH": str(root), "NUMBA_CACHE_DIR": str(tmp / "numba-cache")}
+        env = {**os.environ, "PYTHONPATH": str(root), "NUMBA_CACHE_DIR": str(tmp / "numba-cache"),
+               "ANDYC_CACHE_DIR": str(shared)}
         proc = subprocess.run([sys.executable, "-c", PROFILE, str(path), str(tmp / "build")], capture_output=True,
                               text=True, env=env, cwd=tmp)
         if proc.returncode != 0:
             raise SystemExit(proc.stderr)
         r = json.loads(proc.stdout.splitlines()[-1])
-    print(f"{model}: build (load, derive, generate) {r['build']:.1f} s; Numba {r['numba']:.1f} s, "
-          f"of which LLVM {r['llvm']:.1f} s")
-    total = sum(r["own"].values())
-    mine = sum(r["own"][n] for n in r["generated"])
-    print(f"  the model's own functions ({len(r['generated'])}: dynamics, energy, guards, ...): {mine:.1f} s "
-          f"({100 * mine / total:.0f}%); the functions that are the same in every model (integrator, solves, "
-          f"events) and Numba's library code: {total - mine:.1f} s ({100 * (total - mine) / total:.0f}%)")
-    for name, seconds in sorted(r["own"].items(), key=lambda kv: -kv[1])[:15]:
-        print(f"  {name:28s} {seconds:6.2f} s  {100 * seconds / total:4.0f}%")
+    total = sum(r["leaves"].values())
+    print(f"{model}: build (load, derive, generate) {r['build']:.1f} s; import {r['import']:.1f} s, of which "
+          f"Numba compiling the model's {len(r['leaves'])} leaves {total:.1f} s; the shared integrator "
+          f"{r['integrator']:.2f} s (from andyc's cache)")
+    for name, seconds in sorted(r["leaves"].items(), key=lambda kv: -kv[1]):
+        print(f"  {name:24s} {seconds:6.2f} s  {100 * seconds / total:4.0f}%")
 
 
 SPEED = """
@@ -185,17 +189,21 @@ def main(argv=None) -> int:
     if args.speed_ab:
         speed_ab(root, args.speed_ab.resolve())
         return 0
-    if args.functions:
-        profile(root, args.functions)
-        return 0
     with tempfile.TemporaryDirectory(prefix="andyc-latency-") as tmp:
         tmp = Path(tmp)
+        shared = tmp / "andyc-cache"
+        first = first_use(root, tmp / "first", shared)
+        if args.functions:
+            profile(root, args.functions, shared)
+            return 0
         env = dict(os.environ)
         version = min(_andyc(root, ["--version"], tmp, env)[0] for _ in range(3))
         check = min(_andyc(root, ["check", root / "models" / "passive_walker.yaml"], tmp, env)[0] for _ in range(3))
         print(f"andyc at {root}")
         print(f"andyc --version: {version:.2f} s (target 0.3 s); andyc check passive_walker: {check:.2f} s "
               "(target 1.5 s); best of 3")
+        print(f"first andyc sim after installing andyc (the shared numerics compile once, then the double "
+              f"pendulum): {first:.1f} s")
         print()
         print(f"{'model':16s} {'cold sim':>9s} {'target':>6s} | {'build':>6s} {'derive':>6s} {'gen':>5s} "
               f"{'numba':>6s} {'then sim':>8s} | {'warm sim':>8s}")
@@ -203,12 +211,13 @@ def main(argv=None) -> int:
             for k in range(args.repeats):
                 work = tmp / f"{model}-{k}"
                 work.mkdir()
-                r = measure(root, model, work)
+                r = measure(root, model, work, shared)
                 print(f"{model:16s} {r['cold']:8.1f}s {TARGETS.get(model, 0):5d}s | {r['build']:5.1f}s "
                       f"{r['derive']:5.1f}s {r['generate']:4.1f}s {r['numba_build']:5.1f}s "
                       f"{r['sim_after_build']:7.1f}s | {r['warm']:7.2f}s", flush=True)
     print()
-    print("cold sim: `andyc sim` in a fresh build folder with a fresh NUMBA_CACHE_DIR (build, compile, a 1 s run);")
+    print("cold sim: `andyc sim` in a fresh build folder with a fresh NUMBA_CACHE_DIR (build, compile, a 1 s run),")
+    print("andyc's shared numerics compiled (the first line above);")
     print("build: `andyc build` in another fresh folder, of which derive, generate (andyc's figures) and numba")
     print("(compile or cache load); then sim: `andyc sim` after it; warm sim: the cold command again.")
     return 0

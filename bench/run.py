@@ -42,37 +42,46 @@ import andyc
 from andyc.reference.chains import chain_yaml, kane_model, random_chain
 from andyc.reference.closed_forms import ball_first_integral
 from andyc.reference.robots import robots_dir
-from andyc.runtime.compiled import Workspace
+from andyc.runtime.compiled import work
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-@njit(cache=False)
-def _rhs_loop(rhs_into, n, x, u, p, d, xdot, M, G, S):
-    """n right-hand-side evaluations at slowly moving states (so nothing is hoisted)."""
-    acc = 0.0
-    for i in range(n):
-        x[0] += 1e-12
-        rhs_into(0.0, x, u, p, d, 0, xdot, M, G, S)
-        acc += xdot[-1]
-    return acc
+def _rhs_loop(model):
+    """loop(n, m, w, x, u, p, d, xdot): n right-hand-side evaluations at slowly moving states (so nothing is
+    hoisted), the arrays borrowed as the integrator passes them (andyc_numerics/model.py)."""
+    rhs_mode_into, borrowed = model.numerics.dynamics.rhs_mode_into, model.numerics.model.borrowed
+
+    @njit(cache=False)
+    def loop(n, m, w, x, u, p, d, xdot):
+        x, u, p, d, xdot = borrowed(x), borrowed(u), borrowed(p), borrowed(d), borrowed(xdot)
+        acc = 0.0
+        for i in range(n):
+            x[0] += 1e-12
+            rhs_mode_into(m, w, 0.0, x, u, p, d, 0, xdot, 0)
+            acc += xdot[-1]
+        return acc
+
+    return loop
 
 
 def _rhs_arguments(model):
-    """(x, u, p, d, xdot, M, G, S): the initial state, defaults and a fresh workspace, for rhs_into."""
+    """(m, w, x, u, p, d, xdot): the compiled model, a fresh Work, the initial state and defaults, for the
+    right-hand side (and the Work, which must outlive them)."""
     p, u = model.parameter_defaults, model.input_defaults
-    ws = Workspace.for_model(model)
-    return model.initial_state(p).copy(), u, p, model.initial_discrete(p), ws.xdot, ws.M, ws.G, ws.S
+    w = work(model)
+    return (model.ref, w.ref, model.initial_state(p).copy(), u, p, model.initial_discrete(p), w.xdot), w
 
 
 def rhs_microseconds(model, repeats=3, n=200_000) -> float:
-    """Best of `repeats`: microseconds per rhs_into call inside a compiled loop."""
-    args = _rhs_arguments(model)
-    _rhs_loop(model.module.rhs_into, 10, *args)
+    """Best of `repeats`: microseconds per right-hand side (rhs_mode_into, IDEAL) inside a compiled loop."""
+    args, _ = _rhs_arguments(model)
+    loop = _rhs_loop(model)
+    loop(10, *args)
     best = np.inf
     for _ in range(repeats):
         tic = time.perf_counter()
-        _rhs_loop(model.module.rhs_into, n, *args)
+        loop(n, *args)
         best = min(best, time.perf_counter() - tic)
     return 1e6 * best / n
 
@@ -325,14 +334,14 @@ def _pin_microseconds(model, data, q, v, tau, n=100_000, repeats=3) -> float:
 
 
 def _python_call_microseconds(model, n=100_000, repeats=3) -> float:
-    """Best of `repeats`: microseconds per rhs_into call from Python (Numba's dispatch included)."""
-    x, u, p, d, xdot, M, G, S = _rhs_arguments(model)
-    f = model.module.rhs_into
+    """Best of `repeats`: microseconds per right-hand side called from Python (Numba's dispatch included)."""
+    (m, w, x, u, p, d, xdot), _ = _rhs_arguments(model)
+    f = model.numerics.dynamics.rhs_mode_into
     best = np.inf
     for _ in range(repeats):
         tic = time.perf_counter()
         for _ in range(n):
-            f(0.0, x, u, p, d, 0, xdot, M, G, S)
+            f(m, w, 0.0, x, u, p, d, 0, xdot, 0)
         best = min(best, time.perf_counter() - tic)
     return 1e6 * best / n
 

@@ -188,8 +188,9 @@ def test_payloads_in_expressions_are_refused_by_the_parser(tmp_path, field, valu
 
 
 def test_names_that_would_collide_in_generated_code_stay_apart(tmp_path):
-    """Jumps 'x' and 'rate_x' would both make guard_rate_x; frame 'a_x_in_b' and frame 'a' measured in
-    'b_z' would both make the frame quantity fq_a_x_in_b_z. Each keeps its own function and symbol."""
+    """Jumps 'x' and 'rate_x' (whose functions, one per jump, were once guard_rate_x both) each keep their own
+    branch, by index, in every leaf over the jumps; frame 'a_x_in_b' and frame 'a' measured in 'b_z' would
+    both make the frame quantity fq_a_x_in_b_z. Each keeps its own symbol."""
     text = MODEL.format(description="d").replace("    - name: bounce\n", "    - name: x\n").replace(
         "      impact: {restitution: e, constraints: [ground]}\n",
         "      impact: {restitution: e, constraints: [ground]}\n"
@@ -198,9 +199,14 @@ def test_names_that_would_collide_in_generated_code_stay_apart(tmp_path):
     path.write_text(text)
     model = andyc.derive(andyc.load(path))
     source = render(model, "key")[0]
-    names = {node.name for node in ast.walk(ast.parse(source)) if isinstance(node, ast.FunctionDef)}
-    assert {"guard_0_x", "guard_rate_0_x", "guard_1_rate_x", "guard_rate_1_rate_x"} <= names
-    assert len([n for n in ast.walk(ast.parse(source)) if isinstance(n, ast.FunctionDef)]) == len(names)
+    functions = {node.name: node for node in ast.walk(ast.parse(source)) if isinstance(node, ast.FunctionDef)}
+    assert len([n for n in ast.walk(ast.parse(source)) if isinstance(n, ast.FunctionDef)]) == len(functions)
+    for leaf in ("guard", "guard_rate", "enabled", "reset"):
+        branches = [node for node in functions[leaf].body if isinstance(node, ast.If)]
+        assert [ast.unparse(node.test) for node in branches] == ["k == 0", "k == 1"]
+    x_guard, rate_x_guard = (ast.unparse(node) for node in functions["guard"].body if isinstance(node, ast.If))
+    assert "q_y" in x_guard and "5" not in x_guard          # jump x: guard y
+    assert "q_z" in rate_x_guard and "5" in rate_x_guard    # jump rate_x: guard z - 5
 
     frames = MODEL.format(description="d").replace(
         "  - {name: side, parent: ball, prismatic: z, axis: z}\n",

@@ -74,8 +74,9 @@ def test_runtime_data_edits_reuse_the_build_and_an_equation_edit_rebuilds(tmp_pa
     assert list(edited.parameter_defaults) == [1.5, 2.0, 9.81]
     assert edited.module.initial_state()[0] == 0.75
     assert edited.module.DESCRIPTION == "Edited: the same pendulum."
+    compiled_before = compilations(edited)
     run = andyc.simulate(edited, 1.0, dt=1e-3)
-    assert compilations(edited) == 0                      # compile_model compiled (loaded) all that a run needs
+    assert compilations(edited) == compiled_before        # compile_model compiled (loaded) all that a run needs
     # Against the closed form's invariant: energy m g L sin(theta) + m (L theta')^2 / 2 at the new values.
     theta, omega = run.state[-1]
     energy = 2.0 * 9.81 * 1.5 * np.sin(theta) + 2.0 * (1.5 * omega) ** 2 / 2
@@ -128,3 +129,34 @@ def test_two_models_of_one_name_never_share_a_build_folder(tmp_path):
     replaced = andyc.build(second, build, force=True)
     assert replaced.build_key != key
     assert written_constant(result.module_path, "SOURCE_PATH") == str(second.resolve())
+
+
+def test_a_new_model_compiles_only_its_own_functions(tmp_path):
+    """The algorithms are compiled once for every model (andyc/numerics, cached by content): a model never
+    built before compiles its leaves, and nothing of the integrator, projection or solves."""
+    first, second = tmp_path / "a.yaml", tmp_path / "b.yaml"
+    first.write_text(PENDULUM)
+    second.write_text(PENDULUM.replace("cached_pendulum", "other_pendulum").replace("mass: m", "mass: 3*m"))
+    andyc.compile_model(first, tmp_path / "build")
+    model, result = andyc.compile_model(second, tmp_path / "build")
+    leaves = [name for name, value in vars(model.module.EQUATIONS).items() if hasattr(value, "address")]
+    assert sorted(leaves) == ["dynamics", "energy", "frame_positions", "power"]      # what a pendulum needs
+    assert result.compiled == len(leaves)
+    run = andyc.simulate(model, 0.5, dt=1e-3)
+    theta, omega = run.state[-1]        # m g L sin(theta) + m (L theta')^2 / 2 at m = 3, the changed equation
+    assert abs(3 * 9.81 * np.sin(theta) + 3 * omega ** 2 / 2 - 3 * 9.81 * np.sin(0.5)) < 1e-6
+
+
+def test_a_leaf_refuses_an_array_it_would_read_wrongly(compiled):
+    """The algorithms call a leaf through its C address (andyc_numerics/model.py `call`), which reads its arrays
+    as contiguous: a strided array is a typing error, never a silent misread (SciPy's Radau passes columns)."""
+    from numba.core.errors import TypingError
+
+    model = compiled("double_pendulum")
+    w = andyc.runtime.compiled.work(model)
+    x = np.zeros((model.nx, 2))
+    x[:, 0] = model.initial_state(model.parameter_defaults)
+    with pytest.raises(TypingError):
+        model.numerics.dynamics.rhs_mode_into(model.ref, w.ref, 0.0, x[:, 0], model.input_defaults,
+                                              model.parameter_defaults, model.module.DISCRETE_DEFAULTS, 0,
+                                              w.xdot, 0)

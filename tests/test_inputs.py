@@ -150,6 +150,7 @@ def test_lqr_from_andyc_linearize_balances_the_cart_pole(tmp_path):
 
     falls = andyc_cli("sim", MODELS / "cart_pole.yaml", "--t-end", 3, "--out", tmp_path / "falls.h5",
                       "-o", tmp_path / "build")
+    assert falls.returncode == 0, falls.stderr
     with h5py.File(tmp_path / "falls.h5") as f:
         assert np.max(np.abs(f["state"][:, 1])) > 1.0
 

@@ -41,16 +41,19 @@ def installed(tmp_path_factory):
     return bin_dir, work
 
 
-def test_the_wheel_carries_the_templates_and_the_schema(installed):
+def test_the_wheel_carries_the_templates_the_schema_and_the_numerics(installed):
     bin_dir, work = installed
     where = subprocess.run([str(bin_dir / "python"), "-c", "import andyc, pathlib; p = pathlib.Path(andyc.__file__)"
                             ".parent; print(p); print(sorted(x.name for x in (p / 'templates').glob('*.*'))); "
-                            "print((p / 'schemas' / 'andyc-model.schema.json').is_file())"],
+                            "print((p / 'schemas' / 'andyc-model.schema.json').is_file()); "
+                            "print(sorted(x.name for x in (p / 'numerics').glob('*.py')))"],
                            capture_output=True, text=True, cwd=work)
     assert where.returncode == 0, where.stderr
-    folder, templates, schema = where.stdout.splitlines()
+    folder, templates, schema, numerics = where.stdout.splitlines()
     assert "site-packages" in folder and not folder.startswith(str(ROOT))
-    assert templates == str(["equations.py.j2", "integrator.py", "jumps.py.j2", "module.py.j2"]) and schema == "True"
+    assert templates == str(["equations.py.j2", "jumps.py.j2", "module.py.j2"]) and schema == "True"
+    # The algorithms every build copies (andyc/numerics), all of them.
+    assert numerics == str(sorted(x.name for x in (ROOT / "andyc" / "numerics").glob("*.py")))
 
 
 def test_check_build_and_sim_run_from_the_wheel_in_another_folder(installed):

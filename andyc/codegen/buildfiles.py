@@ -9,9 +9,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import andyc
+from andyc.numerics.compiler import cache_folder
+from andyc.outputs import check_folder, update_text
 
 PACKAGE = Path(__file__).resolve().parents[1]
-_GENERATOR_SOURCES = ["symbolic", "codegen", "spec", "templates", "schemas"]
+NUMERICS = PACKAGE / "numerics"           # static source, copied into every build (andyc/numerics/__init__.py)
+_GENERATOR_SOURCES = ["symbolic", "codegen", "spec", "templates", "schemas", "numerics"]
 
 
 @dataclass
@@ -36,6 +39,35 @@ def generator_fingerprint() -> str:
                 h.update(path.relative_to(PACKAGE).as_posix().encode())
                 h.update(path.read_bytes())
     return h.hexdigest()
+
+
+def _numerics_files() -> list[Path]:
+    return sorted(NUMERICS.glob("*.py"))
+
+
+def numerics_package() -> str:
+    """The name a build imports its copy of andyc/numerics/ by: `andyc_numerics_<digest of its files>`, so that
+    one name means one content, in every build and in Numba's cache of it (andyc/numerics/compiler.py)."""
+    h = hashlib.sha256()
+    for path in _numerics_files():
+        h.update(path.name.encode() + b"\0" + path.read_bytes())
+    return f"andyc_numerics_{h.hexdigest()[:16]}"
+
+
+def numerics_compiled() -> bool:
+    """Whether this andyc's numerics are in the cache (compiled once per installation, for every model)."""
+    return any(Path(cache_folder(numerics_package())).glob("*advance*.nbi"))
+
+
+def numerics_path(out_dir, name: str) -> Path:
+    return Path(out_dir) / name / "andyc_numerics"
+
+
+def write_numerics(out_dir, name: str) -> None:
+    """Copy andyc/numerics/ into the build folder of `name` (the files that differ; each written whole)."""
+    folder = check_folder(numerics_path(out_dir, name))
+    for path in _numerics_files():
+        update_text(folder / path.name, path.read_text(encoding="utf-8"))
 
 
 def build_key(meaning_sha256: str) -> str:

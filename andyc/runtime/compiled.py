@@ -1,14 +1,16 @@
-"""A generated module, imported: the compiled model (immutable) and its workspace.
+"""A generated module, imported: the compiled model (immutable) and the arrays its algorithms work in.
 
 As in Pinocchio and MuJoCo, the model holds sizes, names, defaults and the
-compiled functions; a Workspace holds the arrays an algorithm writes into, so
-nothing is allocated inside the integration loop.
+compiled functions; a Work (andyc_numerics/model.py, in the build) holds the
+arrays an algorithm writes into, so nothing is allocated inside the
+integration loop. The algorithms are the build's copy of andyc/numerics,
+compiled once for every model (CompiledModel.numerics); the model's own
+functions are in CompiledModel.ref, the Model those algorithms take.
 """
 
 from __future__ import annotations
 
 import importlib.util
-import inspect
 import sys
 import traceback
 from dataclasses import dataclass
@@ -16,14 +18,15 @@ from pathlib import Path
 from types import ModuleType
 
 import numpy as np
-from numba import types
 
 from andyc.errors import SimulationError
-
+from andyc.numerics.status import IDEAL
 
 @dataclass(frozen=True)
 class CompiledModel:
-    module: ModuleType
+    module: ModuleType          # the generated <name>.py
+    numerics: ModuleType        # the algorithms: its andyc_numerics package (integrator, dynamics, model, ...)
+    ref: object                 # the compiled Model they take (module.MODEL)
     path: Path
     name: str
     spec_sha256: str
@@ -105,27 +108,10 @@ def _with_overrides(names, defaults, overrides, kind) -> np.ndarray:
     return values
 
 
-@dataclass
-class Workspace:
-    """Arrays the integrators write into: M, G, the solver scratch, stage derivatives, scratch states, guard values."""
-    M: np.ndarray
-    G: np.ndarray
-    S: np.ndarray        # (S_ROWS, S_WIDTH) scratch of the constrained solve, projection and impacts (the module's S_*)
-    k: np.ndarray        # (4, nx) RK stages
-    x_tmp: np.ndarray    # (nx,) stage state
-    x_step: np.ndarray   # (nx,) a step's end
-    x_near: np.ndarray   # (nx,) event location: the state at the bracket's near end
-    x_trial: np.ndarray  # (nx,) event location: a trial state
-    x_event: np.ndarray  # (nx,) the state just before a jump
-    xdot: np.ndarray     # (nx,)
-    g0: np.ndarray       # (nj,) guard values at the current step's start
-    u: np.ndarray        # (nu,) the inputs at the latest (t, x)
-
-    @classmethod
-    def for_model(cls, model: CompiledModel) -> "Workspace":
-        nx = model.nx
-        return cls(np.zeros((model.nv, model.nv)), np.zeros(model.nv), np.zeros((model.module.S_ROWS, model.module.S_WIDTH)), np.zeros((4, nx)),
-                   *(np.zeros(nx) for _ in range(6)), np.zeros(model.nj), np.zeros(len(model.input_names)))
+def work(model: CompiledModel):
+    """A new Work of the model's scratch arrays (andyc_numerics/model.py): `.ref` for the algorithms, and the
+    arrays themselves (w.u, w.x_event, w.g0, ...) for Python."""
+    return model.numerics.model.Work(model.module.SIZES)
 
 
 def load_compiled(path) -> CompiledModel:
@@ -143,9 +129,9 @@ def load_compiled(path) -> CompiledModel:
     finally:
         sys.modules.pop(mod_name, None)     # (it registers its equations under the name their cache knows)
     model = CompiledModel(
-        module=module, path=path, name=module.NAME, spec_sha256=module.SPEC_SHA256,
+        module=module, numerics=module.NUMERICS, ref=module.MODEL, path=path, name=module.NAME, spec_sha256=module.SPEC_SHA256,
         nq=module.NQ, nv=module.NV, ns=module.NS, nx=module.NX, state_names=tuple(module.STATES),
-        quaternions=tuple(module.QUATERNIONS),
+        quaternions=tuple(int(k) for k in module.QUATERNIONS),
         parameter_names=tuple(module.PARAMETERS), parameter_defaults=module.PARAMETER_DEFAULTS,
         input_names=tuple(module.INPUTS), input_defaults=module.INPUT_DEFAULTS,
         frame_names=tuple(module.FRAMES), nh=module.NH, nc=module.NC,
@@ -158,16 +144,7 @@ def load_compiled(path) -> CompiledModel:
         frame_parents=tuple(module.FRAME_PARENTS), input_expressions=tuple(module.INPUT_EXPRESSIONS.items()),
         closed_form=module.closed_form if module.HAS_CLOSED_FORM else None,
         closed_form_where=tuple(tuple(w) for w in module.CLOSED_FORM_WHERE))
-    # Call each function once so Numba compiles now, not inside a timed run.
-    p, u, x, d, ws, flow = _sample_arguments(model)
-    module.rhs_into(0.0, x, u, p, d, flow, ws.k[0], ws.M, ws.G, ws.S)
-    module.normalize(x.copy())
-    module.energy(0.0, x, u, p, d)
-    module.power(0.0, x, u, p, d)
-    module.frame_positions(0.0, x, u, p, d, np.zeros((len(model.frame_names), 3)))
-    if model.closed_form is not None:
-        model.closed_form(0.0, u, p)
-    return model
+    return model          # (the leaves compile, or load from Numba's cache, as the module is imported)
 
 
 def _import_failure(path: Path, exc: BaseException) -> str:
@@ -184,58 +161,71 @@ def _import_failure(path: Path, exc: BaseException) -> str:
 
 
 def compilations(model: CompiledModel) -> int:
-    """How many functions of the module Numba has compiled in this process, rather than loaded from its
-    cache (the misses of its cache)."""
+    """How many functions Numba has compiled in this process, rather than loaded from its cache: the model's
+    leaves, and the algorithms (shared by every model of the process: see numerics_compilations)."""
+    return leaf_compilations(model.module.EQUATIONS) + numerics_compilations(model.numerics)
+
+
+def leaf_compilations(equations: ModuleType) -> int:
+    """How many leaves of a <name>_equations.py module Numba compiled (rather than loaded) when it was imported."""
+    return sum(value.cache_hits == 0 for value in vars(equations).values() if _is_cfunc(value))
+
+
+def numerics_compilations(numerics: ModuleType) -> int:
+    """How many functions of a numerics package (a build's andyc_numerics) Numba has compiled in this process."""
     total = 0
-    for value in vars(model.module).values():
-        misses = getattr(getattr(value, "stats", None), "cache_misses", None)
-        if misses is not None:
-            total += sum(misses.values())
+    for name in ("model", "stubs", "linalg", "dynamics", "integrator", "api"):
+        for value in vars(getattr(numerics, name)).values():
+            misses = getattr(getattr(value, "stats", None), "cache_misses", None)
+            if misses is not None:
+                total += sum(misses.values())
+            elif _is_cfunc(value):
+                total += value.cache_hits == 0
     return total
 
 
-def _sample_arguments(model: CompiledModel):
-    """Defaults and the initial state, to call the module's functions once (so Numba compiles them)."""
+def _is_cfunc(value) -> bool:
+    return hasattr(value, "cache_hits") and hasattr(value, "address")
+
+
+def sample_run(model: CompiledModel):
+    """(p, u, x, d, flow, w): defaults, the initial state and a new Work, to call the algorithms once."""
     p, u = model.parameter_defaults, model.input_defaults
-    return p, u, model.initial_state(p), model.initial_discrete(p), Workspace.for_model(model), model.initial_flow
-
-
-def integrator_compiled(model: CompiledModel, driven: bool = False) -> bool:
-    """Whether the module's integrator is compiled (or plain Python: Numba absent), for held inputs
-    or (driven) for an input function."""
-    advance = model.module.advance
-    signatures = getattr(advance, "signatures", None)
-    if signatures is None:
-        return True
-    k = list(inspect.signature(advance.py_func).parameters).index("inputs")
-    return any((sig[k] != types.none) == driven for sig in signatures)
+    return p, u.copy(), model.initial_state(p), model.initial_discrete(p), model.initial_flow, work(model)
 
 
 def compile_integrator(model: CompiledModel, function=None, data=None) -> None:
-    """Compile the module's integrator and log evaluations (or load them from Numba's cache) once,
-    with the argument types simulate() passes: a block of no steps and one-sample logs. With an
-    input function (and its data), the integrator's second compilation, which calls it. simulate()
-    calls this before it starts its clock, so a run's wall time never includes compilation."""
+    """Compile all that a run calls (or load it from Numba's cache) with the argument types simulate() passes:
+    the integrator (a block of no steps, one-sample logs), the hybrid step, the log evaluations, and the
+    right-hand side, guards and jumps that the adaptive methods call from Python. With an input function
+    (and its data), the integrator's variant that calls it. simulate() calls this before it starts its
+    clock, so a run's wall time never includes compilation; once compiled for one model, the algorithms
+    load from the cache for every other."""
+    numerics, m = model.numerics, model.ref
+    integrator = numerics.integrator
+    p, u, x, d, flow, w = sample_run(model)
+    log = integrator.Log(np.zeros(1), x[None, :].copy(), u[None, :].copy(), np.full(1, flow, dtype=np.int64),
+                         d[None, :].copy())
+    opts = integrator.options(IDEAL, False, False, 0.0, -1.0, 1e-12)
+    integrator.advance(m, w.ref, opts, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1, log, 1)
+    integrator.instant(m, w.ref, IDEAL, function, data, 0.0, x.copy(), p, d.copy(), flow)
+    integrator.update_inputs(function, 0.0, x, p, d, flow, u, data)
+    if function is not None:
+        return
+    integrator.evaluate_energy(m, log, p, np.zeros(1))
+    integrator.evaluate_frames(m, log, p, np.zeros((1, len(model.frame_names), 3)))
+    integrator.evaluate_constraints(m, w.ref, log, p, np.zeros((1, model.nh)), np.zeros((1, model.nc)),
+                                    np.zeros((1, model.nc)))
+    numerics.dynamics.rhs_mode_into(m, w.ref, 0.0, x, u, p, d, flow, w.xdot, IDEAL)
+    if model.nj:
+        numerics.dynamics.jump(m, w.ref, 0, 0.0, x.copy(), u, p, d.copy())
+    integrator.crosses(0, 1.0, -1.0)
     module = model.module
-    driven = function is not None
-    if integrator_compiled(model, driven):
-        return
-    p, u, x, d, ws, flow = _sample_arguments(model)
-    t_log, x_log, f_log, d_log = np.zeros(1), x[None, :].copy(), np.full(1, flow, dtype=np.int64), d[None, :].copy()
-    u_log = u[None, :].copy()
-    module.advance(0, False, False, 0.0, -1.0, 1e-12, 0.0, 1e-3, 0, 0, 1, 0.0, flow, x.copy(), function, ws.u, data,
-                   p, d.copy(), t_log.copy(), x_log.copy(), u_log.copy(), f_log.copy(), d_log.copy(), 1, ws.g0,
-                   ws.x_event, ws.M, ws.G, ws.S, ws.k, ws.x_tmp, ws.x_step, ws.x_near, ws.x_trial,
-                   np.zeros(3, dtype=np.int64))
-    module.instant(0, 0.0, x.copy(), function, ws.u, data, p, d.copy(), flow, ws.xdot, ws.M, ws.G, ws.S)
-    module.update_inputs(function, 0.0, x, p, d, flow, ws.u, data)
-    if driven:
-        return
-    module.evaluate_energy(t_log, x_log, u_log, p, d_log, np.zeros(1))
-    model.flow_inputs(u, p)                             # what simulate() calls before it integrates
+    module.energy(0.0, x, u, p, d)
+    module.guard(0, 0.0, x, u, p, d)
+    module.enabled(0, 0.0, x, u, p, d)
+    model.flow_inputs(u, p)
+    module.constraints(0.0, x, u, p, d, np.empty(model.nh), np.empty(model.nc), np.empty((model.nc, model.nv)),
+                       np.empty(model.nc))
     if model.nc:
-        module.constraints(0.0, x, u, p, d, np.empty(model.nh), np.empty(model.nc), np.empty((model.nc, model.nv)),
-                           np.empty(model.nc))
-    if model.nc:
-        module.evaluate_constraints(t_log, x_log, u_log, p, d_log, f_log, np.zeros((1, model.nh)),
-                                    np.zeros((1, model.nc)), np.zeros((1, model.nc)), ws.M, ws.G, ws.S)
+        numerics.dynamics.project(m, w.ref, 0.0, x.copy(), u, p, d, flow, True, 0.0, -1.0)

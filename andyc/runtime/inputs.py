@@ -100,11 +100,11 @@ class InputSource:
         nu = self.record // self.flows
         return self.data[flow * nu:(flow + 1) * nu]
 
-    def into(self, module, t, x, p, d, flow: int, u) -> int:
-        """u = the inputs at (t, x) in `flow`; a status (the module's OK or INPUT_FAILED)."""
+    def into(self, model, t, x, p, d, flow: int, u) -> int:
+        """u = the inputs of the CompiledModel `model` at (t, x) in `flow`; a status (OK or INPUT_FAILED)."""
         u[:] = self.held(flow)
         inputs, data = self.function_data
-        return module.update_inputs(inputs, t, np.ascontiguousarray(x), p, d, flow, u, data)
+        return model.numerics.integrator.update_inputs(inputs, t, np.ascontiguousarray(x), p, d, flow, u, data)
 
     def failure(self, model, d, p) -> str:
         """Why the function failed (from its record), naming the controller's file and line."""
@@ -259,7 +259,7 @@ def input_source(model, p, values: dict | None = None, controller=None, t_end: f
     if not drives:
         return InputSource(None, data, nx, model.nf, record)
     if own and not (expressions or tables or ctrl):
-        function = model.module.model_inputs                # the module's own callback
+        function = model.module.MODEL_INPUTS                # the module's own callback
     else:
         function = _compile(model, expressions, offsets, ctrl, record, list(own))
     return InputSource(function, data, nx, model.nf, record, drives, ctrl)
@@ -433,20 +433,22 @@ def _compile(model, expressions: dict, tables: dict, ctrl: Controller | None, re
 
     interpolate, failed = _helpers()
     nu = len(model.input_names)
-    lines = ["def inputs(t, x, d, p, flow, u, data):",
-             f"    for i in range({nu}):",
-             f"        u[i] = data[flow * {nu} + i]"]
+    lines = ["def inputs(t, x, d, p, flow, u, data):"]
+    if own:         # the module's callback: the held values, then the model's own expressions ...
+        lines += ["    model_inputs(t, x, d, p, flow, u, data)"]
+        for name, _ in model.input_expressions:     # ... but the run's constant, where it holds one of those
+            if name not in own:
+                i = model.input_names.index(name)
+                lines += [f"    u[{i}] = data[flow * {nu} + {i}]"]
+    else:
+        lines += [f"    for i in range({nu}):", f"        u[i] = data[flow * {nu} + i]"]
     index = {n: i for i, n in enumerate(model.input_names)}
-    functions = model.module.INPUT_FUNCTIONS                # input name -> its function in the module
-    for name in own:
-        lines += [f"    if not SETS[flow, {index[name]}]:", f"        u[{index[name]}] = {functions[name]}(t, x, p, d)"]
     for name, code in expressions.items():
         lines += [f"    if not SETS[flow, {index[name]}]:", f"        u[{index[name]}] = {code}"]
     for name, (start, n) in tables.items():
         lines += [f"    if not SETS[flow, {index[name]}]:", f"        u[{index[name]}] = interpolate(data, {start}, {n}, t)"]
     namespace = {"math": math, "np": np, "SETS": np.ascontiguousarray(model.module.FLOW_SETS_INPUT),
-                 "interpolate": interpolate, "failed": failed,
-                 **{f: getattr(model.module, f) for f in functions.values()}}
+                 "interpolate": interpolate, "failed": failed, "model_inputs": model.module.MODEL_INPUTS}
     if ctrl is not None:
         if ctrl.compiled is None:
             python = ctrl.function
@@ -490,7 +492,7 @@ def _compile(model, expressions: dict, tables: dict, ctrl: Controller | None, re
     # parser and printed by SymPy; no user text is executed here.
     exec(compile("\n".join(lines) + "\n", f"<andyc inputs of {model.name}>", "exec"), namespace)
     try:
-        return cfunc(model.module.INPUTS_SIGNATURE, error_model="numpy")(namespace["inputs"])
+        return cfunc(model.numerics.model.INPUTS_SIGNATURE, error_model="numpy")(namespace["inputs"])
     except Exception as exc:
         where = ctrl.path if ctrl is not None else model.name
         raise SimulationError(f"{where}: cannot compile the inputs with Numba: {str(exc).splitlines()[0]}") from None

@@ -122,7 +122,6 @@ RUN_SUFFIXES = (".h5", ".hdf5", ".csv")
 def write_h5(run: Run, path: Path) -> None:
     import h5py
 
-    n = run.time.shape[0]
     with h5py.File(path, "w") as f:
         for key, value in run.attributes().items():
             f.attrs[key] = value

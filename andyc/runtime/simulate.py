@@ -36,15 +36,14 @@ from pathlib import Path
 import numpy as np
 
 from andyc.errors import SimulationError
-from andyc.runtime.compiled import CompiledModel, Workspace, compile_integrator
+from andyc.numerics.status import BAUMGARTE, DIVERGED, IDEAL, INPUT_FAILED, LAGRANGE, MESSAGES, OK
+from andyc.runtime.compiled import CompiledModel, compile_integrator, work
 from andyc.runtime.events import EventLog
 from andyc.runtime.inputs import USER_ERRORS, InputSource, input_source, raised
 from andyc.runtime.interrupts import Interrupts
 from andyc.runtime.methods import FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
 from andyc.runtime.run import Run
 
-OK, NONFINITE, SINGULAR_MASS, DEPENDENT, INPUT_FAILED, DIVERGED = 0, 1, 2, 3, 4, 5  # statuses, as in the module
-IDEAL, LAGRANGE, BAUMGARTE = 0, 1, 2                   # how constraint forces are found, as there
 def scipy_method(name: str):
     """The solve_ivp solver class of an adaptive method (SciPy is imported only by a run that uses one)."""
     from scipy import integrate
@@ -186,16 +185,16 @@ class _Assembly:
         t_log, x_log, u_log, f_log, d_log = log
         n = t_log.shape[0]
         energy = np.empty(n)
-        model.module.evaluate_energy(t_log, x_log, u_log, p, d_log, energy)
+        integrator = model.numerics.integrator
+        log = integrator.Log(t_log, x_log, u_log, f_log, d_log)
+        integrator.evaluate_energy(model.ref, log, p, energy)
         phi, c, lam = np.empty((n, model.nh)), np.empty((n, model.nc)), np.empty((n, model.nc))
         if model.nc:
-            model.module.evaluate_constraints(t_log, x_log, u_log, p, d_log, f_log, phi, c, lam,
-                                              np.empty((model.nv, model.nv)), np.empty(model.nv),
-                                              np.empty((model.module.S_ROWS, model.module.S_WIDTH)))
+            integrator.evaluate_constraints(model.ref, work(model).ref, log, p, phi, c, lam)
         frames_out = {}
         if frame_names:
             xyz = np.empty((n, len(model.frame_names), 3))
-            model.module.evaluate_frames(t_log, x_log, u_log, p, d_log, xyz)
+            integrator.evaluate_frames(model.ref, log, p, xyz)
             frames_out = {name: xyz[:, model.frame_names.index(name)] for name in frame_names}
         held = u_log[0] if n else self.source.held(model.initial_flow)
         return Run(model=model.name, spec_sha256=model.spec_sha256, method=self.method, dt=self.dt, nq=model.nq,
@@ -240,7 +239,7 @@ def inputs_at(model: CompiledModel, source: InputSource, t: float, x, p, d, flow
     """The inputs at (t, x) in `flow` (a new array); SimulationError naming the controller's line if it fails."""
     u = np.empty(len(model.input_names))
     x = np.ascontiguousarray(x, dtype=np.float64)
-    if source.into(model.module, t, x, p, d, flow, u) != OK:
+    if source.into(model, t, x, p, d, flow, u) != OK:
         raise SimulationError(source.failure(model, d, p))
     return u
 
@@ -302,9 +301,9 @@ def consistent_initial_state(model: CompiledModel, x, u, p, d, flow, init: str, 
             f"{out['initial_position_residual']:.3g}, velocity {out['initial_velocity_residual']:.3g}), past the bound "
             f"{init_tol:g}; fix the initial values, or use --init project to move the state onto the manifold "
             f"(the smallest change in the mass-matrix metric), or --init as-is to start from it anyway")
-    ws = Workspace.for_model(model)
+    w = work(model)
     for _ in range(50):
-        if model.module.project(0.0, x, u, p, d, flow, True, 0.0, -1.0, ws.M, ws.G, ws.S) != OK:
+        if model.numerics.dynamics.project(model.ref, w.ref, 0.0, x, u, p, d, flow, True, 0.0, -1.0) != OK:
             raise SimulationError("cannot project the initial state: the mass matrix is not positive definite there")
         phi, c = constraint_residuals(model, 0.0, x, u, p, d, flow)
         if max(np.max(np.abs(phi), initial=0.0), np.max(np.abs(c), initial=0.0)) <= 1e-13 * max(1.0, np.abs(x).max()):
@@ -331,29 +330,28 @@ def user_jump(model: CompiledModel, k, t, x, u, p, d) -> str | None:
     return None
 
 
-def apply_jump(model: CompiledModel, k, t, x, u, p, d, ws: Workspace) -> str | None:
+def apply_jump(model: CompiledModel, k, t, x, u, p, d, w) -> str | None:
     """Jump k at t (x, d in place; u the inputs just before it): resets and impact, then the user's function."""
-    status = model.module.jump(k, t, x, u, p, d, ws.M, ws.G, ws.S)
+    status = model.numerics.dynamics.jump(model.ref, w.ref, k, t, x, u, p, d)
     if status != OK:
-        return f"stopped: {_STOPPED[status]} in jump '{model.jump_names[k]}' at t = {t:.9g} s"
+        return f"stopped: {MESSAGES[status]} in jump '{model.jump_names[k]}' at t = {t:.9g} s"
     return user_jump(model, k, t, x, u, p, d)
 
 
 def follow_instant_jumps(model: CompiledModel, t, x, source: InputSource, p, d, flow, events: EventLog,
-                         ws: Workspace, mode):
+                         w, mode):
     """Apply the jumps that happen at once at (t, x), in priority order. Returns (flow, stop message or None)."""
-    module = model.module
     while model.nj:
-        ws.u[:] = source.held(flow)
+        w.u[:] = source.held(flow)
         fn, data = source.function_data
-        k = module.instant(mode, t, x, fn, ws.u, data, p, d, flow, ws.xdot, ws.M, ws.G, ws.S)
+        k = model.numerics.integrator.instant(model.ref, w.ref, mode, fn, data, t, x, p, d, flow)
         if k == -2:
             return flow, f"stopped: {source.failure(model, d, p)}"
         if k < 0:
             break
         before = x.copy()
-        stop = apply_jump(model, k, t, x, ws.u, p, d, ws)
-        flow = int(module.JUMP_TARGET[k])
+        stop = apply_jump(model, k, t, x, w.u, p, d, w)
+        flow = int(model.module.JUMP_TARGET[k])
         stop = stop or events.record(t, k, before, x, d)
         if stop is not None:
             return flow, stop
@@ -372,35 +370,27 @@ def _frame_selection(model: CompiledModel, frames) -> list:
     return names
 
 
-_STOPPED = {NONFINITE: "the state became non-finite (NaN or Inf)", INPUT_FAILED: "the inputs failed",
-            DIVERGED: "the solution diverges: within one step the state grew past 1000 times its largest value "
-                      "so far (a step far too large for the dynamics, or a singular mass matrix or constraint)",
-            SINGULAR_MASS: "the mass matrix is not positive definite",
-            DEPENDENT: "the constraint rows are linearly dependent (redundant constraints, or a singular "
-                           "configuration); the multipliers are not unique, use --method projection"}
-
-
 def _run_rk4(model, method, x, source, p, d, flow, t_end, dt, every, bar, events, energy_correction, energy_tol,
              normalize, interrupts: Interrupts, run_of):
     n_steps = int(round(t_end / dt))
     if abs(n_steps * dt - t_end) > 1e-9 * max(1.0, t_end):
         raise SimulationError(f"t_end = {t_end} is not a whole number of steps dt = {dt}; "
                               f"use t_end = {n_steps * dt:g} or another dt")
-    module = model.module
+    module, integrator = model.module, model.numerics.integrator
     mode = _MODE[method]
     constrain = method == "projection" and model.nc > 0
     etol = energy_tol if energy_correction else -1.0
     do_project = constrain or etol >= 0 or (normalize and bool(model.quaternions))
     rows = n_steps // every + 2             # the grid, and a last sample where a run stops between grid points
     nu = len(model.input_names)
-    log = (np.empty(rows), np.empty((rows, model.nx)), np.empty((rows, nu)), np.empty(rows, dtype=np.int64),
-           np.empty((rows, model.nd)))
+    log = integrator.Log(np.empty(rows), np.empty((rows, model.nx)), np.empty((rows, nu)),
+                         np.empty(rows, dtype=np.int64), np.empty((rows, model.nd)))
     out_t, out_x, out_u, out_f, out_d = log
-    ws = Workspace.for_model(model)
+    w = work(model)
     fn, data = source.function_data
     out_t[0], out_x[0], out_u[0], out_f[0], out_d[0] = 0.0, x, inputs_at(model, source, 0.0, x, p, d, flow), flow, d
     i, row, chunk, status, t = 0, 1, 1000, OK, 0.0
-    counts = np.zeros(3, dtype=np.int64)            # steps, event trial steps, rows logged (see advance)
+    counts = w.counts                               # steps, event trial steps, rows logged (see advance)
     counts[2] = row
 
     def partial():
@@ -410,7 +400,7 @@ def _run_rk4(model, method, x, source, p, d, flow, t_end, dt, every, bar, events
 
     interrupts.partial = partial
     e0 = module.energy(0.0, x, out_u[0], p, d)
-    flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, ws, mode)
+    flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, w, mode)
     while i < n_steps and status == OK and message is None:
         message = interrupts.reason()
         if message is not None:
@@ -419,33 +409,32 @@ def _run_rk4(model, method, x, source, p, d, flow, t_end, dt, every, bar, events
         i_end = min(i + chunk, n_steps)
         tic = time.perf_counter()
         i0 = i
-        ws.u[:] = source.held(flow)
-        i, row, status, t, flow, k = module.advance(
-            mode, do_project, constrain, e0, etol, events.event_tol, 0.0, dt, i, i_end, every, t, flow, x, fn,
-            ws.u, data, p, d, out_t, out_x, out_u, out_f, out_d, row, ws.g0, ws.x_event, ws.M, ws.G, ws.S, ws.k, ws.x_tmp,
-            ws.x_step, ws.x_near, ws.x_trial, counts)
+        w.u[:] = source.held(flow)
+        opts = integrator.options(mode, do_project, constrain, e0, etol, events.event_tol)
+        i, row, status, t, flow, k = integrator.advance(model.ref, w.ref, opts, fn, data, p, d, x, t, flow, i, i_end,
+                                                        0.0, dt, every, log, row)
         if k >= 0:
             if status != OK:
-                message = f"stopped: {_STOPPED[status]} in jump '{model.jump_names[k]}' at t = {t:.9g} s"
+                message = f"stopped: {MESSAGES[status]} in jump '{model.jump_names[k]}' at t = {t:.9g} s"
                 break
-            message = user_jump(model, k, t, x, ws.u, p, d) or events.record(t, k, ws.x_event, x, d)
+            message = user_jump(model, k, t, x, w.u, p, d) or events.record(t, k, w.x_event, x, d)
             if message is None:
-                flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, ws, mode)
-            if message is None and source.into(module, t, x, p, d, flow, ws.u) != OK:
+                flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, w, mode)
+            if message is None and source.into(model, t, x, p, d, flow, w.u) != OK:
                 status = INPUT_FAILED
-            e0 = module.energy(t, x, ws.u, p, d)
+            e0 = module.energy(t, x, w.u, p, d)
         elif i > i0:
             elapsed = time.perf_counter() - tic
             chunk = int(min(max(chunk * 0.25 / max(elapsed, 1e-6) * (i_end - i0) / (i - i0), 1000), 10_000_000))
         bar(t)
     if status != OK:
-        why = source.failure(model, d, p) if status == INPUT_FAILED else f"{_STOPPED[status]} at t = {t:.9g} s"
+        why = source.failure(model, d, p) if status == INPUT_FAILED else f"{MESSAGES[status]} at t = {t:.9g} s"
         if status == DIVERGED:
-            why += diverging_constraints(model, t, x, ws.u, p, d, flow)
+            why += diverging_constraints(model, t, x, w.u, p, d, flow)
         message = f"stopped: {why}, step {i}; the {row} samples before it are kept"
     elif message is not None and out_t[row - 1] != t:
         out_t[row], out_x[row], out_f[row], out_d[row] = t, x, flow, d
-        if source.into(module, t, x, p, d, flow, out_u[row]) != OK:
+        if source.into(model, t, x, p, d, flow, out_u[row]) != OK:
             out_u[row] = np.nan
         row += 1
     if message is not None and not events.finished and status == OK:
@@ -491,22 +480,23 @@ def _run_scipy(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol, 
     """scipy's solver stepped one step at a time; after each step the guards are checked, a crossing
     is located on the step's dense output (Illinois, to the event tolerance) and the solver restarts
     after the jump."""
-    module = model.module
-    ws = Workspace.for_model(model)
+    module, rhs_mode_into = model.module, model.numerics.dynamics.rhs_mode_into
+    w = work(model)
     xdot = np.empty(model.nx)
     calls = [0]
     current = [flow]
 
     def inputs(t, y):
-        """ws.u at (t, y) in the current flow."""
+        """w.u at (t, y) in the current flow."""
         y = np.ascontiguousarray(y)      # the input function's type takes C-contiguous arrays only
-        if source.into(module, t, y, p, d, current[0], ws.u) != OK:
+        if source.into(model, t, y, p, d, current[0], w.u) != OK:
             raise _Stopped(t, INPUT_FAILED)
-        return ws.u
+        return w.u
 
     def fun(t, y):
         calls[0] += 1
-        status = module.rhs_into(t, y, inputs(t, y), p, d, current[0], xdot, ws.M, ws.G, ws.S)
+        y = np.ascontiguousarray(y)      # (Radau's Jacobian passes columns of a matrix)
+        status = rhs_mode_into(model.ref, w.ref, t, y, inputs(t, y), p, d, current[0], xdot, IDEAL)
         if status != OK:
             raise _Stopped(t, status)
         return xdot.copy()
@@ -527,7 +517,7 @@ def _run_scipy(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol, 
 
     interrupts.partial = partial
     try:
-        flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, ws, IDEAL)
+        flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, w, IDEAL)
         while message is None and t < t_end:
             current[0] = flow
             solver = scipy_method(method)(fun, t, x, t_end, rtol=rtol, atol=atol)
@@ -560,22 +550,22 @@ def _run_scipy(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol, 
                     continue
                 k, t, x_before = hit
                 x = x_before.copy()
-                message = apply_jump(model, k, t, x, inputs(t, x_before), p, d, ws)
+                message = apply_jump(model, k, t, x, inputs(t, x_before), p, d, w)
                 flow = int(module.JUMP_TARGET[k])
                 message = message or events.record(t, k, x_before, x, d)
                 if message is None:
-                    flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, ws, IDEAL)
+                    flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, events, w, IDEAL)
                 break
             else:
                 t, x = solver.t, solver.y.copy()
     except _Stopped as exc:
         why = (source.failure(model, d, p) if exc.args[1] == INPUT_FAILED
-               else f"{_STOPPED[exc.args[1]]} at t = {exc.args[0]:.9g} s")
+               else f"{MESSAGES[exc.args[1]]} at t = {exc.args[0]:.9g} s")
         message = f"stopped: {why}"
     if message is not None and out_t[-1] != t:
         out_t.append(t), out_x.append(x.copy()), out_f.append(flow), out_d.append(d.copy())
         u = np.empty(len(model.input_names))
-        ok = source.into(module, t, x, p, d, flow, u) == OK
+        ok = source.into(model, t, x, p, d, flow, u) == OK
         out_u.append(u if ok else np.full_like(u, np.nan))
     if message is not None and not events.finished:
         message += f"; the {len(out_t)} samples before it are kept"

@@ -220,7 +220,7 @@ class XmlReader:
         shapes = [g for g in geometry if isinstance(g.tag, str)] if geometry is not None else []
         if not shapes or shapes[0].tag not in ("box", "cylinder", "sphere", "mesh"):
             self.error(geometry if geometry is not None else element, label + ".geometry",
-                       f"expected a box, cylinder, sphere or mesh, got "
+                       "expected a box, cylinder, sphere or mesh, got "
                        + (f"<{shapes[0].tag}>" if shapes else "nothing"), "write one of <box size=...>, "
                        "<cylinder radius=... length=...>, <sphere radius=...>, <mesh filename=...>")
 

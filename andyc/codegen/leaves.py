@@ -1,0 +1,158 @@
+"""The model's own functions, the leaves of andyc/numerics/model.py, as lines of Python source.
+
+Each leaf's math goes through `function_body` (cse over everything the leaf computes, then ordered
+lines); a leaf reads only the states, parameters, inputs and discrete states it uses. The leaves
+over the jumps (guard, guard_rate, enabled, reset) have one branch per jump, each with its own cse,
+so that a model compiles four functions for its jumps, not four per jump. A model without
+constraints, signals, jumps, flow inputs or a closed form generates none of those leaves: the
+numerics' stubs stand in.
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from andyc.codegen.printer import function_body
+from andyc.numerics.layout import scratch_layout
+from andyc.symbolic.model import SymbolicModel
+
+STATE = "t, x, u, p, d"
+DOCS = {
+    "dynamics": "M (NV, NV) and G (NV,) with M dv/dt = G (ANDY eq. 8).",
+    "dynamics_constraints": "`dynamics` and `constraints_into` in one pass that shares their subexpressions.",
+    "constraints_into": "phi (NH,), c = A v + b (NC,), A (NC, NV), kappa (NC,) with dc/dt = A dv/dt + kappa (ANDY eq. "
+                        "11), into the rows of the scratch S (andyc_numerics/layout.py).",
+    "signal_rates": "Rates of the nonholonomic signals (ANDY eq. 4) into xdot[NQ + NV:].",
+    "energy": "Total mechanical energy: kinetic + gravity + springs + potentials.",
+    "power": "Power of the non-conservative elements (forces, torques, dampers).",
+    "frame_positions": "Origins of FRAMES in world coordinates into out (len(FRAMES), 3).",
+    "constraint_gains": "Soft-constraint gains K_s and K_d of each row (ANDY eq. 13-15), for the baumgarte method, "
+                        "into S.",
+    "restitution": "Coefficient of restitution of each jump's impact, into S.",
+    "guard": "The guard of jump k: it happens where this crosses zero in JUMP_DIRECTION[k].",
+    "guard_rate": "d/dt of the guard of jump k, given xdot.",
+    "enabled": "Enabling condition of jump k: >= 0 where it may happen.",
+    "reset": "Resets of jump k, into x and d, all from the values before the jump.",
+    "flow_inputs": "Input values a flow sets, into U (NF, NU); other entries are left as they are.",
+    "closed_form": "x(t), the exact solution the model declares (closed_form:), at held inputs u and parameters p.",
+    "model_inputs": "The inputs as the model drives them (INPUT_EXPRESSIONS in the module), as an input callback: "
+                    "the flow's held values from data[flow * NU:], then each expression the flow does not override.",
+}
+
+
+def state_names(spec) -> list:
+    """The names of x, in order: coordinates, speeds (coordinate rates, then declared), signals."""
+    return [c.name for c in spec.coordinates] + spec.speed_names + [s.name for s in spec.signals]
+
+
+def _unpack(model: SymbolicModel, used: set) -> list[str]:
+    states = model.q + model.v + model.signals
+    lines = [f"{s} = x[{i}]" for i, s in enumerate(states) if s in used]
+    for array, symbols in (("p", model.parameters), ("u", model.inputs), ("d", model.discrete)):
+        lines += [f"{s} = {array}[{i}]" for i, s in enumerate(symbols) if s in used]
+    nq = len(model.q)
+    lines += [f"{s} = xdot[{nq + i}]" for i, s in enumerate(model.hybrid.vdot) if s in used]
+    return lines
+
+
+def _code(model, body, returns: str | None, indent: int) -> list[str]:
+    pad = " " * indent
+    lines = [pad + line for line in _unpack(model, body.inputs)]
+    lines += [f"{pad}{target} = {code}" for target, code in body.lines + body.outputs]
+    if returns is not None:
+        lines.append(f"{pad}return {returns}")
+    return lines or [f"{pad}return None"]
+
+
+class Leaves:
+    """The leaves of one model: `functions` ({decorator, name, args, doc, code} each, for the template) and the
+    operation count of each (`operations`)."""
+
+    def __init__(self, model: SymbolicModel):
+        self.model, self.pool = model, dict(model.assignments)
+        self.functions, self.operations = [], {}
+
+    def add(self, name, args, outputs, returns=None):
+        body = function_body(outputs, self.pool)
+        self._append(name, args, _code(self.model, body, returns, 4), body.operations)
+
+    def add_per_jump(self, name, args, bodies, fallback):
+        """A leaf over the jumps: `bodies` holds (outputs, returns) of each jump, in order."""
+        code, operations = [], 0
+        for k, (outputs, returns) in enumerate(bodies):
+            body = function_body(outputs, self.pool)
+            code += [f"    if k == {k}:", *_code(self.model, body, returns or "None", 8)]
+            operations += body.operations
+        self._append(name, f"k, {args}", code + [f"    return {fallback}"], operations)
+
+    def _append(self, name, args, code, operations, decorator=None):
+        self.functions.append({"decorator": decorator or f"leaf({name!r})", "name": name, "args": args,
+                               "doc": DOCS[name], "code": code})
+        self.operations[name] = operations
+
+
+def leaves(model: SymbolicModel) -> Leaves:
+    """Every leaf `model` has, with the input callback of the inputs it drives by an expression."""
+    out = Leaves(model)
+    n, cons, spec = model.dof, model.constraints, model.spec
+    mass = [(f"M[{i}, {j}]", model.M[i, j]) for i in range(n) for j in range(i, n)]
+    mirror = [(f"M[{j}, {i}]", sp.Symbol(f"M[{i}, {j}]")) for i in range(n) for j in range(i + 1, n)]
+    force = [(f"G[{i}]", model.G[i]) for i in range(n)]
+    at = scratch_layout(n, cons.nc, len(model.hybrid.jumps))      # the rows of S
+    rows = ([(f"S[{at['phi']}, {i}]", e) for i, e in enumerate(cons.phi)]
+            + [(f"S[{at['cv']}, {i}]", e) for i, e in enumerate(cons.c)]
+            + [(f"S[{at['A'] + i}, {j}]", cons.A[i, j]) for i in range(cons.nc) for j in range(n)]
+            + [(f"S[{at['kappa']}, {i}]", e) for i, e in enumerate(cons.kappa)])
+    out.add("dynamics", f"{STATE}, M, G", mass + force + mirror)
+    out.add("energy", STATE, [("e", model.energy)], returns="e")
+    out.add("power", STATE, [("w", model.power)], returns="w")
+    frames = list(model.frame_positions)
+    out.add("frame_positions", f"{STATE}, out",
+            [(f"out[{k}, {i}]", model.frame_positions[f][i]) for k, f in enumerate(frames) for i in range(3)])
+    if model.signals:
+        nq = len(model.q)
+        out.add("signal_rates", f"{STATE}, xdot", [(f"xdot[{nq + n + i}]", r) for i, r in enumerate(model.signal_rates)])
+    if cons.nc:
+        out.add("dynamics_constraints", f"{STATE}, M, G, S", mass + force + rows + mirror)
+        out.add("constraints_into", f"{STATE}, S", rows)
+        out.add("constraint_gains", "p, S", [(f"S[{at['ks']}, {i}]", e) for i, e in enumerate(cons.stiffness)]
+                + [(f"S[{at['kd']}, {i}]", e) for i, e in enumerate(cons.damping)])
+    _hybrid(out, model, at)
+    if spec.closed_form:
+        out.add("closed_form", "t, u, p, x", [(f"x[{i}]", spec.closed_form[name]) for i, name in enumerate(state_names(spec))])
+    _inputs(out, model)
+    return out
+
+
+def _hybrid(out: Leaves, model: SymbolicModel, at: dict) -> None:
+    h = model.hybrid
+    if any(h.flow_inputs):
+        out.add("flow_inputs", "p, U", [(f"U[{f}, {i}]", e) for f, inputs in enumerate(h.flow_inputs)
+                                         for i, e in inputs.items()])
+    if not h.jumps:
+        return
+    spec, nq = model.spec, len(model.q)
+    index = {**{c.name: f"x[{i}]" for i, c in enumerate(spec.coordinates)},
+             **{name: f"x[{nq + i}]" for i, name in enumerate(spec.speed_names)},
+             **{x.name: f"d[{i}]" for i, x in enumerate(spec.discrete)}}
+    out.add_per_jump("guard", STATE, [([("g", j.guard)], "g") for j in h.jumps], "0.0")
+    out.add_per_jump("guard_rate", f"{STATE}, xdot", [([("g", j.guard_rate)], "g") for j in h.jumps], "0.0")
+    out.add_per_jump("enabled", STATE, [([("e", j.enabled)], "e") for j in h.jumps], "1.0")
+    out.add_per_jump("reset", STATE, [([(index[s], e) for s, e in j.resets], None) for j in h.jumps], "None")
+    out.add("restitution", "p, S", [(f"S[{at['e']}, {k}]", j.restitution) for k, j in enumerate(h.jumps)])
+
+
+def _inputs(out: Leaves, model: SymbolicModel) -> None:
+    """model_inputs, the input callback (andyc_numerics/model.py) of the inputs the model drives by an expression:
+    the flow's held values from data, then each expression, unless the flow sets that input itself."""
+    driven = model.spec.driven_inputs
+    if not driven:
+        return
+    names = list(model.spec.inputs)
+    code, operations = ["    for i in range(NU):", "        u[i] = data[flow * NU + i]"], 0
+    for name, expr in driven.items():
+        i = names.index(name)
+        body = function_body([(f"u[{i}]", expr)], out.pool)
+        code += [f"    if not FLOW_SETS_INPUT[flow, {i}]:", *_code(model, body, None, 8)]
+        operations += body.operations
+    out._append("model_inputs", "t, x, d, p, flow, u, data", code + ["    return 0"], operations, "input_callback")

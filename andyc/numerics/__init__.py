@@ -1,0 +1,25 @@
+"""The numerics every generated module shares: constrained dynamics, projection, impacts and the
+integrator with its event location (Braun & Goldfarb; ANDY eq. 8-19).
+
+This package is static source. `andyc build` copies it verbatim into each build folder as
+`andyc_numerics/`, and the generated module imports it from there, so that a build stands alone.
+It never imports andyc. What depends on the model is only the model's own functions (the leaves:
+M and G, the constraint rows, the energy, the guards, ...), compiled per model in
+<name>_equations.py and handed to these algorithms through a compiled `Model` (model.py), as
+MuJoCo's and Pinocchio's algorithms take a model and its data. So Numba compiles these
+algorithms once per andyc version, for every model, and keeps them in a cache keyed by their
+content (compiler.py), wherever the copy sits.
+
+    status.py      statuses and their messages, how constraint forces are found, guard directions
+    compiler.py    the `jit` and `cfunc` decorators and the content-keyed cache
+    layout.py      the rows of the scratch array of the constrained solves
+    model.py       Model (the compiled model: sizes, tables, the leaves' signatures) and Work (its arrays)
+    stubs.py       leaves that do nothing, for the parts a model has none of
+    linalg.py      Cholesky, triangular and Gram solves, unrolled for small sizes
+    dynamics.py    the right-hand side of a flow, the multipliers, projection and the impact map
+    integrator.py  RK4 with event location, the hybrid step, evaluations over a run's log
+    api.py         the generated module's Python functions (rhs, mass_matrix, energy, ...)
+
+Importing the package itself imports nothing heavy; andyc's runtime reads status.py from its own
+copy (andyc.numerics.status) without Numba.
+"""

@@ -1,0 +1,258 @@
+"""The right-hand side of a flow, its multipliers, the projection after a step and the impact map.
+
+Every function takes the compiled Model `model` and its Work `w` (model.py), then t, x (state),
+u (inputs), p (parameters) and d (discrete states). The state is x = (q, v, sigma): NQ coordinates,
+NV speeds, NS nonholonomic signals; M dv/dt = G + A^T lam, with A the active constraint rows of
+the flow. The constraint terms live in the scratch S (layout.py).
+"""
+
+import math
+
+import numpy as np
+
+from .compiler import jit
+from .linalg import add_rows_transposed, cholesky, correction, solve_gram, solve_lower, solve_upper, whiten
+from .model import call
+from .status import BAUMGARTE, DEPENDENT, IDEAL, OK, SINGULAR_MASS
+
+
+@jit
+def rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode):
+    """xdot = f(t, x) in `flow`: dq/dt = v[:NQ], dv/dt, dsigma/dt (in w's M, G and S). Returns a status (OK = 0).
+
+    dv/dt = a + M^-1 A^T lam with a = M^-1 G and A the flow's active rows; `mode` says how lam is
+    found (see constraint_force).
+    """
+    nq, nv = model.nq, model.nv
+    M, G, S = w.M, w.G, w.S
+    if model.flow_nrows[flow] > 0:
+        status = whitened_equations(model, t, x, u, p, d, M, G, S)
+        if status == OK:
+            status = constraint_force(model, p, flow, mode, M, G, S)
+            solve_upper(M, G, nv)
+    else:
+        call(model.dynamics, (t, x, u, p, d, M, G))
+        status = OK if cholesky(M, nv, 0.0) else SINGULAR_MASS
+        if status == OK:                # a = M^-1 G (ANDY eq. 8)
+            solve_lower(M, G, nv)
+            solve_upper(M, G, nv)
+    if status != OK:
+        return status
+    for i in range(nq):
+        xdot[i] = x[nq + i]
+    for i in range(nv):
+        xdot[nq + i] = G[i]
+    if model.ns > 0:
+        call(model.signal_rates, (t, x, u, p, d, xdot))
+    return OK
+
+
+@jit(inline="always")
+def whitened_equations(model, t, x, u, p, d, M, G, S):
+    """M <- L (M = L L^T, see cholesky), G <- g = L^-1 G and every row's terms into S, from one evaluation
+    that shares their subexpressions (dynamics_constraints); returns a status."""
+    call(model.dynamics_constraints, (t, x, u, p, d, M, G, S))
+    if not cholesky(M, model.nv, 0.0):
+        return SINGULAR_MASS
+    solve_lower(M, G, model.nv)
+    return OK
+
+
+@jit(inline="always")
+def constraint_system(model, flow, L, g, S):
+    """C = A L^-T and y = -kappa - C g (= -kappa - A M^-1 G for g = L^-1 G) over the rows of `flow`, into S;
+    returns their number."""
+    nr, nv, rows = model.flow_nrows[flow], model.nv, model.flow_rows
+    c0, y0, kappa = model.s_c, model.s_y, model.s_kappa
+    whiten(model, L, S, rows, flow, nr)
+    for r in range(nr):
+        s = -S[kappa, rows[flow, r]]
+        for i in range(nv):
+            s -= S[c0 + r, i] * g[i]
+        S[y0, r] = s
+    return nr
+
+
+@jit(inline="always")
+def constraint_force(model, p, flow, mode, L, g, S):
+    """g <- g + C^T lam over the rows of `flow`, in whitened speeds: with M = L L^T and g = L^-1 G on entry,
+    dv/dt = L^-T g on return. Needs A, kappa (and for BAUMGARTE phi, c) in S; returns a status.
+
+    With C = A L^-T and y = -kappa - C g (= -kappa - A a, a = M^-1 G), so that C C^T = A M^-1 A^T:
+      IDEAL      lam = (C C^T)^+ y, the least-norm force of any rank (C^T lam = C^+ y)
+      LAGRANGE   lam = (C C^T)^-1 y                           (ANDY eq. 12)
+      BAUMGARTE  LAGRANGE's lam - (K_s phi + K_d c)           (ANDY eq. 15)
+    """
+    nr = constraint_system(model, flow, L, g, S)
+    if solve_gram(model, S, nr, mode == IDEAL) < 0:
+        return DEPENDENT
+    if mode == BAUMGARTE:
+        call(model.constraint_gains, (p, S))
+        y0, ks, kd = model.s_y, model.s_ks, model.s_kd
+        for r in range(nr):
+            i = model.flow_rows[flow, r]
+            S[y0, r] -= S[kd, i] * S[model.s_cv, i]
+            if i < model.nh:
+                S[y0, r] -= S[ks, i] * S[model.s_phi, i]
+    add_rows_transposed(model, S, nr, 1.0, g)
+    return OK
+
+
+@jit
+def multipliers(model, w, t, x, u, p, d, flow, lam):
+    """Multipliers lam (NC,) of the ideal constraint force A^T lam in `flow` (ANDY eq. 10, 12); NaN for rows
+    not active. lam = (C C^T)^+ y (see constraint_force), the least-norm split when rows are redundant.
+    Returns a status."""
+    M, G, S = w.M, w.G, w.S
+    status = whitened_equations(model, t, x, u, p, d, M, G, S)
+    if status != OK:
+        return status
+    nr = constraint_system(model, flow, M, G, S)
+    solve_gram(model, S, nr, True)
+    for r in range(model.nc):
+        lam[r] = np.nan
+    for r in range(nr):
+        lam[model.flow_rows[flow, r]] = S[model.s_y, r]
+    return OK
+
+
+@jit
+def normalize(model, x):
+    """Put each quaternion signal back on the unit sphere (after an integration step)."""
+    for k in model.quaternions:
+        n = math.sqrt(x[k] ** 2 + x[k + 1] ** 2 + x[k + 2] ** 2 + x[k + 3] ** 2)
+        x[k] /= n
+        x[k + 1] /= n
+        x[k + 2] /= n
+        x[k + 3] /= n
+
+
+@jit
+def move(model, t, x, u, p, d, dq):
+    """x <- x (+) dq: a small change of position dq, given in speed space (NV,).
+
+    q += dq[:NQ]; signals move by their rates at speeds dq (eq. 4, to first order).
+    """
+    nq, nv = model.nq, model.nv
+    if model.ns > 0:
+        xt = x.copy()
+        r1 = np.zeros(model.nx)
+        r0 = np.zeros(model.nx)
+        for i in range(nv):
+            xt[nq + i] = dq[i]
+        call(model.signal_rates, (t, xt, u, p, d, r1))
+        for i in range(nv):
+            xt[nq + i] = 0.0
+        call(model.signal_rates, (t, xt, u, p, d, r0))
+        for i in range(model.ns):
+            x[nq + nv + i] += r1[nq + nv + i] - r0[nq + nv + i]
+        normalize(model, x)
+    for i in range(nq):
+        x[i] += dq[i]
+
+
+@jit(inline="always")
+def correct_rows(model, flow, nr, residual, L, S):
+    """S's dv row <- the least M-norm change with A dv = -r over the first nr rows of `flow`, r the values of
+    S's `residual` row (phi or cv) at those rows; L from cholesky."""
+    rows, y0 = model.flow_rows, model.s_y
+    whiten(model, L, S, rows, flow, nr)
+    for r in range(nr):
+        S[y0, r] = -S[residual, rows[flow, r]]
+    correction(model, L, S, nr)
+
+
+@jit
+def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
+    """After a step: quaternions to unit norm, then the Braun & Goldfarb corrections (Part II).
+
+    With constrain (C = A L^-T over the flow's active rows at the step's end, M = L L^T):
+      position (eq. 3)  x <- x (+) L^-T C_q^+ (-phi)
+      velocity (eq. 4)  v <- v + L^-T C^+ (-c), at the corrected position
+    With energy_tol >= 0, energy (eq. 5-6): with r = N L^T v, N = I - C^+ C the projector onto the
+    constraints' null space, v <- v - L^-T r (E - e0) / |r|^2 when |r|^2 (2T on the constraint
+    manifold) exceeds energy_tol. One pass, no iteration. Returns a status.
+    """
+    normalize(model, x)
+    if not constrain and energy_tol < 0.0:
+        return OK
+    nq, nv = model.nq, model.nv
+    M, G, S = w.M, w.G, w.S
+    call(model.dynamics, (t, x, u, p, d, M, G))
+    if not cholesky(M, nv, 0.0):
+        return SINGULAR_MASS
+    nr = model.flow_nrows[flow]
+    constrain = constrain and nr > 0
+    dv = S[model.s_dv, :nv]
+    if constrain:
+        nhr = model.flow_nhrows[flow]
+        if nhr > 0:
+            call(model.constraints_into, (t, x, u, p, d, S))
+            correct_rows(model, flow, nhr, model.s_phi, M, S)
+            move(model, t, x, u, p, d, dv)
+        call(model.constraints_into, (t, x, u, p, d, S))
+        correct_rows(model, flow, nr, model.s_cv, M, S)
+        for i in range(nv):
+            x[nq + i] += dv[i]
+    if energy_tol >= 0.0:
+        r = S[model.s_r, :nv]
+        for i in range(nv):            # r = L^T v (the factor's diagonal holds 1 / L_ii)
+            s = x[nq + i] / M[i, i]
+            for k in range(i + 1, nv):
+                s += M[k, i] * x[nq + k]
+            r[i] = s
+        if constrain:
+            c0, y0 = model.s_c, model.s_y
+            for j in range(nr):        # y <- C r, for r <- r - C^+ C r
+                s = 0.0
+                for i in range(nv):
+                    s += S[c0 + j, i] * r[i]
+                S[y0, j] = s
+            solve_gram(model, S, nr, True)
+            add_rows_transposed(model, S, nr, -1.0, r)
+        rr = 0.0
+        for i in range(nv):
+            rr += r[i] * r[i]
+        if rr > energy_tol:
+            scale = -(call(model.energy, (t, x, u, p, d)) - e0) / rr
+            for i in range(nv):
+                r[i] *= scale
+            solve_upper(M, r, nv)
+            for i in range(nv):
+                x[nq + i] += r[i]
+    return OK
+
+
+@jit
+def impact(model, w, t, x, u, p, d, k):
+    """The impact map of jump k over its impact rows J, restitution e (ANDY eq. 19 at e = 0).
+
+    v+ = v- + M^-1 J^T Lambda with J v+ = -e J v-:  v+ = v- - (1 + e) L^-T C^+ c-,
+    C = J L^-T, c- the rows' velocity residual before. Returns a status.
+    """
+    nq, nv = model.nq, model.nv
+    M, G, S = w.M, w.G, w.S
+    call(model.dynamics, (t, x, u, p, d, M, G))
+    if not cholesky(M, nv, 0.0):
+        return SINGULAR_MASS
+    nr = model.impact_nrows[k]
+    call(model.constraints_into, (t, x, u, p, d, S))
+    call(model.restitution, (p, S))
+    e = S[model.s_e, k]
+    whiten(model, M, S, model.impact_rows, k, nr)
+    for r in range(nr):
+        S[model.s_y, r] = -(1.0 + e) * S[model.s_cv, model.impact_rows[k, r]]
+    correction(model, M, S, nr)
+    for i in range(nv):
+        x[nq + i] += S[model.s_dv, i]
+    return OK
+
+
+@jit
+def jump(model, w, k, t, x, u, p, d):
+    """Apply jump k at (t, x), x and d in place: its resets, then its impact map. Returns a status.
+    (The user's function in <name>_jumps.py comes after, from Python.)"""
+    call(model.reset, (k, t, x, u, p, d))
+    if model.impact_nrows[k] > 0:
+        return impact(model, w, t, x, u, p, d, k)
+    return OK

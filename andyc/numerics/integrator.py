@@ -1,0 +1,300 @@
+"""A fixed-step RK4 loop with event location, over a compiled Model (model.py).
+
+advance() steps along the grid t0 + i dt and returns after a block of steps or after a jump. Each
+step is classical RK4 on rhs_mode_into (mode IDEAL, LAGRANGE or BAUMGARTE), followed, with
+`project`, by dynamics.project (quaternion norms; with `constrain` and energy_tol, the Braun &
+Goldfarb corrections). The options of a run are one Options tuple.
+
+Events: after each step, the guards of the current flow's jumps are compared with their values at
+the step's start. A sign change in a jump's direction is located by root finding on the step,
+each trial time tau being a step of size tau from the step's start (so the located state is the
+method's own solution), to event_tol seconds (relative beyond 1 s). The earliest crossing whose
+enabling condition holds wins, ties going to the lower priority number; the jump (resets, impact)
+is applied at the near side of the final bracket, and the rest of the step is integrated by the
+next call, so the grid stays t0 + i dt. The caller applies the user's jump function and follows
+jumps that happen at once (instant).
+
+Inputs: every function here takes `inputs`, a compiled function
+    status = inputs(t, x, d, p, flow, u, data)
+that writes the inputs u at (t, x) (model.INPUTS_SIGNATURE: a first-class function type, so the
+integrator compiles once for every input source), and the `data` it reads. It is called before each
+evaluation at a new (t, x); a nonzero status stops the run with INPUT_FAILED. inputs = data = None:
+the inputs are held, u as the caller set it for the flow. Numba then compiles the integrator without
+the calls (branches on `is not None` are pruned at compile time), so held inputs do not pay for
+carrying a function and an array down the call chain.
+"""
+
+import math
+from collections import namedtuple
+
+from .compiler import jit
+from .dynamics import jump, multipliers, project, rhs_mode_into
+from .model import borrowed, call
+from .status import DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, RISING
+
+Options = namedtuple("Options", "mode project constrain e0 energy_tol event_tol")
+Options.__doc__ = """How a run integrates: mode (IDEAL, LAGRANGE or BAUMGARTE: how constraint forces are found),
+project (apply dynamics.project after each step), constrain (its constraint corrections), e0 and energy_tol (its
+energy correction to e0; energy_tol < 0: none), event_tol (seconds, relative beyond 1 s)."""
+
+Log = namedtuple("Log", "t x u flow d")
+Log.__doc__ = "A run's logged samples: time (N,), state (N, NX), inputs (N, NU), flow (N,) and discrete states (N, ND)."
+
+
+def options(mode, project, constrain, e0, energy_tol, event_tol) -> Options:
+    """Options with the types the compiled integrator takes (one compilation for every run)."""
+    return Options(int(mode), bool(project), bool(constrain), float(e0), float(energy_tol), float(event_tol))
+
+
+@jit
+def update_inputs(inputs, t, x, p, d, flow, u, data):
+    """u at (t, x) when the inputs are driven (held: u stays as the caller set it); a status (INPUT_FAILED:
+    `inputs` failed, its record in data says why)."""
+    if inputs is not None:
+        if inputs(t, x, d, p, flow, u, data) != 0:
+            return INPUT_FAILED
+    return OK
+
+
+@jit
+def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale):
+    """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status.
+
+    Stage s evaluates at t + c_s h, x + c_s h k_(s-1), c = (0, 1/2, 1/2, 1). A step whose largest
+    entry exceeds GROWTH_LIMIT times `scale` (the largest entry of the states so far, at least 1)
+    is DIVERGED: motion that is followed at all never grows by orders of magnitude in one step; a
+    diverging solution (a constraint turning singular, a step far past the method's stability
+    bound) does, within a few steps. (Against the run's largest entry, not the step start's, so that
+    a stiff oscillator whose speed is large where its position is small does not count as growth.)
+    """
+    k, xt = w.k, w.xt
+    nx = x.shape[0]
+    for s in range(4):
+        c = 0.0 if s == 0 else (1.0 if s == 3 else 0.5)
+        for j in range(nx):
+            xt[j] = x[j] if s == 0 else x[j] + c * h * k[s - 1, j]
+        if inputs is not None:
+            if inputs(t + c * h, xt, d, p, flow, u, data) != 0:
+                return INPUT_FAILED
+        status = rhs_mode_into(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
+        if status != OK:
+            return status
+    total = 0.0
+    grown = 0.0
+    for j in range(nx):
+        out[j] = x[j] + h / 6.0 * (k[0, j] + 2.0 * k[1, j] + 2.0 * k[2, j] + k[3, j])
+        total += out[j]
+        grown = max(grown, abs(out[j]))
+    if not math.isfinite(total):
+        return NONFINITE
+    if grown > GROWTH_LIMIT * scale:
+        return DIVERGED
+    if opts.project:
+        if update_inputs(inputs, t + h, out, p, d, flow, u, data) != OK:
+            return INPUT_FAILED
+        return project(model, w, t + h, out, u, p, d, flow, opts.constrain, opts.e0, opts.energy_tol)
+    return OK
+
+
+@jit
+def crosses(direction, g_start, g_end):
+    """Whether a guard going from g_start to g_end over a step crosses zero in `direction`."""
+    if g_start > 0.0:
+        return direction != RISING and g_end <= 0.0
+    if g_start < 0.0:
+        return direction != FALLING and g_end >= 0.0
+    return False            # starting on zero: the instant check (see `instant`) decides
+
+
+@jit
+def locate(model, w, opts, inputs, data, jump_index, tol, t, h, x, u, p, d, flow, g_start, g_end, scale):
+    """Root of guard `jump_index` on the step (t, x) -> t + h, as a bracket [a, b] no wider than tol.
+
+    Illinois (modified regula falsi) with a bisection whenever the bracket does not halve. Returns
+    (a, status) with w.xb the state at t + a: the near side of zero, so that a guard reset to move
+    back (a bounce) starts the next step on the side from which it can cross again.
+    """
+    xb, xc = w.xb, w.xc
+    s = 1.0 if g_start > 0.0 else -1.0
+    a, ga, b, gb = 0.0, g_start, h, g_end
+    xb[:] = x
+    side = 0
+    width = h
+    for _ in range(200):
+        if b - a <= tol:
+            break
+        c = b - gb * (b - a) / (gb - ga)
+        if not (a < c < b) or (b - a) > 0.5 * width:
+            c = 0.5 * (a + b)
+        width = b - a
+        w.counts[1] += 1
+        status = rk4_step(model, w, opts, inputs, data, t, c, x, u, p, d, flow, xc, scale)
+        if status == OK:
+            status = update_inputs(inputs, t + c, xc, p, d, flow, u, data)
+        if status != OK:
+            return c, status
+        gc = call(model.guard, (jump_index, t + c, xc, u, p, d))
+        if s * gc <= 0.0:
+            b, gb = c, gc
+            if side == 1:
+                ga *= 0.5
+            side = 1
+        else:
+            a, ga = c, gc
+            xb[:] = xc
+            if side == -1:
+                gb *= 0.5
+            side = -1
+    return a, OK
+
+
+@jit(nogil=True)
+def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, every, log, row):
+    """Integrate from time t (on step i: t0 + i dt <= t < t0 + (i + 1) dt) to the grid point i_end,
+    stopping early at a jump or a failure. x, d, w.g0 and the log are updated in place; every
+    `every`-th grid point is logged at log[row] (log.u: the inputs there, w.u the latest inputs).
+    w.counts[0] += steps taken (a step cut by a jump counts twice), w.counts[1] += trial steps of
+    event location, w.counts[2] = the rows logged so far. It runs without the GIL, so that a
+    watchdog thread can write those rows should the loop never return (andyc.runtime.interrupts).
+
+    Returns (i, row, status, t, flow, jump): jump is the index of the jump applied at t (w.x_event
+    holds the state just before it), or -1.
+    """
+    u, g0, x1, xb, x_event, counts = w.u, w.g0, w.x1, w.xb, w.x_event, w.counts
+    source, direction, priority = model.jump_source, model.jump_direction, model.jump_priority
+    x, p, d = borrowed(x), borrowed(p), borrowed(d)     # held by the caller: no reference counts below
+    if data is not None:
+        data = borrowed(data)
+    counts[2] = row
+    scale = 1.0
+    for j in range(x.shape[0]):
+        scale = max(scale, abs(x[j]))
+    if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
+        return i, row, INPUT_FAILED, t, flow, -1
+    for n in range(model.nj):
+        if source[n] == flow:
+            g0[n] = call(model.guard, (n, t, x, u, p, d))
+    while i < i_end:
+        t_next = t0 + (i + 1) * dt
+        h = t_next - t
+        if h > 1e-14 * max(1.0, abs(t_next)):
+            counts[0] += 1
+            status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale)
+            if status != OK:
+                return i, row, status, t, flow, -1
+            best, best_tau = -1, h
+            tol = opts.event_tol * max(1.0, abs(t))
+            for n in range(model.nj):
+                if source[n] != flow:
+                    continue
+                if update_inputs(inputs, t_next, x1, p, d, flow, u, data) != OK:
+                    return i, row, INPUT_FAILED, t, flow, -1
+                g1 = call(model.guard, (n, t_next, x1, u, p, d))
+                if crosses(direction[n], g0[n], g1):
+                    tau, status = locate(model, w, opts, inputs, data, n, tol, t, h, x, u, p, d, flow, g0[n], g1, scale)
+                    if status == OK:
+                        status = update_inputs(inputs, t + tau, xb, p, d, flow, u, data)
+                    if status != OK:
+                        return i, row, status, t, flow, -1
+                    earlier = tau < best_tau - tol or (best >= 0 and tau <= best_tau + tol
+                                                        and priority[n] < priority[best])
+                    if (best < 0 or earlier) and call(model.enabled, (n, t + tau, xb, u, p, d)) >= 0.0:
+                        best, best_tau = n, tau
+                        x_event[:] = xb
+                g0[n] = g1
+            if best >= 0:
+                x[:] = x_event
+                t = t + best_tau
+                if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
+                    return i, row, INPUT_FAILED, t, flow, -1
+                status = jump(model, w, best, t, x, u, p, d)
+                return i, row, status, t, model.jump_target[best], best
+            x[:] = x1
+            for j in range(x.shape[0]):
+                scale = max(scale, abs(x[j]))
+        t = t_next
+        i += 1
+        if i % every == 0:
+            if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
+                return i, row, INPUT_FAILED, t, flow, -1
+            log.t[row] = t
+            log.x[row] = x
+            log.u[row] = u
+            log.flow[row] = flow
+            log.d[row] = d
+            row += 1
+            counts[2] = row
+    return i, row, OK, t, flow, -1
+
+
+@jit(nogil=True)
+def instant(model, w, mode, inputs, data, t, x, p, d, flow):
+    """The first jump (in priority order) out of `flow` that happens at once at (t, x), or -1.
+
+    A guard already past zero happens at once when it is moving further (falling: g < 0 and
+    dg/dt <= 0, or g = 0 and dg/dt < 0; rising mirrored; either: g = 0 and dg/dt != 0) and its
+    enabling condition holds. A guard past zero but moving back, such as a bouncing ball's height
+    just after the bounce, does not. w.u is left at the inputs at (t, x); -2 when they fail.
+    """
+    u, xdot = w.u, w.xdot
+    x, p, d = borrowed(x), borrowed(p), borrowed(d)
+    if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
+        return -2
+    have_rate = False
+    for n in range(model.nj):
+        k = model.jump_order[n]
+        if model.jump_source[k] != flow:
+            continue
+        direction = model.jump_direction[k]
+        g = call(model.guard, (k, t, x, u, p, d))
+        if g != 0.0 and (direction == EITHER or (g > 0.0) != (direction == RISING)):
+            continue
+        if not have_rate:
+            status = rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode)
+            if status != OK:
+                return -1
+            have_rate = True
+        rate = call(model.guard_rate, (k, t, x, u, p, d, xdot))
+        if direction == EITHER:
+            moving = rate != 0.0
+        elif direction == FALLING:
+            moving = rate < 0.0 or (g < 0.0 and rate == 0.0)
+        else:
+            moving = rate > 0.0 or (g > 0.0 and rate == 0.0)
+        if moving and call(model.enabled, (k, t, x, u, p, d)) >= 0.0:
+            return k
+    return -1
+
+
+@jit
+def evaluate_energy(model, log, p, out):
+    """Energy at the logged samples."""
+    for r in range(log.t.shape[0]):
+        out[r] = call(model.energy, (log.t[r], log.x[r], log.u[r], p, log.d[r]))
+
+
+@jit
+def evaluate_frames(model, log, p, out):
+    """Frame origins at the logged samples, out (N, frames, 3)."""
+    for r in range(log.t.shape[0]):
+        call(model.frame_positions, (log.t[r], log.x[r], log.u[r], p, log.d[r], out[r]))
+
+
+@jit
+def evaluate_constraints(model, w, log, p, phi, c, lam):
+    """Residuals phi (N, NH), c (N, NC) and multipliers lam (N, NC) at the logged samples; NaN for the rows
+    not active in the sample's flow."""
+    S = w.S
+    for r in range(log.t.shape[0]):
+        flow = log.flow[r]
+        x, u, d = log.x[r], log.u[r], log.d[r]
+        call(model.constraints_into, (log.t[r], x, u, p, d, S))
+        phi[r, :] = math.nan
+        c[r, :] = math.nan
+        for n in range(model.flow_nrows[flow]):
+            i = model.flow_rows[flow, n]
+            c[r, i] = S[model.s_cv, i]
+            if i < model.nh:
+                phi[r, i] = S[model.s_phi, i]
+        if multipliers(model, w, log.t[r], x, u, p, d, flow, lam[r]) != OK:
+            lam[r, :] = math.nan

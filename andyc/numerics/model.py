@@ -1,0 +1,241 @@
+"""The compiled model and the arrays its algorithms work in, as MuJoCo's mjModel and mjData.
+
+Model holds a model's sizes, its index tables and its own functions (the leaves), which
+<name>_equations.py compiles as Numba C callbacks with the signatures of LEAVES. Every algorithm
+of this package takes a Model and a Work; their types are the same for every model, so each
+algorithm compiles once. Both are Numba structrefs: passed by reference, and typed from Python in
+about a microsecond (a tuple of function pointers takes tens).
+
+Work holds the scratch arrays; Python keeps its own references to them (Work.arrays), so reading
+them needs no compiled accessor.
+
+Every algorithm calls a leaf through `call(leaf, args)` (below), a plain indirect call. (Numba's
+own call of a first-class function carries a fallback that re-enters Python; its presence alone
+makes Numba count references to every array the calling function takes, which costs the
+walker's step a fifth of its time.)
+
+The leaves, each with t, x (state), u (inputs), p (parameters), d (discrete states) first where
+marked STATE; k is a jump's index; S is the scratch of layout.py:
+
+    dynamics(STATE, M, G)                     M (NV, NV) and G (NV,): M dv/dt = G (ANDY eq. 8)
+    dynamics_constraints(STATE, M, G, S)      both this and constraints_into, sharing subexpressions
+    constraints_into(STATE, S)                phi (NH,), c = A v + b (NC,), A (NC, NV) and kappa (NC,)
+                                              with dc/dt = A dv/dt + kappa (ANDY eq. 11), into S
+    signal_rates(STATE, xdot)                 d sigma/dt into xdot[NQ + NV:] (ANDY eq. 4)
+    energy(STATE) -> E, power(STATE) -> P     total energy; power of the non-conservative elements
+    frame_positions(STATE, out)               origins of the frames in world, out (frames, 3)
+    constraint_gains(p, S)                    Baumgarte gains K_s, K_d of each row (ANDY eq. 13-15), into S
+    restitution(p, S)                         restitution of each jump's impact, into S
+    guard(k, STATE) -> g, enabled(k, STATE) -> e   jump k happens where g crosses zero while e >= 0
+    guard_rate(k, STATE, xdot) -> dg/dt
+    reset(k, STATE)                           jump k's resets, into x and d
+    flow_inputs(p, U)                         input values each flow sets, into U (NF, NU)
+    closed_form(t, u, p, x)                   the exact solution the model declares, into x
+
+and the input callback every integrator takes (andyc's runtime, or the model's own expressions):
+
+    status = inputs(t, x, d, p, flow, u, data)    INPUTS_SIGNATURE
+"""
+
+import numpy as np
+
+from .compiler import NUMBA, cfunc, jit
+from .layout import VECTORS, scratch_layout
+
+SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj")
+ROWS = ("s_a", "s_c", "s_w") + tuple(f"s_{name}" for name in VECTORS)  # the first row of each part of S
+TABLES = ("quaternions",                            # index in x of each quaternion signal's w
+          "flow_rows", "flow_nrows", "flow_nhrows",  # active rows of each flow (holonomic first), then -1
+          "impact_rows", "impact_nrows",             # rows taking each jump's impact
+          "jump_source", "jump_target", "jump_direction", "jump_priority", "jump_order")
+LEAF_NAMES = ("dynamics", "dynamics_constraints", "constraints_into", "signal_rates", "energy", "power",
+              "frame_positions", "constraint_gains", "restitution", "guard", "guard_rate", "enabled", "reset",
+              "flow_inputs", "closed_form")
+WORK = {    # the arrays of Work: name -> shape, from the sizes and the scratch layout
+    "M": ("nv", "nv"), "G": ("nv",), "S": ("rows", "width"),
+    "k": (4, "nx"), "xt": ("nx",), "x1": ("nx",), "xb": ("nx",), "xc": ("nx",), "x_event": ("nx",),
+    "xdot": ("nx",), "g0": ("nj",), "u": ("nu",),
+}
+
+if NUMBA:
+    from numba import types
+    from numba.core import cgutils
+    from numba.core.extending import intrinsic
+    from numba.experimental import structref
+
+    _f8, _i8, _V, _MAT = types.float64, types.int64, types.float64[::1], types.float64[:, ::1]
+    _STATE = (_f8, _V, _V, _V, _V)
+    LEAVES = {
+        "dynamics": types.void(*_STATE, _MAT, _V),
+        "dynamics_constraints": types.void(*_STATE, _MAT, _V, _MAT),
+        "constraints_into": types.void(*_STATE, _MAT),
+        "signal_rates": types.void(*_STATE, _V),
+        "energy": _f8(*_STATE),
+        "power": _f8(*_STATE),
+        "frame_positions": types.void(*_STATE, _MAT),
+        "constraint_gains": types.void(_V, _MAT),
+        "restitution": types.void(_V, _MAT),
+        "guard": _f8(_i8, *_STATE),
+        "guard_rate": _f8(_i8, *_STATE, _V),
+        "enabled": _f8(_i8, *_STATE),
+        "reset": types.void(_i8, *_STATE),
+        "flow_inputs": types.void(_V, _MAT),
+        "closed_form": types.void(_f8, _V, _V, _V),
+    }
+    INPUTS_SIGNATURE = _i8(_f8, _V, _V, _V, _i8, _V, _V)
+
+    def leaf(name):
+        """Compile a model function as the leaf `name` (a C callback of its signature in LEAVES, cached
+        beside it): its type is its signature, so the algorithms compile once for every model."""
+        return cfunc(LEAVES[name])
+
+    def input_callback(function):
+        """Compile an input function `status = inputs(t, x, d, p, flow, u, data)` (INPUTS_SIGNATURE)."""
+        return cfunc(INPUTS_SIGNATURE)(function)
+
+    @structref.register
+    class ModelType(types.StructRef):
+        def preprocess_fields(self, fields):
+            return tuple((name, types.unliteral(t)) for name, t in fields)
+
+    class Model(structref.StructRefProxy):
+        """A compiled model, for the algorithms (see the module docstring). Build it with new_model."""
+
+    @structref.register
+    class WorkType(types.StructRef):
+        def preprocess_fields(self, fields):
+            return tuple((name, types.unliteral(t)) for name, t in fields)
+
+    class WorkRef(structref.StructRefProxy):
+        """The scratch of one model, for the algorithms. Build it with Work."""
+
+    def _passes_as(given, wanted) -> bool:
+        """Whether a value of type `given` can be passed where the leaf takes `wanted`: an array of the very
+        type (dtype, dimensions, C layout: the leaf indexes it as contiguous), or a number (cast)."""
+        if isinstance(wanted, types.Array):
+            return (isinstance(given, types.Array) and given.dtype == wanted.dtype and given.ndim == wanted.ndim
+                    and given.layout == "C")
+        return isinstance(given, (types.Number, types.Boolean))
+
+    @intrinsic
+    def call(typingctx, leaf, args):
+        """leaf(*args), a leaf called through its C address (see the module docstring). Arrays must be
+        C-contiguous of the leaf's dtype (else a typing error); numbers are cast to its argument types."""
+        if not isinstance(leaf, types.FunctionType) or not isinstance(args, types.BaseTuple):
+            return None
+        prototype = leaf.ftype
+        if len(args) != len(prototype.atypes) or not all(map(_passes_as, args.types, prototype.atypes)):
+            return None
+
+        def codegen(context, builder, signature, values):
+            function, arguments = values
+            address = cgutils.create_struct_proxy(leaf)(context, builder, value=function).c_addr
+            pointer = builder.bitcast(address, context.get_value_type(prototype))
+            passed = [builder.extract_value(arguments, i) for i in range(len(args))]
+            passed = [value if isinstance(wanted, types.Array) else context.cast(builder, value, given, wanted)
+                      for value, given, wanted in zip(passed, args.types, prototype.atypes)]
+            return builder.call(pointer, passed)
+
+        return prototype.rtype(leaf, args), codegen
+
+    @intrinsic
+    def borrowed(typingctx, array):
+        """The same array without its reference count (a null meminfo), for an array that outlives every call
+        it is passed to: Model's tables and Work's arrays (their `owner` keeps them) and the state of a run
+        (its caller keeps it). Numba then skips the atomic increments and decrements on every call that
+        takes it, which in a constrained step cost about a quarter of its time."""
+        if not isinstance(array, types.Array):
+            return None
+
+        def codegen(context, builder, signature, values):
+            view = context.make_array(array)(context, builder, value=values[0])
+            view.meminfo = cgutils.get_null_value(view.meminfo.type)
+            return view._getvalue()
+
+        return array(array), codegen
+
+    # Each holds its arrays borrowed (see borrowed) and, in `owner`, a tuple of the same arrays with their
+    # counts, which keeps them alive as long as it lives.
+    structref.define_proxy(Model, ModelType, SIZES + ROWS + TABLES + LEAF_NAMES + ("owner",))
+    structref.define_proxy(WorkRef, WorkType, tuple(WORK) + ("counts", "owner"))
+else:
+    LEAVES, INPUTS_SIGNATURE = {name: None for name in LEAF_NAMES}, None
+
+    def leaf(name):
+        return lambda function: function
+
+    def input_callback(function):
+        return function
+
+    def call(leaf, args):
+        return leaf(*args)
+
+    def borrowed(array):
+        return array
+
+    class Model:
+        def __init__(self, *values):
+            for name, value in zip(SIZES + ROWS + TABLES + LEAF_NAMES + ("owner",), values):
+                setattr(self, name, value)
+
+    class WorkRef:
+        def __init__(self, *values):
+            for name, value in zip(tuple(WORK) + ("counts", "owner"), values):
+                setattr(self, name, value)
+
+
+@jit
+def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, impact_rows, impact_nrows, jump_source,
+           jump_target, jump_direction, jump_priority, jump_order, leaves):
+    (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_positions,
+     constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form) = leaves
+    return Model(sizes[0], sizes[1], sizes[2], sizes[3], sizes[4], sizes[5], sizes[6], sizes[7], sizes[8], sizes[9],
+                 rows[0], rows[1], rows[2], rows[3], rows[4], rows[5], rows[6], rows[7], rows[8], rows[9], rows[10],
+                 rows[11], rows[12],
+                 borrowed(quaternions), borrowed(flow_rows), borrowed(flow_nrows), borrowed(flow_nhrows),
+                 borrowed(impact_rows), borrowed(impact_nrows), borrowed(jump_source), borrowed(jump_target),
+                 borrowed(jump_direction), borrowed(jump_priority), borrowed(jump_order),
+                 dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_positions,
+                 constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form,
+                 (quaternions, flow_rows, flow_nrows, flow_nhrows, impact_rows, impact_nrows, jump_source, jump_target,
+                  jump_direction, jump_priority, jump_order))
+
+
+def sizes_of(equations) -> dict:
+    """The sizes of a generated <name>_equations.py module (NQ, NV, ...), with the scratch layout's "rows" and
+    "width", by lower-case name."""
+    sizes = {name: int(getattr(equations, name.upper())) for name in SIZES}
+    layout = scratch_layout(sizes["nv"], sizes["nc"], sizes["nj"])
+    return {**sizes, "rows": layout["rows"], "width": layout["width"]}
+
+
+def new_model(equations, stubs) -> Model:
+    """The Model of a generated <name>_equations.py module: its sizes (NQ, NV, ...), tables (FLOW_ROWS, ...)
+    and leaves; `stubs` (a module of leaves that do nothing) stands in for the leaves a model has none of
+    (no constraints, no jumps, ...)."""
+    sizes = sizes_of(equations)
+    layout = scratch_layout(sizes["nv"], sizes["nc"], sizes["nj"])
+    rows = np.array([layout[name] for name in ("A", "C", "W") + VECTORS], dtype=np.int64)
+    tables = [np.ascontiguousarray(getattr(equations, name.upper()), dtype=np.int64) for name in TABLES]
+    leaves = tuple(getattr(equations, name, None) or getattr(stubs, name) for name in LEAF_NAMES)
+    return _model(np.array([sizes[name] for name in SIZES], dtype=np.int64), rows, *tables, leaves)
+
+
+@jit
+def _work(M, G, S, k, xt, x1, xb, xc, x_event, xdot, g0, u, counts):
+    return WorkRef(borrowed(M), borrowed(G), borrowed(S), borrowed(k), borrowed(xt), borrowed(x1), borrowed(xb),
+                   borrowed(xc), borrowed(x_event), borrowed(xdot), borrowed(g0), borrowed(u), borrowed(counts),
+                   (M, G, S, k, xt, x1, xb, xc, x_event, xdot, g0, u, counts))
+
+
+class Work:
+    """The scratch arrays of one model (WORK), zeroed, and `ref`, the same arrays as the algorithms take them.
+
+    counts (int64, 3): steps taken, trial steps of event location, rows logged (see integrator.advance).
+    """
+
+    def __init__(self, sizes: dict):
+        for name, shape in WORK.items():
+            setattr(self, name, np.zeros(tuple(sizes[s] if isinstance(s, str) else s for s in shape)))
+        self.counts = np.zeros(3, dtype=np.int64)
+        self.ref = _work(*(getattr(self, name) for name in WORK), self.counts)

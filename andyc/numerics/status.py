@@ -1,0 +1,23 @@
+"""Codes shared by the compiled numerics and andyc's runtime, each written once (as SciPy's solve_ivp keeps its
+status messages in one table). Plain Python: no Numba, no NumPy."""
+
+# What a compiled function returns.
+OK, NONFINITE, SINGULAR_MASS, DEPENDENT, INPUT_FAILED, DIVERGED = 0, 1, 2, 3, 4, 5
+MESSAGES = {
+    NONFINITE: "the state became non-finite (NaN or Inf)",
+    SINGULAR_MASS: "the mass matrix is not positive definite",
+    DEPENDENT: "the constraint rows are linearly dependent (redundant constraints, or a singular configuration); "
+               "the multipliers are not unique, use --method projection",
+    INPUT_FAILED: "the inputs failed",
+    DIVERGED: "the solution diverges: within one step the state grew past 1000 times its largest value so far "
+              "(a step far too large for the dynamics, or a singular mass matrix or constraint)",
+}
+
+# How the constraint forces of a flow are found (see dynamics.constraint_force).
+IDEAL, LAGRANGE, BAUMGARTE = 0, 1, 2
+
+# The direction in which a guard must cross zero for its jump to happen.
+FALLING, EITHER, RISING = -1, 0, 1
+
+GROWTH_LIMIT = 1e3  # a step that grows the state past this factor of its largest so far: DIVERGED
+RANK_TOL = 1e-8     # singular values below RANK_TOL * the largest count as zero (redundant rows, singular poses)
