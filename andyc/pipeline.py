@@ -117,7 +117,7 @@ def compile_model(path, out_dir="build", force: bool = False):
     compile_integrator(compiled)
     if compiled.input_expressions:          # the integrator's variant that calls the model's input callback
         data = np.zeros(compiled.nf * len(compiled.input_names) + 3 + compiled.nx)
-        compile_integrator(compiled, compiled.module.MODEL_INPUTS, data)
+        compile_integrator(compiled, compiled.numerics.inputs.callbacks(compiled.module.MODEL_INPUTS), data)
     result.timings["compile"] = time.perf_counter() - t0
     result.compiled = compilations(compiled) - before
     return compiled, result

@@ -259,3 +259,29 @@ def test_cli_input_options(tmp_path, cart):
     assert header.split(",")[:4] == ["time", "x", "x_dot", "F"]
     proc = andyc_cli("sim", model, "--input", "F", "-o", tmp_path / "build")
     assert proc.returncode == 2 and "'F' is not NAME=VALUE" in proc.stderr
+
+
+def test_a_command_line_expression_is_generated_into_the_build_and_reused(tmp_path):
+    """--input F=EXPR goes through the whitelist parser and the code generator into the build folder, as the
+    model's own expressions do (nothing is executed as text); a run with the same drives imports that module
+    again, Numba's cache of it included, without SymPy."""
+    model = tmp_path / "driven_cart.yaml"
+    model.write_text(CART)
+    script = ("import sys\nfrom andyc.cli import main\ntry:\n"
+              f"    main(['sim', {str(model)!r}, '-o', {str(tmp_path / 'build')!r}, '--t-end', '0.1', "
+              "'--input', 'F=2 - k*x', '--out', 'run.csv'])\n"
+              "except SystemExit as exc:\n    assert exc.code in (0, None), exc.code\n"
+              "print('sympy' in sys.modules)")
+    first = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True)
+    assert first.returncode == 0, first.stderr
+    generated = list((tmp_path / "build" / "driven_cart" / "run_inputs").glob("r_*.py"))
+    assert len(generated) == 1
+    source = generated[0].read_text()
+    assert "u[0] = -p[1]*x[0] + 2" in source and "k*x" not in source      # k is p[1], x is x[0]
+    cache = generated[0].parent / "__pycache__"
+    stamps = {p.name: p.stat().st_mtime_ns for p in cache.iterdir()}
+    assert any(name.endswith(".nbc") for name in stamps)
+    again = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True)
+    assert again.returncode == 0, again.stderr
+    assert again.stdout.splitlines()[-1] == "False"                       # no SymPy: the module was found
+    assert {p.name: p.stat().st_mtime_ns for p in cache.iterdir()} == stamps   # and nothing compiled again

@@ -18,6 +18,7 @@ content (compiler.py), wherever the copy sits.
     linalg.py      Cholesky, triangular and Gram solves, unrolled for small sizes
     dynamics.py    the right-hand side of a flow, the multipliers, projection and the impact map
     integrator.py  RK4 with event location, the hybrid step, evaluations over a run's log
+    inputs.py      input callbacks: the model's and the run's, held values, tables
     api.py         the generated module's Python functions (rhs, mass_matrix, energy, ...)
 
 Importing the package itself imports nothing heavy; andyc's runtime reads status.py from its own

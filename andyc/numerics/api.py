@@ -14,6 +14,7 @@ import numpy as np
 
 from .compiler import jit
 from .dynamics import multipliers, rhs_mode_into
+from .inputs import callbacks
 from .integrator import crosses, update_inputs  # noqa: F401  (crosses: for the module's users)
 from .model import Work, call
 from .status import IDEAL, OK
@@ -103,7 +104,7 @@ class Functions:
         u = u.copy()
         if self.model_inputs is not None:
             data = np.tile(u, self.sizes["nf"])        # the callback reads the flow's held values from here
-            update_inputs(self.model_inputs, float(t), _vector(x), p, d, flow, u, data)
+            update_inputs(callbacks(self.model_inputs), float(t), _vector(x), p, d, flow, u, data)
         return u
 
     def mass_matrix(self, t, x, u=None, p=None, d=None):

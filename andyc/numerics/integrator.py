@@ -14,14 +14,14 @@ is applied at the near side of the final bracket, and the rest of the step is in
 next call, so the grid stays t0 + i dt. The caller applies the user's jump function and follows
 jumps that happen at once (instant).
 
-Inputs: every function here takes `inputs`, a compiled function
-    status = inputs(t, x, d, p, flow, u, data)
-that writes the inputs u at (t, x) (model.INPUTS_SIGNATURE: a first-class function type, so the
-integrator compiles once for every input source), and the `data` it reads. It is called before each
-evaluation at a new (t, x); a nonzero status stops the run with INPUT_FAILED. inputs = data = None:
-the inputs are held, u as the caller set it for the flow. Numba then compiles the integrator without
-the calls (branches on `is not None` are pruned at compile time), so held inputs do not pay for
-carrying a function and an array down the call chain.
+Inputs: every function here takes `inputs`, a pair of compiled callbacks (inputs.py)
+    status = callback(t, x, d, p, flow, u, data)
+that write the inputs u at (t, x) (model.INPUTS_SIGNATURE: a first-class function type, so the
+integrator compiles once for every input source), and the `data` they read. They are called before
+each evaluation at a new (t, x); a nonzero status stops the run with INPUT_FAILED. inputs = data =
+None: the inputs are held, u as the caller set it for the flow. Numba then compiles the integrator
+without the calls (branches on `is not None` are pruned at compile time), so held inputs do not pay
+for carrying functions and an array down the call chain.
 """
 
 import math
@@ -48,11 +48,12 @@ def options(mode, project, constrain, e0, energy_tol, event_tol) -> Options:
 
 @jit
 def update_inputs(inputs, t, x, p, d, flow, u, data):
-    """u at (t, x) when the inputs are driven (held: u stays as the caller set it); a status (INPUT_FAILED:
-    `inputs` failed, its record in data says why)."""
+    """u at (t, x) when the inputs are driven (inputs: the pair of callbacks of inputs.callbacks; None: held, u
+    stays as the caller set it); a status (INPUT_FAILED: a callback failed, its record in data says why)."""
     if inputs is not None:
-        if inputs(t, x, d, p, flow, u, data) != 0:
-            return INPUT_FAILED
+        for callback in inputs:
+            if call(callback, (t, x, d, p, flow, u, data)) != 0:
+                return INPUT_FAILED
     return OK
 
 
@@ -73,9 +74,8 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale):
         c = 0.0 if s == 0 else (1.0 if s == 3 else 0.5)
         for j in range(nx):
             xt[j] = x[j] if s == 0 else x[j] + c * h * k[s - 1, j]
-        if inputs is not None:
-            if inputs(t + c * h, xt, d, p, flow, u, data) != 0:
-                return INPUT_FAILED
+        if update_inputs(inputs, t + c * h, xt, p, d, flow, u, data) != OK:
+            return INPUT_FAILED
         status = rhs_mode_into(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
         if status != OK:
             return status

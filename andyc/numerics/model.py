@@ -32,7 +32,8 @@ marked STATE; k is a jump's index; S is the scratch of layout.py:
     flow_inputs(p, U)                         input values each flow sets, into U (NF, NU)
     closed_form(t, u, p, x)                   the exact solution the model declares, into x
 
-and the input callback every integrator takes (andyc's runtime, or the model's own expressions):
+and the input callbacks every integrator takes (inputs.py: the model's own expressions, model_inputs,
+and what a run drives beyond them):
 
     status = inputs(t, x, d, p, flow, u, data)    INPUTS_SIGNATURE
 """

@@ -174,7 +174,7 @@ def leaf_compilations(equations: ModuleType) -> int:
 def numerics_compilations(numerics: ModuleType) -> int:
     """How many functions of a numerics package (a build's andyc_numerics) Numba has compiled in this process."""
     total = 0
-    for name in ("model", "stubs", "linalg", "dynamics", "integrator", "api"):
+    for name in ("model", "stubs", "linalg", "dynamics", "integrator", "inputs", "api"):
         for value in vars(getattr(numerics, name)).values():
             misses = getattr(getattr(value, "stats", None), "cache_misses", None)
             if misses is not None:

@@ -1,38 +1,30 @@
 """What drives a run's inputs: constants, expressions of t and the state, tables, a controller.
 
-The integrator calls one compiled function before every evaluation at a new
-(t, x) (the generated module's INPUTS_SIGNATURE):
-
-    status = inputs(t, x, d, p, flow, u, data)
-
-It is a Numba C callback; its type is its signature, not the function, so the
-integrator compiles once for every input source and its cache holds. `data`
-carries what the function reads:
+The integrator calls a pair of compiled input callbacks before every evaluation at a new (t, x)
+(andyc_numerics/inputs.py): the model's own expressions (the module's model_inputs), then what
+the run drives beyond them. Their type is their signature, not the function, so the integrator
+compiles once for every input source and its cache holds. `data` carries what they read:
 
     data = [ U (NF x NU)  |  failure record (3 + NX)  |  tables ]
 
-U holds the constant inputs of each flow (the run's values, then the inputs a
-flow sets itself). The model's own input expressions are compiled into the
-generated module (input_<k>_<name>, and the callback model_inputs, used as it is
-when the run drives no input itself); the run's own drives are added here.
-When no input is driven, the function is None and the
-integrator holds u = U[flow] (see the module's integrator). Driven inputs are
-written over U's values, except where the current flow sets them: the model's
-flow wins over the run.
+U holds the constant inputs of each flow (the run's values, then the inputs a flow sets itself).
+When no input is driven, the integrator gets None and holds u = U[flow]. Driven inputs are written
+over U's values, except where the current flow sets them: the model's flow wins over the run.
 
   NAME=2.5             a constant
-  NAME="-10*th"        an expression of t, the states (q, <q>_dot, signals),
-                       the parameters and the discrete states, parsed through
-                       the whitelist of andyc.spec.expressions and printed as code
-  NAME=push.csv        a table: a time column `t` (or `time`) and a column NAME
-                       (or a single value column), interpolated linearly
-  controller FILE.py   `u = control(t, x, d, p)` for all inputs: a number (one
-                       input) or a sequence of NU numbers, compiled with Numba,
-                       or, when Numba cannot, called as Python (slower; a warning)
+  NAME="-10*th"        an expression of t, the states (q, <q>_dot, signals), the parameters and
+                       the discrete states: parsed through the whitelist of andyc.spec.expressions
+                       and generated into the build folder like the model's own expressions
+                       (andyc.codegen.run_inputs), never executed as text
+  NAME=push.csv        a table: a time column `t` (or `time`) and a column NAME (or a single value
+                       column), interpolated linearly
+  controller FILE.py   `u = control(t, x, d, p)` for all inputs: a number (one input) or a sequence
+                       of NU numbers, compiled with Numba, or, when Numba cannot, called as Python
+                       (slower; a warning)
 
-A controller that raises or returns the wrong number of values stops the run:
-the callback records (t, x) and the failure, and the run calls the controller
-again as Python there to name the file and line.
+A controller that raises or returns the wrong number of values stops the run: the callback
+records (t, x) and the failure, and the run calls the controller again as Python there to name
+the file and line.
 """
 
 from __future__ import annotations
@@ -52,11 +44,11 @@ import numpy as np
 
 from andyc.errors import SimulationError
 
-RAISED, WRONG_SHAPE = 1.0, 2.0          # failure kinds in the record
+from andyc.numerics.inputs import RAISED, RECORD, WRONG_SHAPE
+
 # What the user's code may raise and the run reports: its exceptions, and sys.exit(), which must not end
 # andyc (a KeyboardInterrupt still does).
 USER_ERRORS = (Exception, SystemExit)
-_RECORD = 3                             # kind, t, number of values returned; then x
 
 
 class InputWarning(UserWarning):
@@ -81,7 +73,7 @@ class Controller:
 
 @dataclass
 class InputSource:
-    """A run's inputs: the compiled function (None: held), its data, and what drives each input."""
+    """A run's inputs: the pair of compiled callbacks (None: held), their data, and what drives each input."""
     function: object
     data: np.ndarray
     nx: int
@@ -110,7 +102,7 @@ class InputSource:
         """Why the function failed (from its record), naming the controller's file and line."""
         r = self.record
         kind, t, count = self.data[r], float(self.data[r + 1]), int(self.data[r + 2])
-        x = self.data[r + _RECORD:r + _RECORD + self.nx].copy()
+        x = self.data[r + RECORD:r + RECORD + self.nx].copy()
         c = self.controller
         if c is None:
             return f"the inputs failed at t = {t:.9g} s"
@@ -170,41 +162,6 @@ def _return_line(function, t, x, d, p) -> int | None:
     return seen[-1] if seen else None
 
 
-# -- compiled helpers, referenced by the generated callback ---------------------------------------
-
-def _helpers():
-    from numba import njit
-
-    @njit(cache=True, error_model="numpy")
-    def interpolate(data, start, n, t):
-        """Linear interpolation in the table at data[start:start + n] (times), data[start + n:start + 2n] (values)."""
-        if t <= data[start]:
-            return data[start + n]
-        if t >= data[start + n - 1]:
-            return data[start + 2 * n - 1]
-        lo, hi = 0, n - 1
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if data[start + mid] <= t:
-                lo = mid
-            else:
-                hi = mid
-        a = (t - data[start + lo]) / (data[start + hi] - data[start + lo])
-        return data[start + n + lo] + a * (data[start + n + hi] - data[start + n + lo])
-
-    @njit(cache=True, error_model="numpy")
-    def failed(data, r, kind, t, x, count):
-        """Record a failure at (t, x) for the run to report; the callback's nonzero status."""
-        data[r] = kind
-        data[r + 1] = t
-        data[r + 2] = count
-        for i in range(x.shape[0]):
-            data[r + 3 + i] = x[i]
-        return 1
-
-    return interpolate, failed
-
-
 # -- building a source -----------------------------------------------------------------------------
 
 def input_source(model, p, values: dict | None = None, controller=None, t_end: float | None = None) -> InputSource:
@@ -234,7 +191,7 @@ def input_source(model, p, values: dict | None = None, controller=None, t_end: f
             tables[name] = read_table(Path(text), name, t_end)
             drives[name] = f"table {text}"
         else:
-            expressions[name] = _expression_code(model, name, text)
+            expressions[name] = text
             drives[name] = f"expression {text}"
     ctrl = None
     if controller is not None:
@@ -248,9 +205,9 @@ def input_source(model, p, values: dict | None = None, controller=None, t_end: f
         drives.update({n: f"controller {controller}" for n in names})
     nu, nx = len(names), model.nx
     record = model.nf * nu
-    data = [U.ravel(), np.zeros(_RECORD + nx)]
+    data = [U.ravel(), np.zeros(RECORD + nx)]
     offsets = {}
-    start = record + _RECORD + nx
+    start = record + RECORD + nx
     for name, table in tables.items():
         offsets[name] = (start, table.time.shape[0])
         data += [table.time, table.values]
@@ -258,10 +215,13 @@ def input_source(model, p, values: dict | None = None, controller=None, t_end: f
     data = np.ascontiguousarray(np.concatenate(data))
     if not drives:
         return InputSource(None, data, nx, model.nf, record)
-    if own and not (expressions or tables or ctrl):
-        function = model.module.MODEL_INPUTS                # the module's own callback
+    callbacks = model.numerics.inputs.callbacks
+    if ctrl is not None:                                    # it drives every input: the model's expressions do not
+        function = callbacks(None, _controller_callback(model, ctrl, record))
     else:
-        function = _compile(model, expressions, offsets, ctrl, record, list(own))
+        held = [n for n, _ in model.input_expressions if n in numbers]
+        run = _run_inputs(model, expressions, offsets, held) if (expressions or offsets or held) else None
+        function = callbacks(model.module.MODEL_INPUTS, run)
     return InputSource(function, data, nx, model.nf, record, drives, ctrl)
 
 
@@ -275,24 +235,35 @@ def _is_number(value) -> bool:
         return False
 
 
-def _expression_code(model, name: str, text: str) -> str:
-    """An input's expression as code over t, x[i], p[j], d[k] (parsed through the whitelist)."""
-    import sympy as sp              # here: a run that drives no input by a command-line expression needs no SymPy
+def _run_inputs(model, expressions: dict, tables: dict, held: list):
+    """The run's input callback for its expressions (as written), tables ({input: (start, n)} in data) and the
+    inputs it holds over the model's expressions: from the build folder's run_inputs/ when a run with these
+    drives made it, else generated there (andyc.codegen.run_inputs), then imported (Numba loads its cache)."""
+    from andyc.codegen.run_inputs import run_inputs_key, run_inputs_path
 
-    from andyc.codegen.printer import to_code
-    from andyc.spec.expressions import TIME, ExpressionError, parse
+    key = run_inputs_key(model.module.BUILD_KEY, expressions, tables, held)
+    path = run_inputs_path(model.path.parent, key)
+    if not path.exists():
+        from andyc.codegen.run_inputs import write_run_inputs
+        from andyc.spec.expressions import ExpressionError
 
-    symbols = {}
-    code = {}
-    for kind, names in (("x", model.state_names), ("p", model.parameter_names), ("d", model.discrete_names)):
-        for i, n in enumerate(names):
-            symbols[n] = sp.Symbol(n, real=True)
-            code[symbols[n]] = sp.Symbol(f"{kind}[{i}]", real=True)
-    try:
-        expr = parse(text, symbols, allow_time=True)
-    except ExpressionError as exc:
-        raise SimulationError(f"input {name}: {exc}; {exc.hint}") from None
-    return to_code(expr.xreplace({**code, TIME: sp.Symbol("t", real=True)}))
+        names = {"states": model.state_names, "parameters": model.parameter_names, "discrete": model.discrete_names,
+                 "inputs": model.input_names, "name": model.name,
+                 "flow_sets_input": np.asarray(model.module.FLOW_SETS_INPUT).tolist()}
+        for name, text in expressions.items():           # each alone first, to name the input that is wrong
+            try:
+                write_run_inputs(path, names, {name: text}, {}, [])
+            except ExpressionError as exc:
+                raise SimulationError(f"input {name}: {exc}; {exc.hint}") from None
+        write_run_inputs(path, names, expressions, tables, held)
+    module_name = f"andyc_run_inputs_{key}"
+    module = sys.modules.get(module_name)
+    if module is None:
+        spec = importlib.util.spec_from_file_location(module_name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[module_name] = module
+        spec.loader.exec_module(module)
+    return module.run_inputs
 
 
 def read_table(path: Path, name: str, t_end: float | None) -> Table:
@@ -426,73 +397,70 @@ def _numba_compile(control, python, path: Path):
     return jitted
 
 
-def _compile(model, expressions: dict, tables: dict, ctrl: Controller | None, record: int, own: list):
-    """Write, then compile, the callback: the held values, then each driven input unless the flow sets it
-    (`own`: the inputs the module's own expressions drive, by name)."""
+def _controller_callback(model, ctrl: Controller, record: int):
+    """The run's input callback of a controller: it calls control(t, x, d, p) and writes every input the flow
+    does not set; a controller that raises or returns the wrong number of values records why (see
+    InputSource.failure). Compiled for each run, from closures over the controller (nothing executed as text)."""
     from numba import cfunc, njit, objmode
 
-    interpolate, failed = _helpers()
+    failed = model.numerics.inputs.failed
     nu = len(model.input_names)
-    lines = ["def inputs(t, x, d, p, flow, u, data):"]
-    if own:         # the module's callback: the held values, then the model's own expressions ...
-        lines += ["    model_inputs(t, x, d, p, flow, u, data)"]
-        for name, _ in model.input_expressions:     # ... but the run's constant, where it holds one of those
-            if name not in own:
-                i = model.input_names.index(name)
-                lines += [f"    u[{i}] = data[flow * {nu} + {i}]"]
+    sets = np.ascontiguousarray(model.module.FLOW_SETS_INPUT)
+    if ctrl.compiled is None:
+        python = ctrl.function
+
+        def guarded(t, x, d, p):
+            # An exception must not leave the object-mode block: raised inside a C callback, it would stay set
+            # behind the compiled integrator's back. The run calls control again as Python there to say what
+            # it raised and where.
+            try:
+                return np.ascontiguousarray(np.atleast_1d(python(t, x, d, p)), dtype=np.float64), True
+            except BaseException:
+                return np.zeros(0), False
+
+        @njit
+        def call_python(t, x, d, p):
+            with objmode(r="float64[::1]", ok="boolean"):
+                r, ok = guarded(t, x, d, p)
+            return r, ok
+
+        def inputs(t, x, d, p, flow, u, data):
+            r, ok = call_python(t, x, d, p)
+            if not ok:
+                return failed(data, record, RAISED, t, x, 0)
+            if len(r) != nu:
+                return failed(data, record, WRONG_SHAPE, t, x, len(r))
+            for i in range(nu):
+                if not sets[flow, i]:
+                    u[i] = r[i]
+            return 0
+    elif ctrl.returns_scalar:
+        control = ctrl.compiled
+
+        def inputs(t, x, d, p, flow, u, data):
+            try:
+                r = control(t, x, d, p)
+            except Exception:
+                return failed(data, record, RAISED, t, x, 0)
+            if not sets[flow, 0]:
+                u[0] = r
+            return 0
     else:
-        lines += [f"    for i in range({nu}):", f"        u[i] = data[flow * {nu} + i]"]
-    index = {n: i for i, n in enumerate(model.input_names)}
-    for name, code in expressions.items():
-        lines += [f"    if not SETS[flow, {index[name]}]:", f"        u[{index[name]}] = {code}"]
-    for name, (start, n) in tables.items():
-        lines += [f"    if not SETS[flow, {index[name]}]:", f"        u[{index[name]}] = interpolate(data, {start}, {n}, t)"]
-    namespace = {"math": math, "np": np, "SETS": np.ascontiguousarray(model.module.FLOW_SETS_INPUT),
-                 "interpolate": interpolate, "failed": failed, "model_inputs": model.module.MODEL_INPUTS}
-    if ctrl is not None:
-        if ctrl.compiled is None:
-            python = ctrl.function
+        control = ctrl.compiled
 
-            def guarded(t, x, d, p):
-                # An exception must not leave the object-mode block: raised inside a C callback, it would
-                # stay set behind the compiled integrator's back. The run calls control again as Python
-                # there to say what it raised and where.
-                try:
-                    return np.ascontiguousarray(np.atleast_1d(python(t, x, d, p)), dtype=np.float64), True
-                except BaseException:
-                    return np.zeros(0), False
+        def inputs(t, x, d, p, flow, u, data):
+            try:
+                r = control(t, x, d, p)
+            except Exception:
+                return failed(data, record, RAISED, t, x, 0)
+            if len(r) != nu:
+                return failed(data, record, WRONG_SHAPE, t, x, len(r))
+            for i in range(nu):
+                if not sets[flow, i]:
+                    u[i] = r[i]
+            return 0
 
-            @njit
-            def call_python(t, x, d, p):
-                with objmode(r="float64[::1]", ok="boolean"):
-                    r, ok = guarded(t, x, d, p)
-                return r, ok
-            namespace["control"] = call_python
-            scalar = False
-            lines += ["    r, ok = control(t, x, d, p)",
-                      "    if not ok:",
-                      f"        return failed(data, {record}, {RAISED}, t, x, 0)"]
-        else:
-            namespace["control"] = ctrl.compiled
-            scalar = ctrl.returns_scalar
-            lines += ["    try:",
-                      "        r = control(t, x, d, p)",
-                      "    except Exception:",
-                      f"        return failed(data, {record}, {RAISED}, t, x, 0)"]
-        if scalar:
-            lines += ["    if not SETS[flow, 0]:", "        u[0] = r"]
-        else:
-            lines += [f"    if len(r) != {nu}:",
-                      f"        return failed(data, {record}, {WRONG_SHAPE}, t, x, len(r))",
-                      f"    for i in range({nu}):",
-                      "        if not SETS[flow, i]:",
-                      "            u[i] = r[i]"]
-    lines.append("    return 0")
-    # Generated code, as the module is: the user's expressions arrive as trees checked by the whitelist
-    # parser and printed by SymPy; no user text is executed here.
-    exec(compile("\n".join(lines) + "\n", f"<andyc inputs of {model.name}>", "exec"), namespace)
     try:
-        return cfunc(model.numerics.model.INPUTS_SIGNATURE, error_model="numpy")(namespace["inputs"])
+        return cfunc(model.numerics.model.INPUTS_SIGNATURE, error_model="numpy")(inputs)
     except Exception as exc:
-        where = ctrl.path if ctrl is not None else model.name
-        raise SimulationError(f"{where}: cannot compile the inputs with Numba: {str(exc).splitlines()[0]}") from None
+        raise SimulationError(f"{ctrl.path}: cannot compile the inputs with Numba: {str(exc).splitlines()[0]}") from None
