@@ -1,9 +1,9 @@
 """Shared fixtures. The shipped models are built into one build folder that every worker and every run
 of the suite shares (build/tests: a build is reused by meaning, and Numba's cache with it, so a model
 compiles once, not once per worker and run); other models into a temporary folder per session. The
-numerics every build shares compile once into build/tests/cache (ANDYC_CACHE_DIR), not the user's cache."""
+numerics every build shares compile once into andyc's cache (ANDYC_CACHE_DIR), as for any user, so that
+`make demo` after `make test` finds them."""
 
-import os
 from pathlib import Path
 
 import pytest
@@ -13,7 +13,6 @@ import andyc
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
 SHIPPED_BUILD = ROOT / "build" / "tests"
-os.environ.setdefault("ANDYC_CACHE_DIR", str(SHIPPED_BUILD / "cache"))      # subprocesses inherit it
 
 
 @pytest.fixture(scope="session")

@@ -21,9 +21,7 @@ import numpy as np
 
 from .compiler import jit
 from .model import input_callback
-
-RECORD = 3                              # kind, t, number of values returned; then x
-RAISED, WRONG_SHAPE = 1.0, 2.0          # failure kinds in the record
+from .status import RECORD
 
 
 @input_callback

@@ -19,5 +19,9 @@ IDEAL, LAGRANGE, BAUMGARTE = 0, 1, 2
 # The direction in which a guard must cross zero for its jump to happen.
 FALLING, EITHER, RISING = -1, 0, 1
 
+# An input callback's failure record in its data (inputs.py): its kind, t, the number of values returned, then x.
+RECORD = 3
+RAISED, WRONG_SHAPE = 1.0, 2.0
+
 GROWTH_LIMIT = 1e3  # a step that grows the state past this factor of its largest so far: DIVERGED
 RANK_TOL = 1e-8     # singular values below RANK_TOL * the largest count as zero (redundant rows, singular poses)

@@ -44,7 +44,7 @@ import numpy as np
 
 from andyc.errors import SimulationError
 
-from andyc.numerics.inputs import RAISED, RECORD, WRONG_SHAPE
+from andyc.numerics.status import RAISED, RECORD, WRONG_SHAPE
 
 # What the user's code may raise and the run reports: its exceptions, and sys.exit(), which must not end
 # andyc (a KeyboardInterrupt still does).
