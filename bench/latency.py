@@ -103,7 +103,7 @@ leaves, compile_leaf = {}, ccallback.CFunc.compile
 def timed(self):
     start = time.perf_counter()
     compile_leaf(self)
-    leaves[self._pyfunc.__name__] = time.perf_counter() - start
+    leaves[self._pyfunc.__module__, self._pyfunc.__name__] = time.perf_counter() - start
 
 
 ccallback.CFunc.compile = timed
@@ -114,7 +114,7 @@ model = load_compiled(result.module_path)         # compiles the leaves (and loa
 t2 = time.perf_counter()
 compile_integrator(model)
 t3 = time.perf_counter()
-own = {k: v for k, v in leaves.items() if k in model.module.OPERATIONS}
+own = {name: v for (module, name), v in leaves.items() if module == model.module.EQUATIONS.__name__}
 print(json.dumps({"build": t1 - t0, "import": t2 - t1, "integrator": t3 - t2, "leaves": own}))
 """
 
