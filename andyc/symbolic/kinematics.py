@@ -255,6 +255,9 @@ def frame_kinematics(spec: Spec, emit: Emitter) -> dict[str, FrameKinematics]:
     moving = set(q) | {TIME}
     rigid = rigid_groups(spec)
     for k, frame in enumerate(spec.frames):
+        # Intermediates are named by the frame (f<k>_<name>_R00, ...): its index keeps two frames apart
+        # whatever their names (frames 'a' and 'a_ref' would share a_ref_R00), its name makes them readable.
+        label = f"f{k}_{frame.name}_"
         P = out[frame.parent]
         steps = list(frame.transforms)
         rates = {}
@@ -268,10 +271,10 @@ def frame_kinematics(spec: Spec, emit: Emitter) -> dict[str, FrameKinematics]:
         elif steps and isinstance(steps[-1], Nonholonomic):
             nonholonomic = steps.pop()
             if steps:   # fixed offsets first: the link's reference frame
-                P = _attach(P, link_motion(steps, q, v), emit, f"f{k}ref", k)
-            motion, rates = nonholonomic_motion(nonholonomic, q, v, emit, f"f{k}")
+                P = _attach(P, link_motion(steps, q, v), emit, f"{label}ref_", k)
+            motion, rates = nonholonomic_motion(nonholonomic, q, v, emit, label)
         else:
             motion = link_motion(steps, q, v)
-        out[frame.name] = _attach(P, motion, emit, f"f{k}", k)
+        out[frame.name] = _attach(P, motion, emit, label, k)
         out[frame.name].signal_rates = rates
     return out
