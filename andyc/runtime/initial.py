@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from andyc.errors import SimulationError
-from andyc.numerics.status import OK
+from andyc.numerics.status import MESSAGES, OK
 from andyc.runtime.compiled import CompiledModel, work
 from andyc.runtime.options import Init
 
@@ -76,8 +76,9 @@ def consistent_initial_state(model: CompiledModel, x, u, p, d, flow, init: Init)
             f"(the smallest change in the mass-matrix metric), or --init as-is to start from it anyway")
     w = work(model)
     for _ in range(50):
-        if model.numerics.dynamics.project(model.ref, w.ref, 0.0, x, u, p, d, flow, True, 0.0, -1.0) != OK:
-            raise SimulationError("cannot project the initial state: the mass matrix is not positive definite there")
+        status = model.numerics.dynamics.project(model.ref, w.ref, 0.0, x, u, p, d, flow, True, 0.0, -1.0)
+        if status != OK:
+            raise SimulationError(f"cannot project the initial state: {MESSAGES[status]} there")
         phi, c = constraint_residuals(model, 0.0, x, u, p, d, flow)
         if max(np.max(np.abs(phi), initial=0.0), np.max(np.abs(c), initial=0.0)) <= 1e-13 * max(1.0, np.abs(x).max()):
             out["initial_projection"] = float(worst)
