@@ -405,10 +405,12 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", InputWarning)
             run = andyc.simulate(model, t_end, dt=dt, method=method, parameters=params, inputs=inputs,
-                                 controller=controller, every=every, frames=frames, rtol=rtol, atol=atol, init=init,
-                                 init_tol=init_tol, energy_correction=energy_correction, energy_tol=energy_tol,
-                                 event_tol=event_tol, max_instant_jumps=max_instant_jumps, zeno_tol=zeno_tol,
-                                 stop_after=stops, interrupts=interrupts)
+                                 controller=controller, every=every, frames=frames, rtol=rtol, atol=atol,
+                                 interrupts=interrupts, init=andyc.Init(mode=init, tol=init_tol),
+                                 projection=andyc.Projection(energy_correction=energy_correction,
+                                                             energy_tol=energy_tol),
+                                 events=andyc.Events(tol=event_tol, max_instant_jumps=max_instant_jumps,
+                                                     zeno_tol=zeno_tol, stop_after=stops))
     except SimulationError as exc:
         raise Refused(str(exc))
     finally:

@@ -124,7 +124,7 @@ CASES = [
 
 ANIMATIONS = {"swing_bar": {"t_end": 5.0, "dt": 1e-3, "every": 10},
               "passive_walker": {"t_end": 12.5, "dt": 1e-3, "every": 10, "method": "projection",
-                                 "stop_after": {"strike_inner_foot": 10}}}
+                                 "events": andyc.Events(stop_after={"strike_inner_foot": 10})}}
 
 
 @dataclass

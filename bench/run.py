@@ -137,8 +137,9 @@ def swing_bar_benchmark(tmp: Path) -> None:
     print(f"build: derive {t['derive']:.2f} s, generate {t['generate']:.2f} s, compile {t['compile']:.2f} s "
           f"(total {total:.2f} s, target < 10 s); {result.operations['dynamics']} operations in dynamics")
     for normalize in (True, False):
-        andyc.simulate(model, 0.01, dt=1e-3, normalize=normalize, progress=False)
-        best = min(andyc.simulate(model, 30.0, dt=1e-3, every=1000, normalize=normalize, progress=False)
+        fix = andyc.Projection(normalize=normalize)
+        andyc.simulate(model, 0.01, dt=1e-3, projection=fix, progress=False)
+        best = min(andyc.simulate(model, 30.0, dt=1e-3, every=1000, projection=fix, progress=False)
                    .stats["wall_seconds"] for _ in range(5))
         sps = 30.0 / 1e-3 / best
         label = "with" if normalize else "without"
@@ -154,7 +155,8 @@ def swing_bar_benchmark(tmp: Path) -> None:
     quat = [model.state_names.index(f"ball_q{c}") for c in "wxyz"]
     print("quaternion strategy over 10 s at dt = 1e-3 s (reference: DOP853, rtol = atol = 1e-13):")
     for normalize in (True, False):
-        run = andyc.simulate(model, 10.0, dt=1e-3, frames=frames, every=100, normalize=normalize, progress=False)
+        run = andyc.simulate(model, 10.0, dt=1e-3, frames=frames, every=100,
+                             projection=andyc.Projection(normalize=normalize), progress=False)
         drift = np.max(abs(np.linalg.norm(run.state[:, quat], axis=1) - 1))
         err = max(np.max(abs(run.frames[f] - ref.frames[f])) for f in frames)
         label = "renormalize each step" if normalize else "no renormalization  "
@@ -206,8 +208,9 @@ def models_benchmark(tmp: Path) -> None:
 
 
 BALL_METHODS = {"lagrange": {"method": "lagrange"}, "baumgarte": {"method": "baumgarte"},
-                "projection": {"method": "projection", "energy_correction": False},
-                "projection+energy": {"method": "projection", "energy_correction": True}}
+                "projection": {"method": "projection", "projection": andyc.Projection(energy_correction=False)},
+                "projection+energy": {"method": "projection",
+                                      "projection": andyc.Projection(energy_correction=True)}}
 
 
 def constraints_benchmark(tmp: Path) -> None:
@@ -304,7 +307,7 @@ def hybrid_benchmark(tmp: Path) -> None:
     for method in ("rk4", "projection", "lagrange"):
         andyc.simulate(model, 0.5, dt=1e-3, method=method, progress=False)
         runs = [andyc.simulate(model, 30.0, dt=1e-3, method=method, every=1000, progress=False,
-                               stop_after={"strike_inner_foot": 10}) for _ in range(10)]
+                               events=andyc.Events(stop_after={"strike_inner_foot": 10})) for _ in range(10)]
         best = min(runs, key=lambda r: r.stats["wall_seconds"])
         s = best.stats
         steps = s["steps"] + s["event_trial_steps"]

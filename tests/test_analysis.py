@@ -115,7 +115,7 @@ def test_baumgarte_soft_forces_damp_the_no_slip_residual_at_w_kd(ball):
     x0[ball.state_names.index("wy")] += 1e-3                # off the no-slip rows, on the bowl
     k_d = 10.0
     run = andyc.simulate(ball, 0.2, dt=1e-4, method="baumgarte", parameters={"k_s": 0.0, "k_d": k_d}, x0=x0,
-                         init="as-is", every=10, progress=False)
+                         init=andyc.Init("as-is"), every=10, progress=False)
     W = 1 / p["m"] + p["r"] ** 2 / (2 * p["m"] * p["r"] ** 2 / 5)
     residual = np.abs(run.residual_velocity[:, 1:]).max(axis=1)
     rate = -np.polyfit(run.time, np.log(residual), 1)[0]

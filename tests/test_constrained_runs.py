@@ -42,7 +42,8 @@ def first_integral(model, run):
 def ball_runs(compiled):
     model = compiled("ball_in_bowl")
     return model, {
-        "projection": andyc.simulate(model, 100.0, dt=1e-2, method="projection", energy_correction=False),
+        "projection": andyc.simulate(model, 100.0, dt=1e-2, method="projection",
+                                     projection=andyc.Projection(energy_correction=False)),
         "projection+energy": andyc.simulate(model, 100.0, dt=1e-2, method="projection"),
         "lagrange": andyc.simulate(model, 100.0, dt=1e-2, method="lagrange"),
         "baumgarte": andyc.simulate(model, 100.0, dt=1e-2, method="baumgarte"),
@@ -113,7 +114,7 @@ def test_ball_runs_are_logged_side_by_side(ball_runs, tmp_path):
 
 def test_biped_recovers_from_an_inconsistent_start(compiled):
     model = compiled("biped_rheonomic")
-    run = andyc.simulate(model, 100.0, dt=1e-2, method="projection", init="as-is")
+    run = andyc.simulate(model, 100.0, dt=1e-2, method="projection", init=andyc.Init("as-is"))
     assert run.finished
     assert run.stats["initial_position_residual"] > 1e-3            # the paper's q(0) is off by millimetres
     residual = np.maximum(np.abs(run.residual_position).max(axis=1), np.abs(run.residual_velocity).max(axis=1))
@@ -134,7 +135,7 @@ def test_biped_inconsistent_start_is_refused_without_init(compiled):
 
 def test_biped_projected_start_is_consistent_from_the_first_sample(compiled):
     model = compiled("biped_rheonomic")
-    run = andyc.simulate(model, 2.0, dt=1e-2, method="projection", init="project")
+    run = andyc.simulate(model, 2.0, dt=1e-2, method="projection", init=andyc.Init("project"))
     assert run.stats["initial_projection"] > 1e-3
     assert max(largest(run.residual_position), largest(run.residual_velocity)) < 1e-12
 

@@ -587,7 +587,7 @@ def test_cli_check_shipped_hybrid_models_are_valid(name):
 def test_simulate_stop_after_an_unknown_jump_names_the_jumps(compiled):
     model = compiled("bouncing_ball")
     with pytest.raises(SimulationError) as info:
-        andyc.simulate(model, 0.1, dt=1e-3, stop_after={"nope": 1}, progress=False)
+        andyc.simulate(model, 0.1, dt=1e-3, events=andyc.Events(stop_after={"nope": 1}), progress=False)
     message = str(info.value)
     assert "unknown jump 'nope'" in message and "stop_after" in message
     assert message.endswith("jumps of bouncing_ball: bounce")

@@ -60,7 +60,7 @@ def wheel_step(model, w, method):
     """Angular speed just after the next impact, from w just after one (the hub alpha behind its foot)."""
     x0 = np.array([-math.sin(ALPHA), math.cos(ALPHA), w * math.cos(ALPHA), w * math.sin(ALPHA)])
     run = andyc.simulate(model, 50.0, dt=1e-3, method=method, x0=x0, d0=np.zeros(1),
-                         stop_after={"next_spoke": 1}, progress=False)
+                         events=andyc.Events(stop_after={"next_spoke": 1}), progress=False)
     assert run.status == "finished" and len(run.events["time"]) == 1
     x = run.events["state_after"][0]
     fx = run.events["discrete_after"][0][0]
@@ -103,7 +103,7 @@ def gait_state(z):
 def gait_step(model, z):
     """(z after the next heel strike, step time); roles swap: leg 2 stands after it."""
     run = andyc.simulate(model, 5.0, dt=1e-3, method="projection", x0=gait_state(z), d0=np.zeros(1),
-                         flow0="stance1", stop_after={"strike2": 1}, progress=False)
+                         flow0="stance1", events=andyc.Events(stop_after={"strike2": 1}), progress=False)
     assert run.status == "finished" and run.event_names() == ["strike2"]
     x = run.events["state_after"][0]
     th1, th2, w1, w2 = x[2], x[3], x[6], x[7]

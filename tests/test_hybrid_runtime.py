@@ -116,7 +116,7 @@ hybrid:
     path = tmp_path / "loop.yaml"
     path.write_text(text.replace("name: push", "name: loop"))
     model, _ = andyc.compile_model(path, tmp_path / "build")
-    run = andyc.simulate(model, 1.0, dt=1e-3, max_instant_jumps=20, progress=False)
+    run = andyc.simulate(model, 1.0, dt=1e-3, events=andyc.Events(max_instant_jumps=20), progress=False)
     assert re.match(r"stopped: 21 jumps at t = 0\.(5|49999\d*) s without time advancing", run.status)
     assert "ab -> ba" in run.status or "ba -> ab" in run.status
     assert len(run.events["time"]) == 21 and np.all(run.events["time"] == run.events["time"][0])

@@ -38,7 +38,7 @@ def walker(compiled):
 def twenty_steps(walker):
     """From the shipped state (flow 1 just after an inner heel strike) to the 20th heel strike."""
     return andyc.simulate(walker, 20.0, dt=1e-3, method="projection", frames="all",
-                          stop_after={"strike_inner_foot": 10}, progress=False)
+                          events=andyc.Events(stop_after={"strike_inner_foot": 10}), progress=False)
 
 
 def strike_states(run):

@@ -167,6 +167,38 @@ def test_parameters_and_inputs_are_checked(compiled):
         andyc.simulate(model, 1.0005, dt=1e-3)
 
 
+def test_options_are_small_objects_passed_one_way(compiled):
+    """simulate's grouped options: andyc.Events, andyc.Init, andyc.Projection; a bare value where an object belongs
+    says which, an unknown init mode is refused when the object is made, and the old keywords are gone."""
+    model = compiled("double_pendulum")
+    assert andyc.Init() == andyc.Init(mode="check", tol=1e-6)
+    with pytest.raises(andyc.errors.SimulationError, match="unknown init 'maybe'; use one of: check, project, as-is"):
+        andyc.Init("maybe")
+    with pytest.raises(TypeError, match=r"init is an andyc\.Init"):
+        andyc.simulate(model, 0.01, init="as-is")
+    with pytest.raises(TypeError, match="unexpected keyword argument 'event_tol'"):
+        andyc.simulate(model, 0.01, event_tol=1e-10)
+    with pytest.raises(andyc.errors.SimulationError, match="energy correction needs the projection method"):
+        andyc.simulate(model, 0.01, projection=andyc.Projection(energy_correction=True))
+    run = andyc.simulate(model, 0.01, method="projection", progress=False, events=andyc.Events(tol=1e-10),
+                         projection=andyc.Projection(normalize=False))
+    assert run.finished and not run.energy_correction
+
+
+def test_the_adaptive_methods_locate_with_the_compiled_illinois(compiled):
+    """The adaptive driver's root finder is the integrator's illinois_trial and illinois_bracket, called from
+    Python: the near end of a bracket no wider than the tolerance, on the side where g keeps its start's sign."""
+    from andyc.runtime.adaptive import illinois
+
+    model = compiled("bouncing_ball")
+
+    def g(t):
+        return np.cos(t) - 0.5                  # root pi / 3
+
+    a = illinois(model, g, 0.0, 2.0, g(0.0), g(2.0), 1e-12)
+    assert g(a) > 0 and np.pi / 3 - 1e-12 <= a <= np.pi / 3
+
+
 def test_progress_reports_after_the_first_second_at_most_once_a_second(monkeypatch, capsys):
     from andyc.runtime import simulate as sim_module
 

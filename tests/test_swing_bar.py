@@ -46,7 +46,8 @@ def test_quaternion_norm_within_1e9_over_30s(run30, compiled):
     # Without the projection after each step the drift is RK4's own; it is
     # also inside the bound at this step (measured 1.3e-11), and the
     # projection leaves the trajectory within RK4's truncation error.
-    bare = andyc.simulate(compiled("swing_bar"), 30.0, dt=1e-3, normalize=False, every=100)
+    bare = andyc.simulate(compiled("swing_bar"), 30.0, dt=1e-3, projection=andyc.Projection(normalize=False),
+                          every=100)
     drift = np.max(abs(np.linalg.norm(quaternion(bare), axis=1) - 1))
     assert 1e-14 < drift < 1e-9
     assert np.max(abs(bare.state[:, :5] - run30.state[::100, :5])) < 1e-5

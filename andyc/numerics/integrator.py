@@ -107,12 +107,39 @@ def crosses(direction, g_start, g_end):
 
 
 @jit
+def illinois_trial(a, ga, b, gb, width):
+    """The next trial point in the bracket [a, b] of a root (g(a) = ga and g(b) = gb of opposite signs), and the
+    width to compare the next bracket with: the regula falsi point, or the midpoint when that falls outside the
+    bracket or the bracket did not halve since `width` (the previous bracket's width; the first: b - a).
+    Returns (c, b - a)."""
+    c = b - gb * (b - a) / (gb - ga)
+    if not (a < c < b) or (b - a) > 0.5 * width:
+        c = 0.5 * (a + b)
+    return c, b - a
+
+
+@jit
+def illinois_bracket(s, a, ga, b, gb, side, c, gc):
+    """The bracket after a trial gc = g(c): c replaces the end on its side of the root (s: the sign of g on the
+    near side a), and when the same end moves twice in a row the other end's value is halved (Illinois). side:
+    the end that moved last (1: b, -1: a, 0: none yet). Returns (a, ga, b, gb, side)."""
+    if s * gc <= 0.0:
+        if side == 1:
+            ga *= 0.5
+        return a, ga, c, gc, 1
+    if side == -1:
+        gb *= 0.5
+    return c, gc, b, gb, -1
+
+
+@jit
 def locate(model, w, opts, inputs, data, jump_index, tol, t, h, x, u, p, d, flow, g_start, g_end, scale):
     """Root of guard `jump_index` on the step (t, x) -> t + h, as a bracket [a, b] no wider than tol.
 
-    Illinois (modified regula falsi) with a bisection whenever the bracket does not halve. Returns
-    (a, status) with w.xb the state at t + a: the near side of zero, so that a guard reset to move
-    back (a bounce) starts the next step on the side from which it can cross again.
+    Illinois (modified regula falsi) with a bisection whenever the bracket does not halve (illinois_trial,
+    illinois_bracket; the adaptive methods use the same two on SciPy's dense output). Returns (a, status)
+    with w.xb the state at t + a: the near side of zero, so that a guard reset to move back (a bounce)
+    starts the next step on the side from which it can cross again.
     """
     xb, xc = w.xb, w.xc
     s = 1.0 if g_start > 0.0 else -1.0
@@ -123,10 +150,7 @@ def locate(model, w, opts, inputs, data, jump_index, tol, t, h, x, u, p, d, flow
     for _ in range(200):
         if b - a <= tol:
             break
-        c = b - gb * (b - a) / (gb - ga)
-        if not (a < c < b) or (b - a) > 0.5 * width:
-            c = 0.5 * (a + b)
-        width = b - a
+        c, width = illinois_trial(a, ga, b, gb, width)
         w.counts[1] += 1
         status = rk4_step(model, w, opts, inputs, data, t, c, x, u, p, d, flow, xc, scale)
         if status == OK:
@@ -134,17 +158,9 @@ def locate(model, w, opts, inputs, data, jump_index, tol, t, h, x, u, p, d, flow
         if status != OK:
             return c, status
         gc = call(model.guard, (jump_index, t + c, xc, u, p, d))
-        if s * gc <= 0.0:
-            b, gb = c, gc
-            if side == 1:
-                ga *= 0.5
-            side = 1
-        else:
-            a, ga = c, gc
+        a, ga, b, gb, side = illinois_bracket(s, a, ga, b, gb, side, c, gc)
+        if side == -1:
             xb[:] = xc
-            if side == -1:
-                gb *= 0.5
-            side = -1
     return a, OK
 
 

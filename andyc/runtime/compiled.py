@@ -85,6 +85,10 @@ class CompiledModel:
     def inputs(self, overrides: dict | None = None) -> np.ndarray:
         return _with_overrides(self.input_names, self.input_defaults, overrides, "input")
 
+    def active_rows(self, flow: int) -> list:
+        """The constraint rows active in `flow` (indices into the nc rows; holonomic ones first)."""
+        return [int(r) for r in self.module.FLOW_ROWS[flow, :self.module.FLOW_NROWS[flow]]]
+
     def row_location(self, row: int) -> str:
         """`FILE:LINE: PATH` of a constraint row, for messages."""
         line, path = self.constraint_where[row]
@@ -220,6 +224,8 @@ def compile_integrator(model: CompiledModel, function=None, data=None) -> None:
     if model.nj:
         numerics.dynamics.jump(m, w.ref, 0, 0.0, x.copy(), u, p, d.copy())
     integrator.crosses(0, 1.0, -1.0)
+    integrator.illinois_trial(0.0, 1.0, 1.0, -1.0, 1.0)
+    integrator.illinois_bracket(1.0, 0.0, 1.0, 1.0, -1.0, 0, 0.5, -0.5)
     module = model.module
     module.energy(0.0, x, u, p, d)
     module.guard(0, 0.0, x, u, p, d)

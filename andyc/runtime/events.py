@@ -1,10 +1,22 @@
-"""The jumps of a run as they happen, and when they must stop it (jump loops, Zeno, stop_after)."""
+"""The jumps of a run as they happen, and when they must stop it (jump loops, Zeno, stop_after).
+
+EventLog records them; apply_jump and user_jump apply one from Python (resets and impact in the compiled
+numerics, then the user's function in <name>_jumps.py), follow_instant_jumps the jumps that happen at once
+after it. Both drivers use them (andyc.runtime.fixed_step, andyc.runtime.adaptive).
+"""
 
 from __future__ import annotations
+
+import traceback
+from pathlib import Path
 
 import numpy as np
 
 from andyc.errors import SimulationError
+from andyc.numerics.status import OK
+from andyc.runtime.inputs import USER_ERRORS, InputSource, raised
+from andyc.runtime.options import Events
+from andyc.runtime.status import at, in_jump
 
 
 class EventLog:
@@ -20,11 +32,11 @@ class EventLog:
     """
     ZENO_WINDOW = 8
 
-    def __init__(self, model, event_tol: float, max_instant: int, zeno_tol: float,
-                 stop_after: dict | None):
-        self.model, self.event_tol, self.max_instant, self.zeno_tol = model, event_tol, max_instant, zeno_tol
+    def __init__(self, model, options: Events):
+        self.model, self.event_tol = model, options.tol
+        self.max_instant, self.zeno_tol = options.max_instant_jumps, options.zeno_tol
         self.stop_after = {}
-        for name, count in (stop_after or {}).items():
+        for name, count in (options.stop_after or {}).items():
             if name not in model.jump_names:
                 raise SimulationError(f"unknown jump '{name}' in stop_after; jumps of {model.name}: "
                                       f"{', '.join(model.jump_names) or 'none'}")
@@ -82,3 +94,46 @@ class EventLog:
                 "from_flow": np.array(self.sources, dtype=np.int32), "to_flow": np.array(self.targets, dtype=np.int32),
                 "state_before": np.array(self.before).reshape(n, nx), "state_after": np.array(self.after).reshape(n, nx),
                 "discrete_after": np.array(self.discrete).reshape(n, nd)}
+
+
+def user_jump(model, k, t, x, u, p, d) -> str | None:
+    """Run the user's function of jump k (<name>_jumps.py); a stop message if it fails."""
+    try:
+        model.module.user_jump(k, t, x, u, p, d)
+    except USER_ERRORS as exc:      # the user's code: report it, keep the run's data
+        path = Path(model.module.__file__).with_name(f"{model.name}_jumps.py")
+        line = next((f.lineno for f in reversed(traceback.extract_tb(exc.__traceback__))
+                     if Path(f.filename) == path), None)
+        return (f"stopped: {path}{f':{line}' if line else ''}: the function of jump '{model.jump_names[k]}' "
+                f"{raised(exc)}" + at(t))
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(d))):
+        return (f"stopped: the function of jump '{model.jump_names[k]}' in {model.name}_jumps.py left the state or "
+                f"the discrete states non-finite" + at(t))
+    return None
+
+
+def apply_jump(model, k, t, x, u, p, d, w) -> str | None:
+    """Jump k at t (x, d in place; u the inputs just before it): resets and impact, then the user's function."""
+    status = model.numerics.dynamics.jump(model.ref, w.ref, k, t, x, u, p, d)
+    if status != OK:
+        return in_jump(model, status, k, t)
+    return user_jump(model, k, t, x, u, p, d)
+
+
+def follow_instant_jumps(model, t, x, source: InputSource, p, d, flow, jumps: EventLog, w, mode):
+    """Apply the jumps that happen at once at (t, x), in priority order. Returns (flow, stop message or None)."""
+    while model.nj:
+        w.u[:] = source.held(flow)
+        fn, data = source.function_data
+        k = model.numerics.integrator.instant(model.ref, w.ref, mode, fn, data, t, x, p, d, flow)
+        if k == -2:
+            return flow, f"stopped: {source.failure(model, d, p)}"
+        if k < 0:
+            break
+        before = x.copy()
+        stop = apply_jump(model, k, t, x, w.u, p, d, w)
+        flow = int(model.module.JUMP_TARGET[k])
+        stop = stop or jumps.record(t, k, before, x, d)
+        if stop is not None:
+            return flow, stop
+    return flow, None

@@ -44,7 +44,7 @@ import numpy as np
 
 from andyc.errors import SimulationError
 
-from andyc.numerics.status import RAISED, RECORD, WRONG_SHAPE
+from andyc.numerics.status import INPUT_FAILED, MESSAGES, OK, RAISED, RECORD, WRONG_SHAPE
 
 # What the user's code may raise and the run reports: its exceptions, and sys.exit(), which must not end
 # andyc (a KeyboardInterrupt still does).
@@ -105,7 +105,7 @@ class InputSource:
         x = self.data[r + RECORD:r + RECORD + self.nx].copy()
         c = self.controller
         if c is None:
-            return f"the inputs failed at t = {t:.9g} s"
+            return f"{MESSAGES[INPUT_FAILED]} at t = {t:.9g} s"
         if kind == WRONG_SHAPE:
             line = _return_line(c.function, t, x, d, p)
             return (f"{_where(c.path, line)}: control returned {count} values at t = {t:.9g} s; "
@@ -117,6 +117,15 @@ class InputSource:
         return (f"{c.path}: control raised an exception in compiled code at t = {t:.9g} s (Numba keeps no message), "
                 f"but not when called again as Python there; check indexing past the end of an array, which "
                 f"Numba does not catch")
+
+
+def inputs_at(model, source: InputSource, t: float, x, p, d, flow: int) -> np.ndarray:
+    """The inputs at (t, x) in `flow` (a new array); SimulationError naming the controller's line if it fails."""
+    u = np.empty(len(model.input_names))
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    if source.into(model, t, x, p, d, flow, u) != OK:
+        raise SimulationError(source.failure(model, d, p))
+    return u
 
 
 def raised(exc: BaseException) -> str:

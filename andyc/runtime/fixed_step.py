@@ -1,0 +1,103 @@
+"""The fixed-step driver (rk4, projection, lagrange, baumgarte): the compiled loop in chunks.
+
+The build's integrator (andyc_numerics/integrator.py: advance) steps along the grid i dt, locates guard
+crossings on the step and applies the jump's resets and impact; it returns after a chunk of steps, sized
+to about a quarter of a second so that progress, interrupts and the watchdog are served, or right after a
+jump. Python then runs the user's jump function, records the jump (EventLog: loops, Zeno, stop_after) and
+follows the jumps that happen at once, and the loop goes on from there: the grid stays regular.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from andyc.errors import SimulationError
+from andyc.numerics.status import BAUMGARTE, DIVERGED, IDEAL, INPUT_FAILED, LAGRANGE, OK
+from andyc.runtime.compiled import work
+from andyc.runtime.events import follow_instant_jumps, user_jump
+from andyc.runtime.inputs import inputs_at
+from andyc.runtime.options import Projection
+from andyc.runtime.status import INTERRUPTED, at, diverging_constraints, ending, failure, in_jump
+
+MODE = {"rk4": IDEAL, "projection": IDEAL, "lagrange": LAGRANGE, "baumgarte": BAUMGARTE}
+
+
+def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, projection: Projection, bar, jumps,
+                   interrupts, run_of):
+    """Integrate from (0, x) to t_end in steps dt, logging every `every`-th; x and d change in place.
+    projection.energy_correction is resolved (a bool). Returns (log, status, stats)."""
+    n_steps = int(round(t_end / dt))
+    if abs(n_steps * dt - t_end) > 1e-9 * max(1.0, t_end):
+        raise SimulationError(f"t_end = {t_end} is not a whole number of steps dt = {dt}; "
+                              f"use t_end = {n_steps * dt:g} or another dt")
+    module, integrator = model.module, model.numerics.integrator
+    mode = MODE[method]
+    constrain = method == "projection" and model.nc > 0
+    etol = projection.energy_tol if projection.energy_correction else -1.0
+    do_project = constrain or etol >= 0 or (projection.normalize and bool(model.quaternions))
+    rows = n_steps // every + 2             # the grid, and a last sample where a run stops between grid points
+    nu = len(model.input_names)
+    log = integrator.Log(np.empty(rows), np.empty((rows, model.nx)), np.empty((rows, nu)),
+                         np.empty(rows, dtype=np.int64), np.empty((rows, model.nd)))
+    out_t, out_x, out_u, out_f, out_d = log
+    w = work(model)
+    fn, data = source.function_data
+    out_t[0], out_x[0], out_u[0], out_f[0], out_d[0] = 0.0, x, inputs_at(model, source, 0.0, x, p, d, flow), flow, d
+    i, row, chunk, status, t = 0, 1, 1000, OK, 0.0
+    counts = w.counts                               # steps, event trial steps, rows logged (see advance)
+    counts[2] = row
+
+    def partial():
+        """The Run of the rows logged so far, for the watchdog: advance keeps counts[2] up to date."""
+        n = int(counts[2])
+        return run_of(tuple(a[:n].copy() for a in log), INTERRUPTED, stats(counts, constrain))
+
+    interrupts.partial = partial
+    e0 = module.energy(0.0, x, out_u[0], p, d)
+    flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, jumps, w, mode)
+    while i < n_steps and status == OK and message is None:
+        message = interrupts.reason()
+        if message is not None:
+            message += at(t)
+            break
+        i_end = min(i + chunk, n_steps)
+        tic = time.perf_counter()
+        i0 = i
+        w.u[:] = source.held(flow)
+        opts = integrator.options(mode, do_project, constrain, e0, etol, jumps.event_tol)
+        i, row, status, t, flow, k = integrator.advance(model.ref, w.ref, opts, fn, data, p, d, x, t, flow, i, i_end,
+                                                        0.0, dt, every, log, row)
+        if k >= 0:
+            if status != OK:
+                message = in_jump(model, status, k, t)
+                break
+            message = user_jump(model, k, t, x, w.u, p, d) or jumps.record(t, k, w.x_event, x, d)
+            if message is None:
+                flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, jumps, w, mode)
+            if message is None and source.into(model, t, x, p, d, flow, w.u) != OK:
+                status = INPUT_FAILED
+            e0 = module.energy(t, x, w.u, p, d)
+        elif i > i0:
+            elapsed = time.perf_counter() - tic
+            chunk = int(min(max(chunk * 0.25 / max(elapsed, 1e-6) * (i_end - i0) / (i - i0), 1000), 10_000_000))
+        bar(t)
+    if status != OK:
+        why = failure(model, source, status, t, d, p)
+        if status == DIVERGED:
+            why += diverging_constraints(model, t, x, w.u, p, d, flow)
+        message = f"stopped: {why}, step {i}"
+    elif message is not None and out_t[row - 1] != t:
+        out_t[row], out_x[row], out_f[row], out_d[row] = t, x, flow, d
+        if source.into(model, t, x, p, d, flow, out_u[row]) != OK:
+            out_u[row] = np.nan
+        row += 1
+    return tuple(a[:row] for a in log), ending(message, row, jumps), stats(counts, constrain)
+
+
+def stats(counts, constrain: bool) -> dict:
+    """The run's figures from the integrator's counts (steps, event trial steps)."""
+    steps, trials = int(counts[0]), int(counts[1])
+    return {"steps": steps, "event_trial_steps": trials, "rhs_evaluations": 4 * (steps + trials),
+            "projections": steps + trials if constrain else 0}

@@ -1,0 +1,74 @@
+"""The options of a run, grouped by concept into small frozen objects (as diffrax's SaveAt and its step-size
+controllers), each passed to simulate() as one argument:
+
+    andyc.simulate(model, 10.0, events=andyc.Events(stop_after={"strike": 10}), init=andyc.Init("project"),
+                   projection=andyc.Projection(energy_correction=False))
+
+Events      where guard crossings are located, and when jumps stop a run
+Init        what a constrained run does with an initial state off its constraint manifold
+Projection  what the fixed-step methods correct after each step
+
+Light: importing this imports neither NumPy nor Numba nor SciPy.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping
+
+from andyc.errors import SimulationError
+
+INIT_MODES = ("check", "project", "as-is")
+
+
+@dataclass(frozen=True)
+class Events:
+    """Event location and the stops of hybrid runs (every method; a model without jumps ignores them).
+
+    tol                guard crossings are located to this many seconds (relative beyond t = 1 s); jumps
+                       closer together than this count as one instant
+    max_instant_jumps  the run stops, keeping its samples, after more than this many jumps at one instant
+                       (a loop such as a -> b -> a)
+    zeno_tol           the run stops when the jump times accumulate (Zeno: the last intervals shrink
+                       geometrically) at a point less than this many seconds ahead
+    stop_after         {jump name: n}: the run ends, with the status "finished", right after the n-th
+                       occurrence of that jump, the state just after it being the last sample (step maps);
+                       None: no such end
+    """
+    tol: float = 1e-12
+    max_instant_jumps: int = 100
+    zeno_tol: float = 1e-6
+    stop_after: Mapping[str, int] | None = None
+
+
+@dataclass(frozen=True)
+class Init:
+    """A constrained run's initial state: its distance from the constraint manifold is measured first.
+
+    mode  "check": refuse the run when a residual (position or velocity level) exceeds tol;
+          "project": move the state onto the manifold (Braun & Goldfarb's corrections, repeated to
+          round-off: the smallest change in the mass-matrix metric); "as-is": start from it anyway
+    tol   the largest initial residual "check" accepts
+    """
+    mode: str = "check"
+    tol: float = 1e-6
+
+    def __post_init__(self):
+        if self.mode not in INIT_MODES:
+            raise SimulationError(f"unknown init '{self.mode}'; use one of: {', '.join(INIT_MODES)}")
+
+
+@dataclass(frozen=True)
+class Projection:
+    """What the fixed-step methods correct after each step (the adaptive methods correct nothing).
+
+    normalize          renormalize the quaternion signals (every fixed-step method; the adaptive methods'
+                       norm drift stays within their tolerances and never reaches the dynamics, whose
+                       rotation matrices are exact for any norm)
+    energy_correction  the projection method's energy correction (Braun & Goldfarb eq. 5-6); None: on when
+                       the method is projection and the model declares conserves_energy; True needs both
+    energy_tol         the energy correction applies only where 2T exceeds this (Braun & Goldfarb eq. 6)
+    """
+    normalize: bool = True
+    energy_correction: bool | None = None
+    energy_tol: float = 1e-6

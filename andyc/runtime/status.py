@@ -1,0 +1,73 @@
+"""A run's status and its messages.
+
+A run ends "finished" (at t_end, or by Events.stop_after), "stopped: why" (a failure, a jump loop, Zeno, the
+wall-clock limit) or "interrupted: why" (a signal), and a stopped run says how many samples it kept. The
+reasons a compiled function fails come from the one table of status messages,
+andyc.numerics.status.MESSAGES, shared with the compiled numerics; the jumps' stops are in EventLog
+(andyc.runtime.events), the interruptions' in andyc.runtime.interrupts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from andyc.numerics.status import INPUT_FAILED, MESSAGES, NONFINITE
+
+FINISHED = "finished"
+INTERRUPTED = "interrupted"     # a partial run's status, built by the watchdog (andyc.runtime.interrupts)
+
+
+def at(t: float) -> str:
+    """" at t = ... s": where a run stopped."""
+    return f" at t = {t:.9g} s"
+
+
+def failure(model, source, status: int, t: float, d, p) -> str:
+    """Why a step failed with `status` at t: the record of a failed input, or the status's message."""
+    return source.failure(model, d, p) if status == INPUT_FAILED else MESSAGES[status] + at(t)
+
+
+def in_jump(model, status: int, k: int, t: float) -> str:
+    """The stop of a jump whose resets or impact failed with `status`."""
+    return f"stopped: {MESSAGES[status]} in jump '{model.jump_names[k]}'" + at(t)
+
+
+def nonfinite(t: float) -> str:
+    """The stop of a run whose state became NaN or Inf at t."""
+    return f"stopped: {MESSAGES[NONFINITE]}" + at(t)
+
+
+def solver_failed(method: str, t: float, text: str) -> str:
+    """The stop of a SciPy solver that failed at t, with its own message."""
+    return f"stopped: {method} failed" + at(t) + f": {text}"
+
+
+def ending(message: str | None, samples: int, jumps) -> str:
+    """The status of a run that ended with `message` (None: it reached t_end) having logged `samples`:
+    "finished", also when stop_after ended it (jumps.finished); otherwise the message and the samples kept."""
+    if message is None or jumps.finished:
+        return FINISHED
+    return f"{message}; the {samples} samples before it are kept"
+
+
+def diverging_constraints(model, t, x, u, p, d, flow) -> str:
+    """Why a state may have diverged from (t, x), the last sound state, as a clause for the message: the
+    flow's constraint rows nearly dependent there (a singular pose, where the constraint forces that keep
+    the rows grow without bound), or nothing."""
+    rows = model.active_rows(flow)
+    if not rows:
+        return ""
+    A = np.zeros((model.nc, model.nv))
+    model.module.constraints(t, x, u, p, d, np.empty(model.nh), np.empty(model.nc), A, np.empty(model.nc))
+    M = model.module.mass_matrix(t, x, u, p, d)
+    try:
+        W = A[rows] @ np.linalg.solve(M, A[rows].T)
+        sv = np.linalg.svd(W, compute_uv=False)
+    except np.linalg.LinAlgError:
+        return "; the mass matrix is singular there"
+    if not np.all(np.isfinite(sv)) or sv[-1] < 1e-6 * sv[0]:
+        names = ", ".join(dict.fromkeys(model.constraint_rows[r] for r in rows))
+        return (f"; the constraint rows ({names}) are nearly dependent there (A M^-1 A^T has condition number "
+                f"{sv[0] / max(sv[-1], 1e-300):.3g}): the mechanism reaches a singular pose, where its "
+                f"constraint forces grow without bound")
+    return ""
