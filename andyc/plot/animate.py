@@ -16,6 +16,7 @@ import numpy as np
 from matplotlib import animation
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from PIL import Image
 
 from andyc.outputs import write_atomic
 from andyc.plot.scene import animation_edges, animation_view, branch_colours, is_hybrid, leaf_colours
@@ -107,15 +108,11 @@ class GifWriter(animation.AbstractMovieWriter):
         """Draw the figure and keep it as the next frame (the canvas as drawn: no savefig arguments)."""
         if savefig_kwargs:
             raise TypeError(f"GifWriter.grab_frame takes no savefig arguments, got {sorted(savefig_kwargs)}")
-        from PIL import Image
-
         self._canvas.draw()
         self._images.append(Image.fromarray(np.asarray(self._canvas.buffer_rgba())).convert("RGB"))
 
     def finish(self):
         """Write the frames grabbed, on one palette; ValueError if there are none."""
-        from PIL import Image
-
         frames, self._images = self._images, []
         if not frames:
             raise ValueError(f"{self.outfile}: no frames to write")
