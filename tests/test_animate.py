@@ -1,37 +1,24 @@
-"""`andyc plot RUN.h5 --animate` (andyc.plot.animate_run): a 3-D stick animation of a run's logged
-frames, as a GIF (or an MP4 with ffmpeg).
+"""andyc.plot's animation (`andyc plot RUN.h5 --animate`): the samples shown, the sticks, joints,
+traces and title drawn at each, the view of a planar and of a spatial run, and the GIF (or MP4,
+with ffmpeg) written; on the synthetic runs of tests/test_plot.py (no model is compiled)."""
 
-One double-pendulum run (2 s, frames logged) serves all tests; the GIFs have a few dozen frames.
-"""
-
-import dataclasses
 import shutil
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from matplotlib import animation
+from matplotlib.colors import to_rgb
+from matplotlib.figure import Figure
 from PIL import Image
 
-import andyc
 from andyc import cli
-from andyc.plot import (animate_run, animation_figure, animation_samples, animation_writer, stick_segments,
-                        world_links)
-from andyc.runtime.run import Run, read_h5
+from andyc.plot import (TRACE_SECONDS, GifWriter, animate_run, animation_figure, animation_samples,
+                        animation_view, animation_writer, stick_segments, world_links)
+from andyc.runtime.run import Run
+from tests.test_plot import hybrid_run, plain_run, planar_run, spatial_run
 
-T_END, DT, EVERY = 2.0, 1e-3, 10
-GIF_FPS = 100 / 3                   # what --fps 30 plays at: GIF frames last whole hundredths of a second
-
-
-@pytest.fixture(scope="module")
-def run_file(compiled, tmp_path_factory):
-    model = compiled("double_pendulum")
-    run = andyc.simulate(model, T_END, DT, frames="all", every=EVERY, progress=False)
-    return run.save(tmp_path_factory.mktemp("animate") / "pendulum.h5")
-
-
-@pytest.fixture(scope="module")
-def run(run_file):
-    return read_h5(run_file)
+GIF_FPS = 100 / 3                   # what fps 30 plays at: GIF frames last whole hundredths of a second
 
 
 def invoke(*args):
@@ -52,39 +39,94 @@ def gif_frames(path) -> list:
         return frames
 
 
+def by_gid(fig) -> dict:
+    """{gid: line} of the lines of the animation's 3-D axes."""
+    return {line.get_gid(): line for line in fig.axes[0].get_lines()}
+
+
 # -- what is drawn -----------------------------------------------------------------------------------
 
-def test_samples_are_evenly_spread_from_start_to_end(run):
-    n = len(run.time)
-    assert n == round(T_END / (DT * EVERY)) + 1
+def test_samples_are_evenly_spread_from_start_to_end():
+    run = planar_run()                                  # 201 samples, 0.01 s apart, over 2 s
+    n, dt = len(run.time), run.time[1] - run.time[0]
     samples = animation_samples(run, fps=30, max_frames=20)
     t = run.time[samples]
-    assert len(samples) == 20 and t[0] == 0.0 and t[-1] == pytest.approx(T_END)
-    even = np.linspace(0.0, T_END, 20)
-    assert np.all(np.abs(t - even) <= DT * EVERY / 2 + 1e-12)       # the sample nearest to each even time
+    assert len(samples) == 20 and t[0] == 0.0 and t[-1] == pytest.approx(2.0)
+    assert np.all(np.abs(t - np.linspace(0.0, 2.0, 20)) <= dt / 2 + 1e-12)   # the sample nearest each even time
     assert np.all(np.diff(samples) > 0)
     # uncapped: as many frames as play the run in real time, and never more than the samples
-    assert len(animation_samples(run, fps=30, max_frames=300)) == round(T_END * 30) + 1
+    assert len(animation_samples(run, fps=30, max_frames=300)) == round(2.0 * 30) + 1
     assert np.array_equal(animation_samples(run, fps=1000, max_frames=10_000), np.arange(n))
 
 
-def test_stick_ends_are_the_logged_frames_at_the_samples(run):
+def test_stick_ends_are_the_logged_frames_at_the_samples():
+    run = planar_run()
     samples = animation_samples(run, fps=30, max_frames=24)
     edges, segments = stick_segments(run, samples)
     assert edges == [("upper", "elbow"), ("elbow", "lower"), ("lower", "tip")]   # no world link: upper is at 0
     assert segments.shape == (24, 3, 2, 3)
-    e = edges.index(("lower", "tip"))
-    for f, k in enumerate(samples):
-        assert np.array_equal(segments[f, e, 1], run.frames["tip"][k])
-        assert np.array_equal(segments[f, e, 0], run.frames["lower"][k])
-    assert np.ptp(segments[:, e, 1, 0]) > 0.5          # the tip swings
+    for e, (parent, child) in enumerate(edges):
+        assert np.array_equal(segments[:, e, 0], run.frames[parent][samples])
+        assert np.array_equal(segments[:, e, 1], run.frames[child][samples])
 
-    fig, update = animation_figure(run, samples)     # the drawn stick is that segment
-    tip = next(a for a in fig.axes[0].get_lines() if a.get_gid() == "lower>tip")
+
+def test_each_frame_draws_the_sticks_joints_trace_and_time_at_its_sample():
+    run = planar_run()
+    samples = animation_samples(run, fps=30, max_frames=24)
+    edges, segments = stick_segments(run, samples)
+    fig, update = animation_figure(run, samples)
+    lines = by_gid(fig)
+    title = fig.texts[-1]
     for f in (0, 11, 23):
         update(f)
-        assert np.array_equal(np.array(tip.get_data_3d()).T, segments[f, e])
-        assert f"t = {run.time[samples[f]]:.2f} s" in fig.texts[-1].get_text()
+        k = samples[f]
+        for e, (parent, child) in enumerate(edges):
+            assert np.array_equal(np.array(lines[f"{parent}>{child}"].get_data_3d()).T, segments[f, e])
+        joints = np.array(lines["joints"].get_data_3d()).T
+        assert np.array_equal(joints, np.stack([xyz[k] for xyz in run.frames.values()]))
+        trace = np.array(lines["trace:tip"].get_data_3d()).T        # the last TRACE_SECONDS of the leaf
+        first = np.searchsorted(run.time, run.time[k] - TRACE_SECONDS)
+        assert np.array_equal(trace, run.frames["tip"][first:k + 1])
+        assert f"{run.time[k]:.2f}" in title.get_text()
+    assert set(lines) >= {"trace:tip"} and not any(g.startswith("trace:") and g != "trace:tip" for g in lines)
+
+
+def test_a_hybrid_run_shows_its_flow_and_colours_each_leg_as_its_foot():
+    run = hybrid_run()
+    samples = animation_samples(run, fps=30, max_frames=40)
+    fig, update = animation_figure(run, samples)
+    lines = by_gid(fig)
+    for f in (0, 20, 39):
+        update(f)
+        assert run.flow_names[run.flow[samples[f]]] in fig.texts[-1].get_text()
+    for foot in ("foot1", "foot2"):
+        assert to_rgb(lines[f"hip>{foot}"].get_color()) == to_rgb(lines[f"trace:{foot}"].get_color())
+    assert to_rgb(lines["hip>foot1"].get_color()) != to_rgb(lines["hip>foot2"].get_color())
+    assert "ground" in lines                            # the stance foot stands on y = 0
+
+
+def test_a_planar_run_is_seen_square_on_and_a_spatial_one_in_3d_with_shadows():
+    planar, spatial = planar_run(), spatial_run()
+    view = animation_view(planar)
+    assert view["planar"] and view["up"] == 1 and view["camera"]["vertical_axis"] == "y" and not view["ground"]
+    fig, update = animation_figure(planar, animation_samples(planar, max_frames=5))
+    ax = fig.axes[0]
+    assert len(ax.get_zticks()) == 0                     # nothing to read along the depth
+    assert not any(g.startswith("shadow:") for g in by_gid(fig))
+
+    view = animation_view(spatial)
+    assert not view["planar"] and view["up"] == 2 and view["camera"]["vertical_axis"] == "z"
+    samples = animation_samples(spatial, max_frames=5)
+    fig, update = animation_figure(spatial, samples)
+    assert len(fig.axes[0].get_zticks()) > 0
+    lines = by_gid(fig)
+    edges, segments = stick_segments(spatial, samples)
+    assert edges == [("world", "arm"), ("arm", "tip")]
+    update(3)
+    floor = view["limits"][2][0]                          # no ground: the bottom of the box
+    for e, (parent, child) in enumerate(edges):
+        shadow = np.array(lines[f"shadow:{parent}>{child}"].get_data_3d()).T
+        assert np.array_equal(shadow[:, :2], segments[3, e, :, :2]) and np.all(shadow[:, 2] == floor)
 
 
 def test_a_frame_hung_from_the_world_at_a_fixed_distance_gets_a_stick_from_the_origin():
@@ -104,45 +146,74 @@ def test_a_frame_hung_from_the_world_at_a_fixed_distance_gets_a_stick_from_the_o
 
 # -- the GIF -----------------------------------------------------------------------------------------
 
-def test_cli_writes_a_gif_of_the_moving_pendulum(run, run_file):
-    result = invoke(run_file, "--animate", "--frames-max", 24)
-    gif = run_file.with_suffix(".gif")
-    assert result.exit_code == 0, result.output + result.stderr
-    assert result.output.startswith(f"wrote {gif} (24 frames, 0.7 s at 33.3 fps, 2.90 x real time")
-    frames = gif_frames(gif)
-    assert len(frames) == 24 == len(animation_samples(run, GIF_FPS, 24))
-    with Image.open(gif) as im:
+def test_animate_run_writes_one_gif_frame_per_sample_at_the_figures_size(tmp_path):
+    run = planar_run()
+    calls = []
+    info = animate_run(run, tmp_path / "a.gif", fps=30, max_frames=12, progress=lambda *a: calls.append(a))
+    assert calls == [(k, 12) for k in range(12)] + [(12, 12)]      # before each frame, and at the end
+    assert info["frames"] == 12 and info["fps"] == pytest.approx(GIF_FPS)
+    assert info["seconds"] == pytest.approx(12 / GIF_FPS)
+    assert info["speed"] == pytest.approx(2.0 * GIF_FPS / 11, rel=1e-9)    # 11 steps of 0.03 s play 2 s
+
+    frames = gif_frames(tmp_path / "a.gif")
+    assert len(frames) == 12
+    fig, _ = animation_figure(run, animation_samples(run, GIF_FPS, 12))
+    width, height = fig.canvas.get_width_height()
+    assert frames[0].shape == (height, width, 3) and width % 2 == 0 and height % 2 == 0
+    with Image.open(tmp_path / "a.gif") as im:
         assert im.info["duration"] == 30 and im.info["loop"] == 0
     below_title = slice(40, None)                   # the title changes anyway: the drawing must change
     for a, b in zip(frames, frames[1:]):
         assert np.any(a[below_title] != b[below_title])
-    changed = np.any(frames[0][below_title] != frames[-1][below_title], axis=2)
-    assert changed.sum() > 200                      # pixels, a good part of the sticks
+    assert np.any(frames[0][below_title] != frames[-1][below_title], axis=2).sum() > 200   # the sticks moved
 
 
-def test_animate_run_reports_progress_and_playing_time(run, tmp_path):
-    calls = []
-    info = animate_run(run, tmp_path / "a.gif", fps=25, max_frames=12, progress=lambda *a: calls.append(a))
-    assert calls == [(k, 12) for k in range(12)] + [(12, 12)]
-    assert info["frames"] == 12 and info["fps"] == 25 and info["seconds"] == pytest.approx(12 / 25)
-    assert info["speed"] == pytest.approx(T_END * 25 / 11, rel=1e-9)     # 11 steps of 1/25 s play 2 s
-    assert len(gif_frames(tmp_path / "a.gif")) == 12
+@pytest.mark.parametrize("fps, hundredths", [(30, 3), (25, 4), (20, 5), (100, 2), (7, 14)])
+def test_gif_frames_last_whole_hundredths_of_a_second(tmp_path, fps, hundredths):
+    writer, played = animation_writer(tmp_path / "a.gif", fps)
+    assert isinstance(writer, GifWriter) and played == pytest.approx(100 / hundredths)
+    fig = Figure(figsize=(1, 0.5), dpi=50)
+    text = fig.text(0.5, 0.5, "")
+    with writer.saving(fig, tmp_path / "a.gif", 50):
+        for k in range(3):
+            text.set_text(str(k))
+            writer.grab_frame()
+    with Image.open(tmp_path / "a.gif") as im:
+        assert im.n_frames == 3 and im.size == (50, 25) and im.info["duration"] == 10 * hundredths
 
 
-# -- errors ------------------------------------------------------------------------------------------
+@pytest.mark.skipif(not animation.FFMpegWriter.isAvailable(), reason="ffmpeg is not installed")
+def test_animate_run_writes_an_mp4_with_ffmpeg(tmp_path):
+    info = animate_run(spatial_run(), tmp_path / "a.mp4", fps=30, max_frames=8)
+    assert info["frames"] == 8 and info["fps"] == 30
+    assert (tmp_path / "a.mp4").read_bytes()[4:8] == b"ftyp"
 
-def test_a_run_without_frames_says_to_log_them(run, tmp_path):
-    bare = dataclasses.replace(run, frames={}, frame_parents={})
+
+# -- andyc plot --animate ----------------------------------------------------------------------------
+
+def test_cli_writes_a_gif_of_the_run(tmp_path):
+    run_file = planar_run().save(tmp_path / "pendulum.h5")
+    result = invoke(run_file, "--animate", "--frames-max", 12)
+    gif = run_file.with_suffix(".gif")
+    assert result.exit_code == 0, result.output + result.stderr
+    assert str(gif) in result.output
+    assert all(part in result.output for part in ("12 frames", "33.3 fps", "6.06 x real time"))  # 2 s in 11 / 33.3 s
+    assert len(gif_frames(gif)) == 12
+
+
+def test_a_run_without_frames_says_to_log_them(tmp_path):
+    bare = plain_run()
     bare.save(tmp_path / "bare.h5")
     result = invoke(tmp_path / "bare.h5", "--animate")
     assert result.exit_code == 2
-    assert "logged no frames" in result.stderr and "--frames all" in result.stderr
+    assert "--frames all" in result.stderr
     assert not (tmp_path / "bare.gif").exists()
     with pytest.raises(ValueError, match="--frames all"):
         animate_run(bare, tmp_path / "bare.gif")
 
 
-def test_mp4_without_ffmpeg_says_so_and_suggests_a_gif(run_file, tmp_path, monkeypatch):
+def test_mp4_without_ffmpeg_says_so_and_suggests_a_gif(tmp_path, monkeypatch):
+    run_file = planar_run().save(tmp_path / "pendulum.h5")
     monkeypatch.setattr(shutil, "which", lambda *args, **kwargs: None)     # matplotlib looks ffmpeg up so
     result = invoke(run_file, "--animate", "-o", tmp_path / "movie.mp4")
     assert result.exit_code == 2
@@ -152,9 +223,12 @@ def test_mp4_without_ffmpeg_says_so_and_suggests_a_gif(run_file, tmp_path, monke
         animation_writer(tmp_path / "movie.mp4")
 
 
-def test_other_output_types_and_animation_options_without_animate_are_refused(run_file, tmp_path):
+def test_other_output_types_and_animation_options_without_animate_are_refused(tmp_path):
+    run_file = planar_run().save(tmp_path / "pendulum.h5")
     result = invoke(run_file, "--animate", "-o", tmp_path / "movie.png")
     assert result.exit_code == 2 and ".gif or .mp4" in result.stderr
+    with pytest.raises(ValueError, match=".gif or .mp4"):
+        animation_writer(tmp_path / "movie.png")
     result = invoke(run_file, "--fps", 10)
-    assert result.exit_code == 2 and "only with --animate" in result.stderr
+    assert result.exit_code == 2 and "--animate" in result.stderr
     assert not run_file.with_suffix(".png").exists()            # nothing plotted either

@@ -1,107 +1,105 @@
-"""andyc.plot on synthetic runs: which panels a figure has and what data their lines carry; the
-stick figures; and one real hybrid run (the compass gait) through HDF5, the plots and `andyc plot`."""
+"""andyc.plot's time series and stick figures, on synthetic runs built from small arrays (no model is
+compiled): which panels each kind of run gets, that every line carries the run's own arrays, the
+stick figures' sticks, plane, shading and ground; that importing andyc.plot leaves the user's
+matplotlib backend alone; and one shipped model (the compass gait) end to end through `andyc plot`.
+
+The synthetic runs here serve tests/test_animate.py too."""
+
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
 from matplotlib.colors import to_rgb
+from PIL import Image
 
 import andyc
 from andyc import cli
 from andyc.plot import figure_for, plot_run, plot_sticks, snapshot_indices, stick_edges, stick_plane, sticks_figure
-from andyc.runtime.run import Run, read_h5
+from andyc.runtime.run import Run
+
+# -- synthetic runs -----------------------------------------------------------------------------------
 
 
-def make_run(state_names, nq, nv, state, frames=None):
-    t = np.linspace(0.0, 2.0, state.shape[0])
-    return Run(model="synthetic", spec_sha256="0" * 64, method="rk4", dt=1e-3, nq=nq, nv=nv, rtol=1e-8,
-               atol=1e-10, t_end=2.0, parameters={}, inputs={}, state_names=state_names, time=t, state=state,
-               energy=1.0 + 0.01 * np.sin(t), frames=frames or {})
+def make_run(state_names, nq, nv, state, frames=None, t_end=2.0, **fields) -> Run:
+    """A run of `state` (N, nx) sampled evenly over [0, t_end], energy 1 + 0.01 sin t."""
+    t = np.linspace(0.0, t_end, state.shape[0])
+    return Run(model="synthetic", spec_sha256="0" * 64, method="rk4", dt=t[1] - t[0], nq=nq, nv=nv, rtol=1e-8,
+               atol=1e-10, t_end=t_end, parameters={}, inputs={}, state_names=state_names, time=t, state=state,
+               energy=1.0 + 0.01 * np.sin(t), frames=frames or {}, **fields)
 
 
-def swing_bar_like_run(n=50):
-    """qh, speeds qh_dot wx wy wz, a unit quaternion and a position signal; bar1 and ball coincide."""
+def plain_run(n=30) -> Run:
+    """Two coordinates, two speeds; no frames, signals, flows or constraints."""
+    t = np.linspace(0.0, 2.0, n)
+    return make_run(["q1", "q2", "q1_dot", "q2_dot"], 2, 2, np.column_stack([t, -t, np.ones(n), -np.ones(n)]))
+
+
+def planar_run(n=201) -> Run:
+    """A double pendulum swinging in the world x-y plane: upper (at the origin, parent world) -> elbow
+    -> lower (at the elbow: their paths coincide) -> tip, 1 m links, sampled every 0.01 s."""
+    t = np.linspace(0.0, 2.0, n)
+    th1, th2 = 0.8 * np.cos(2 * t), 0.5 * np.sin(3 * t)
+    upper = np.zeros((n, 3))
+    elbow = np.stack([np.sin(th1), -np.cos(th1), 0 * t], axis=1)
+    tip = elbow + np.stack([np.sin(th1 + th2), -np.cos(th1 + th2), 0 * t], axis=1)
+    state = np.column_stack([th1, th2, np.gradient(th1, t), np.gradient(th2, t)])
+    return make_run(["th1", "th2", "th1_dot", "th2_dot"], 2, 2, state,
+                    frames={"upper": upper, "elbow": elbow, "lower": elbow.copy(), "tip": tip},
+                    frame_parents={"upper": "world", "elbow": "upper", "lower": "elbow", "tip": "lower"})
+
+
+def spatial_run(n=101) -> Run:
+    """A spherical double pendulum: arm hung from the world 1 m from the origin (a world link),
+    tip 0.5 m below it, both moving in x, y and z."""
+    t = np.linspace(0.0, 2.0, n)
+    a, b = 0.6 * np.sin(2 * t), 0.4 * np.cos(2 * t)
+    arm = np.stack([np.sin(a) * np.cos(b), np.sin(a) * np.sin(b), -np.cos(a)], axis=1)
+    tip = arm + 0.5 * np.stack([np.sin(b), 0 * t, -np.cos(b)], axis=1)
+    state = np.column_stack([a, b, np.gradient(a, t), np.gradient(b, t)])
+    return make_run(["a", "b", "a_dot", "b_dot"], 2, 2, state, frames={"arm": arm, "tip": tip},
+                    frame_parents={"arm": "world", "tip": "arm"})
+
+
+def quaternion_run(n=50) -> Run:
+    """A free body (no coordinates: speeds and signals only): a unit quaternion, a position, and
+    one other signal; its frame and a marker on it (coincident paths) move in 3-D."""
     t = np.linspace(0.0, 2.0, n)
     half = 0.5 * t
     quaternion = np.stack([np.cos(half), 0.6 * np.sin(half), 0.8 * np.sin(half), 0 * t], axis=1)
-    state = np.column_stack([t, np.ones(n), np.sin(t), np.cos(t), t**2, quaternion, t, 2 * t, 3 * t])
-    names = ["qh", "qh_dot", "wx", "wy", "wz", "ball_qw", "ball_qx", "ball_qy", "ball_qz", "tip_x", "tip_y", "tip_z"]
-    bar1 = np.stack([np.cos(t), np.sin(t), 0 * t], axis=1)
-    bar2 = bar1 + np.stack([0 * t, 0 * t, -1 - 0.1 * np.sin(3 * t)], axis=1)
-    return make_run(names, 1, 4, state, frames={"bar1": bar1, "ball": bar1.copy(), "bar2": bar2})
+    position = np.stack([np.cos(t), np.sin(t), -0.1 * t**2], axis=1)
+    speeds = np.column_stack([np.sin(t), np.cos(t), t**2, -t, np.ones(n), 2 * t])
+    names = ["wx", "wy", "wz", "vx", "vy", "vz", "body_qw", "body_qx", "body_qy", "body_qz",
+             "body_x", "body_y", "body_z", "spin"]
+    state = np.column_stack([speeds, quaternion, position, 3 * t])
+    return make_run(names, 0, 6, state, frames={"body": position, "marker": position.copy()})
 
 
-def axes_by_ylabel(fig):
-    return {ax.get_ylabel(): ax for ax in fig.axes if ax.name != "3d"}
-
-
-def test_swing_bar_like_run_has_3d_trajectories_frame_xyz_and_quaternion_panels():
-    run = swing_bar_like_run()
-    fig = figure_for(run)
-    (ax3d,) = [ax for ax in fig.axes if ax.name == "3d"]
-    paths = {line.get_label(): np.array(line.get_data_3d()).T for line in ax3d.get_lines()}
-    assert set(paths) == {"bar1 = ball", "bar2"}                      # coincident frames share one line
-    assert np.array_equal(paths["bar2"], run.frames["bar2"])
-    spans = [np.diff(lim)[0] for lim in (ax3d.get_xlim3d(), ax3d.get_ylim3d(), ax3d.get_zlim3d())]
-    assert np.allclose(spans, spans[0])                                 # equal aspect
-    assert len(ax3d.collections) == 4                                   # start and end of each path
-
-    panels = axes_by_ylabel(fig)
-    assert {"frame x, m", "frame y, m", "frame z, m", "energy E, J"} <= set(panels)
-    z = {line.get_label(): line.get_ydata() for line in panels["frame z, m"].get_lines()}
-    assert np.array_equal(z["bar2"], run.frames["bar2"][:, 2])
-    quaternion = panels["quaternion (w, x, y, z), 1"].get_lines()
-    assert [line.get_label() for line in quaternion] == ["ball_qw", "ball_qx", "ball_qy", "ball_qz"]
-    for line in quaternion:
-        assert np.array_equal(line.get_xdata(), run.time)
-        assert np.array_equal(line.get_ydata(), run.column(line.get_label()))
-    assert [line.get_label() for line in panels["speeds v, rad/s | m/s"].get_lines()] == ["qh_dot", "wx", "wy", "wz"]
-    assert [line.get_label() for line in panels["position signals, m"].get_lines()] == ["tip_x", "tip_y", "tip_z"]
-    coordinates = panels["coordinates q, rad | m"]
-    assert all(coordinates.get_shared_x_axes().joined(coordinates, ax) for ax in panels.values())
-
-
-def test_planar_frames_leave_out_the_axis_they_do_not_move_along():
-    run = swing_bar_like_run()
-    run.frames = {name: xyz * [1, 1, 0] for name, xyz in run.frames.items()}
-    labels = set(axes_by_ylabel(figure_for(run)))
-    assert {"frame x, m", "frame y, m"} <= labels and "frame z, m" not in labels
-
-
-def test_run_without_frames_or_signals_has_only_states_and_energy(tmp_path):
-    n = 30
+def constrained_run(n=50) -> Run:
+    """Two multipliers; one position residual, two velocity residuals (the second exactly zero)."""
     t = np.linspace(0.0, 2.0, n)
-    run = make_run(["q1", "q2", "q1_dot", "q2_dot"], 2, 2, np.column_stack([t, -t, np.ones(n), -np.ones(n)]))
-    fig = figure_for(run)
-    assert not any(ax.name == "3d" for ax in fig.axes)
-    assert [ax.get_ylabel() for ax in fig.axes] == [
-        "coordinates q, rad | m", "speeds v, rad/s | m/s", "energy E, J", "(E - E(0)) / max|E|, 1"]
-    assert np.array_equal(fig.axes[1].get_lines()[1].get_ydata(), -np.ones(n))
-    plot_run(run, tmp_path / "run.png")
-    assert (tmp_path / "run.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    return make_run(["q", "q_dot"], 1, 1, np.column_stack([np.sin(t), np.cos(t)]),
+                    multiplier_names=["lam_a", "lam_b"],
+                    multipliers=np.column_stack([np.linspace(-1, 1, n), np.ones(n)]),
+                    residual_position=np.column_stack([-1e-12 * (1 + t)]),
+                    residual_velocity=np.column_stack([1e-13 * np.cos(t), np.zeros(n)]))
 
 
-def test_constrained_run_shows_multipliers_and_residuals_per_row():
-    run = make_run(["q", "q_dot"], 1, 1, np.zeros((50, 2)))
-    run.multiplier_names = ["lam_a", "lam_b"]
-    run.multipliers = np.column_stack([np.linspace(-1, 1, 50), np.ones(50)])
-    run.residual_position = np.full((50, 1), 1e-12)
-    run.residual_velocity = np.column_stack([np.full(50, 1e-13), np.zeros(50)])   # exact zeros: floored
-    panels = axes_by_ylabel(figure_for(run))
-    lines = panels["multipliers λ, N | N m"].get_lines()
-    assert [line.get_label() for line in lines] == ["lam_a", "lam_b"]
-    residuals = panels["constraint residuals"]
-    assert residuals.get_yscale() == "log"
-    assert [line.get_label() for line in residuals.get_lines()] == ["φ lam_a", "c lam_a", "c lam_b"]
-    assert residuals.get_lines()[2].get_ydata().min() == 1e-17
+def inputs_run(n=40, changing=True) -> Run:
+    """Inputs u (a ramp, or constant) and v (constant)."""
+    t = np.linspace(0.0, 2.0, n)
+    u = 0.5 * t if changing else np.full(n, 0.5)
+    return make_run(["q", "q_dot"], 1, 1, np.column_stack([t, np.ones(n)]), input_names=["u", "v"],
+                    input_values=np.column_stack([u, np.full(n, -2.0)]))
 
 
-# -- hybrid runs: the flow and discrete panels ---------------------------------------------------
-
-def walker_like_run(n=201):
+def hybrid_run(n=201) -> Run:
     """A planar two-legged stick walker: flows stance1/stance2 swapped by strike2 at t = 0.5 and
     strike1 at t = 1.2, strike2 again at 1.7; discrete fx (stance foot) and a step count. Frames:
-    hip (parent world), foot1 and foot2 (parent hip), marker (parent 'knee', not logged)."""
+    hip (parent world), foot1 and foot2 (parent hip; the stance foot on the ground y = 0), marker
+    (parent 'knee', not logged)."""
     t = np.linspace(0.0, 2.0, n)
     event_times = np.array([0.5, 1.2, 1.7])
     flow = np.searchsorted(event_times, t, side="right") % 2
@@ -112,159 +110,266 @@ def walker_like_run(n=201):
     stance = np.stack([fx, 0 * t, 0 * t], axis=1)
     foot1 = np.where((flow == 0)[:, None], stance, swing)
     foot2 = np.where((flow == 1)[:, None], stance, swing)
-    marker = hip + [0.1, -0.5, 0.0]
     state = np.column_stack([hip[:, 0], hip[:, 1], np.gradient(hip[:, 0], t), np.gradient(hip[:, 1], t)])
-    run = make_run(["x", "y", "x_dot", "y_dot"], 2, 2, state,
-                   frames={"hip": hip, "foot1": foot1, "foot2": foot2, "marker": marker})
-    run.flow, run.flow_names = flow, ["stance1", "stance2"]
-    run.discrete_names, run.discrete = ["fx", "steps"], np.column_stack([fx, steps])
+    discrete = np.column_stack([fx, steps])
     k = np.searchsorted(t, event_times)
-    run.jump_names = ["strike2", "strike1"]
-    run.events = {"time": event_times, "jump": np.array([0, 1, 0], np.int32),
-                  "from_flow": np.array([0, 1, 0], np.int32), "to_flow": np.array([1, 0, 1], np.int32),
-                  "state_before": state[k - 1], "state_after": state[k], "discrete_after": run.discrete[k]}
-    run.frame_parents = {"hip": "world", "foot1": "hip", "foot2": "hip", "marker": "knee"}
-    return run
+    events = {"time": event_times, "jump": np.array([0, 1, 0], np.int32),
+              "from_flow": np.array([0, 1, 0], np.int32), "to_flow": np.array([1, 0, 1], np.int32),
+              "state_before": state[k - 1], "state_after": state[k], "discrete_after": discrete[k]}
+    return make_run(["x", "y", "x_dot", "y_dot"], 2, 2, state,
+                    frames={"hip": hip, "foot1": foot1, "foot2": foot2, "marker": hip + [0.1, -0.5, 0.0]},
+                    flow=flow, flow_names=["stance1", "stance2"], discrete_names=["fx", "steps"], discrete=discrete,
+                    jump_names=["strike2", "strike1"], events=events,
+                    frame_parents={"hip": "world", "foot1": "hip", "foot2": "hip", "marker": "knee"})
 
 
-def test_hybrid_run_has_flow_panel_with_flow_names_and_jumps_marked():
-    run = walker_like_run()
-    fig = figure_for(run)
-    panels = axes_by_ylabel(fig)
-    flow = panels["flow"]
-    assert [label.get_text() for label in flow.get_yticklabels()] == ["stance1", "stance2"]
+# -- what a figure holds --------------------------------------------------------------------------------
+
+def panels(fig) -> dict:
+    """{gid: axes} of the figure's panels (the gid names the panel)."""
+    return {ax.get_gid(): ax for ax in fig.axes if ax.get_gid()}
+
+
+def lines(ax) -> list:
+    """[(label, x, y)] of the axes' lines (2-D axes)."""
+    return [(line.get_label(), np.asarray(line.get_xdata()), np.asarray(line.get_ydata())) for line in ax.get_lines()]
+
+
+def assert_lines(ax, run, expected) -> None:
+    """The axes' lines are, in order, the (label, y) of `expected`, each against the run's time."""
+    drawn = lines(ax)
+    assert [label for label, _, _ in drawn] == [label for label, _ in expected]
+    for (_, x, y), (_, want) in zip(drawn, expected):
+        assert np.array_equal(x, run.time) and np.array_equal(y, want)
+
+
+def columns(run, names) -> list:
+    return [(name, run.column(name)) for name in names]
+
+
+ENERGY = ["energy", "energy_change"]
+
+
+@pytest.mark.parametrize("make, expected", [
+    (plain_run, ["coordinates", "speeds"] + ENERGY),
+    (planar_run, ["trajectories", "frame_x", "frame_y", "coordinates", "speeds"] + ENERGY),
+    (spatial_run, ["trajectories", "frame_x", "frame_y", "frame_z", "coordinates", "speeds"] + ENERGY),
+    (quaternion_run, ["trajectories", "frame_x", "frame_y", "frame_z", "speeds", "quaternions", "position_signals",
+                      "other_signals"] + ENERGY),
+    (constrained_run, ["coordinates", "speeds", "multipliers", "residuals"] + ENERGY),
+    (inputs_run, ["coordinates", "speeds", "inputs"] + ENERGY),
+    (lambda: inputs_run(changing=False), ["coordinates", "speeds"] + ENERGY),
+    (hybrid_run, ["trajectories", "flow", "discrete", "frame_x", "frame_y", "coordinates", "speeds"] + ENERGY),
+], ids=["plain", "planar", "spatial", "quaternion", "constrained", "inputs", "constant-inputs", "hybrid"])
+def test_each_run_gets_the_panels_that_apply_in_order(make, expected):
+    fig = figure_for(make())
+    assert [ax.get_gid() for ax in fig.axes] == expected
+    assert all(ax.name == ("3d" if ax.get_gid() == "trajectories" else "rectilinear") for ax in fig.axes)
+
+
+def test_states_signals_and_energy_panels_carry_the_runs_columns():
+    run = quaternion_run()
+    p = panels(figure_for(run))
+    assert_lines(p["speeds"], run, columns(run, ["wx", "wy", "wz", "vx", "vy", "vz"]))
+    assert_lines(p["quaternions"], run, columns(run, ["body_qw", "body_qx", "body_qy", "body_qz"]))
+    assert_lines(p["position_signals"], run, columns(run, ["body_x", "body_y", "body_z"]))
+    assert_lines(p["other_signals"], run, columns(run, ["spin"]))
+    (energy,) = lines(p["energy"])
+    assert np.array_equal(energy[2], run.energy)
+    (change,) = lines(p["energy_change"])
+    assert np.allclose(change[2], (run.energy - run.energy[0]) / np.abs(run.energy).max())
+
+    run = plain_run()
+    assert_lines(panels(figure_for(run))["coordinates"], run, columns(run, ["q1", "q2"]))
+
+
+def test_time_series_share_one_time_axis_labelled_only_at_the_bottom_of_each_column():
+    for run in (plain_run(), hybrid_run()):
+        fig = figure_for(run)
+        series = [ax for ax in fig.axes if ax.name != "3d"]
+        assert all(series[0].get_shared_x_axes().joined(series[0], ax) for ax in series)
+        labelled = [ax.get_gid() for ax in series if ax.get_xlabel()]
+        # one column: the last panel; with frames, the bottom of each column
+        assert labelled == (["energy_change"] if not run.frames else ["speeds", "energy_change"])
+
+
+def test_frame_paths_in_3d_and_along_each_axis_carry_the_frames_and_coincident_frames_share_a_line():
+    run = quaternion_run()
+    p = panels(figure_for(run))
+    paths = [np.array(line.get_data_3d()).T for line in p["trajectories"].get_lines()]
+    assert len(paths) == 1 and np.array_equal(paths[0], run.frames["body"])   # body and marker: one line
+    assert len(p["trajectories"].collections) == 2                               # its start and end marks
+    spans = [np.diff(p["trajectories"].get_w_lims()[2 * k:2 * k + 2])[0] for k in range(3)]
+    assert np.allclose(spans, spans[0])                                          # one scale along all axes
+    for k, gid in enumerate(["frame_x", "frame_y", "frame_z"]):
+        ((label, x, y),) = lines(p[gid])
+        assert "body" in label and "marker" in label
+        assert np.array_equal(x, run.time) and np.array_equal(y, run.frames["body"][:, k])
+
+
+def test_inputs_panel_carries_every_input_once_any_changes():
+    run = inputs_run()
+    assert_lines(panels(figure_for(run))["inputs"], run,
+                 [("u", run.input_values[:, 0]), ("v", run.input_values[:, 1])])
+
+
+def test_constrained_run_shows_multipliers_and_residuals_per_row_on_a_log_scale():
+    run = constrained_run()
+    p = panels(figure_for(run))
+    assert_lines(p["multipliers"], run, [("lam_a", run.multipliers[:, 0]), ("lam_b", run.multipliers[:, 1])])
+    residuals = p["residuals"]
+    assert residuals.get_yscale() == "log"
+    drawn = lines(residuals)
+    assert len(drawn) == 3                      # phi of the one position row, c of both velocity rows
+    want = [run.residual_position[:, 0], run.residual_velocity[:, 0], run.residual_velocity[:, 1]]
+    for (_, x, y), w in zip(drawn, want):
+        assert np.array_equal(x, run.time) and np.array_equal(y, np.maximum(np.abs(w), 1e-17))
+    assert drawn[2][2].min() == 1e-17           # exact zeros floored, not dropped
+    styles = [line.get_linestyle() for line in residuals.get_lines()]
+    assert styles == ["-", "--", "--"]          # position solid, velocity dashed
+
+
+# -- hybrid runs: the flow and discrete panels ---------------------------------------------------------
+
+def test_flow_panel_steps_through_the_flows_named_on_its_axis_with_each_jump_marked():
+    run = hybrid_run()
+    flow = panels(figure_for(run))["flow"]
+    assert [label.get_text() for label in flow.get_yticklabels()] == run.flow_names
     assert list(flow.get_yticks()) == [0, 1]
     (line,) = flow.get_lines()
     assert line.get_drawstyle() == "steps-post"
     assert np.array_equal(line.get_xdata(), run.time) and np.array_equal(line.get_ydata(), run.flow)
-    marks = {c.get_label(): c for c in flow.collections}           # one set of dashed lines per jump
-    assert set(marks) == {"strike2 (2)", "strike1 (1)"}
-    for name, times in (("strike2 (2)", [0.5, 1.7]), ("strike1 (1)", [1.2])):
-        xs = [segment[:, 0] for segment in marks[name].get_segments()]
+    marks = {c.get_gid(): c for c in flow.collections}
+    assert set(marks) == {"jump:strike2", "jump:strike1"}
+    for gid, times in (("jump:strike2", [0.5, 1.7]), ("jump:strike1", [1.2])):
+        xs = [segment[:, 0] for segment in marks[gid].get_segments()]
         assert np.allclose(xs, np.array(times)[:, None])           # vertical lines at the jump times
-    legend = [text.get_text() for text in flow.get_legend().get_texts()]
-    assert legend == ["active flow", "strike2 (2)", "strike1 (1)"]
-    # top of the time series, sharing time with the others; only the bottom axis is labelled
-    series = [ax for ax in fig.axes if ax.name != "3d" and ax.get_label() != "<colorbar>"]
-    assert fig.axes[1] is flow
-    assert all(flow.get_shared_x_axes().joined(flow, ax) for ax in series)
-    assert flow.get_xlabel() == "" and not any(t.get_visible() and t.get_text() for t in flow.get_xticklabels())
+    assert to_rgb(marks["jump:strike2"].get_color()[0]) != to_rgb(marks["jump:strike1"].get_color()[0])
+    assert len(flow.get_legend().get_texts()) == 3                  # the flow and each jump
 
 
-def test_hybrid_run_has_discrete_panel_carrying_the_discrete_states():
-    run = walker_like_run()
-    panels = axes_by_ylabel(figure_for(run))
-    lines = panels["discrete states"].get_lines()
-    assert [line.get_label() for line in lines] == ["fx", "steps"]
-    for j, line in enumerate(lines):
-        assert line.get_drawstyle() == "steps-post"
-        assert np.array_equal(line.get_xdata(), run.time)
-        assert np.array_equal(line.get_ydata(), run.discrete[:, j])
-    order = [ax.get_ylabel() for ax in figure_for(run).axes if ax.name != "3d"]
-    assert order[:3] == ["flow", "discrete states", "frame x, m"]
+def test_discrete_panel_steps_through_the_discrete_states():
+    run = hybrid_run()
+    discrete = panels(figure_for(run))["discrete"]
+    assert_lines(discrete, run, columns(run, ["fx", "steps"]))
+    assert all(line.get_drawstyle() == "steps-post" for line in discrete.get_lines())
 
 
-def test_one_flow_with_jumps_has_a_flow_panel_but_no_discrete_panel_without_discrete_states():
-    run = walker_like_run()
+def test_one_flow_with_jumps_has_a_flow_panel_and_no_discrete_panel_without_discrete_states():
+    run = hybrid_run()
     run.flow, run.flow_names = np.zeros_like(run.flow), ["roll"]
     run.events["from_flow"][:] = run.events["to_flow"][:] = 0
     run.discrete_names, run.discrete = [], np.zeros((len(run.time), 0))
-    panels = axes_by_ylabel(figure_for(run))
-    assert [label.get_text() for label in panels["flow"].get_yticklabels()] == ["roll"]
-    assert "discrete states" not in panels
+    p = panels(figure_for(run))
+    assert [label.get_text() for label in p["flow"].get_yticklabels()] == ["roll"]
+    assert "discrete" not in p
 
 
-def test_run_without_flows_or_jumps_has_no_flow_or_discrete_panel():
-    for run in (swing_bar_like_run(), make_run(["q", "q_dot"], 1, 1, np.zeros((20, 2)))):
-        labels = set(axes_by_ylabel(figure_for(run)))
-        assert "flow" not in labels and "discrete states" not in labels
-
-
-def test_hybrid_run_without_frames_has_flow_and_discrete_panels_on_top(tmp_path):
-    run = walker_like_run()
-    run.frames, run.frame_parents = {}, {}
-    fig = figure_for(run)
-    assert [ax.get_ylabel() for ax in fig.axes] == [
-        "flow", "discrete states", "coordinates q, rad | m", "speeds v, rad/s | m/s", "energy E, J",
-        "(E - E(0)) / max|E|, 1"]
+def test_plot_run_writes_the_figure_as_a_png_at_110_dpi(tmp_path):
+    run = plain_run()
     plot_run(run, tmp_path / "run.png")
-    assert (tmp_path / "run.png").stat().st_size > 0
+    with Image.open(tmp_path / "run.png") as im:
+        assert im.format == "PNG"
+        assert im.size == tuple(np.round(figure_for(run).get_size_inches() * 110).astype(int))
 
 
-# -- stick figures ---------------------------------------------------------------------------------
+# -- stick figures ---------------------------------------------------------------------------------------
 
 def stick_lines(fig):
-    """{(parent, child, sample): ((x0, x1), (y0, y1))} of the stick lines (gid 'parent>child@k')."""
+    """(axes, {(parent, child, sample): ((x0, x1), (y0, y1))}) of the stick lines (gid 'parent>child@k')."""
     (ax,) = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
-    lines = {}
+    found = {}
     for line in ax.get_lines():
         gid = line.get_gid() or ""
         if ">" in gid:
             edge, k = gid.split("@")
-            lines[(*edge.split(">"), int(k))] = (np.asarray(line.get_xdata()), np.asarray(line.get_ydata()))
-    return ax, lines
+            found[(*edge.split(">"), int(k))] = (np.asarray(line.get_xdata()), np.asarray(line.get_ydata()))
+    return ax, found
 
 
 def test_sticks_join_each_frame_to_its_logged_parent_at_the_snapshot_times():
-    run = walker_like_run()
+    run = hybrid_run()
     assert stick_edges(run) == [("hip", "foot1"), ("hip", "foot2")]    # not world, not the unlogged knee
     snaps = snapshot_indices(run, count=5)
     jump_samples = np.searchsorted(run.time, run.events["time"], side="right") - 1
     assert {0, len(run.time) - 1} <= set(snaps) and set(jump_samples) <= set(snaps)
     assert np.array_equal(snaps, np.unique(snaps))
-    fig = sticks_figure(run, count=5)
-    ax, lines = stick_lines(fig)
-    assert set(lines) == {(p, c, k) for p, c in stick_edges(run) for k in snaps}
-    for (parent, child, k), (xs, ys) in lines.items():
+    ax, found = stick_lines(sticks_figure(run, count=5))
+    assert ax.name == "rectilinear" and ax.get_aspect() == 1.0
+    assert set(found) == {(p, c, k) for p, c in stick_edges(run) for k in snaps}
+    for (parent, child, k), (xs, ys) in found.items():
         assert np.array_equal(xs, [run.frames[parent][k, 0], run.frames[child][k, 0]])
         assert np.array_equal(ys, [run.frames[parent][k, 1], run.frames[child][k, 1]])
-    # earlier snapshots lighter
-    colour = {k: to_rgb(line.get_color()) for line in ax.get_lines() if ">" in (line.get_gid() or "")
-              for k in [int(line.get_gid().split("@")[1])]}
-    assert sum(colour[snaps[0]]) > sum(colour[snaps[-1]])
-    # snapshots at a jump are dashed, the others solid
-    styles = {int(line.get_gid().split("@")[1]): line.get_linestyle() for line in ax.get_lines()
-              if ">" in (line.get_gid() or "")}
-    assert all((styles[k] == "--") == (k in jump_samples) for k in snaps)
-    assert ax.get_aspect() == 1.0 and (ax.get_xlabel(), ax.get_ylabel()) == ("world x, m", "world y, m")
+    sticks = [line for line in ax.get_lines() if ">" in (line.get_gid() or "")]
+    sample = {line: int(line.get_gid().split("@")[1]) for line in sticks}
+    colour = {sample[line]: sum(to_rgb(line.get_color())) for line in sticks}
+    assert colour[snaps[0]] > colour[snaps[-1]]                         # earlier snapshots lighter
+    assert all((line.get_linestyle() == "--") == (sample[line] in jump_samples) for line in sticks)
     (ground,) = [line for line in ax.get_lines() if line.get_gid() == "ground"]   # the feet touch y = 0
     assert np.allclose(ground.get_ydata(), 0.0)
 
 
 def test_sticks_of_a_hanging_pendulum_have_no_ground():
-    t = np.linspace(0.0, 2.0, 40)
-    rod = np.stack([np.sin(t), -np.cos(t), 0 * t], axis=1)
-    run = make_run(["q", "q_dot"], 1, 1, np.column_stack([t, np.ones_like(t)]),
-                   frames={"pivot": np.zeros((40, 3)), "bob": rod})
-    run.frame_parents = {"pivot": "world", "bob": "pivot"}
-    ax, lines = stick_lines(sticks_figure(run, count=4))
-    assert len(lines) == 4 and not any(line.get_gid() == "ground" for line in ax.get_lines())
+    run = planar_run()
+    assert stick_plane(run) == (0, 1)
+    ax, found = stick_lines(sticks_figure(run, count=4))
+    assert {(p, c) for p, c, _ in found} == {("upper", "elbow"), ("elbow", "lower"), ("lower", "tip")}
+    assert len(found) == 3 * 4 and not any(line.get_gid() == "ground" for line in ax.get_lines())
 
 
 def test_sticks_of_3d_frames_are_drawn_in_the_plane_they_move_most_in():
     t = np.linspace(0.0, 2.0, 40)
     tip = np.stack([np.sin(t), 0.01 * np.sin(t), -np.cos(t)], axis=1)     # swings in x-z
     run = make_run(["q", "q_dot"], 1, 1, np.column_stack([t, np.ones_like(t)]),
-                   frames={"base": np.zeros((40, 3)), "tip": tip})
-    run.frame_parents = {"base": "world", "tip": "base"}
+                   frames={"base": np.zeros((40, 3)), "tip": tip}, frame_parents={"base": "world", "tip": "base"})
     assert stick_plane(run) == (0, 2)
-    ax, lines = stick_lines(sticks_figure(run, count=3))
-    assert (ax.get_xlabel(), ax.get_ylabel()) == ("world x, m", "world z, m")
-    for (_, _, k), (xs, ys) in lines.items():
+    _, found = stick_lines(sticks_figure(run, count=3))
+    assert len(found) == 3
+    for (_, _, k), (xs, ys) in found.items():
         assert np.array_equal(xs, [0.0, tip[k, 0]]) and np.array_equal(ys, [0.0, tip[k, 2]])
 
 
 def test_sticks_need_a_frame_with_a_logged_parent(tmp_path):
-    run = swing_bar_like_run()                                  # frames logged, parents unknown
+    run = quaternion_run()                                  # frames logged, parents unknown
     assert stick_edges(run) == []
-    with pytest.raises(ValueError, match="no stick figure"):
+    with pytest.raises(ValueError, match="parent"):
         sticks_figure(run)
-    run = walker_like_run()
+    run = hybrid_run()
     plot_sticks(run, tmp_path / "sticks.png")
-    assert (tmp_path / "sticks.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with Image.open(tmp_path / "sticks.png") as im:
+        assert im.format == "PNG"
+        assert im.size == tuple(np.round(sticks_figure(run).get_size_inches() * 110).astype(int))
 
 
-# -- andyc plot --------------------------------------------------------------------------------------
+# -- matplotlib's state --------------------------------------------------------------------------------
+
+def test_importing_and_plotting_leave_the_users_backend_alone(tmp_path):
+    """A user who chose a backend keeps it, and pyplot is never imported."""
+    code = f"""
+import sys
+import matplotlib
+matplotlib.use("pdf")
+import numpy as np
+import andyc.plot
+from andyc.runtime.run import Run
+t = np.linspace(0, 1, 20)
+tip = np.stack([np.sin(t), -np.cos(t), 0 * t], axis=1)
+run = Run(model="m", spec_sha256="", method="rk4", dt=0.05, nq=1, nv=1, rtol=0, atol=0, t_end=1.0, parameters={{}},
+          inputs={{}}, state_names=["q", "v"], time=t, state=np.zeros((20, 2)), energy=np.ones(20),
+          frames={{"pivot": 0 * tip, "tip": tip}}, frame_parents={{"pivot": "world", "tip": "pivot"}})
+andyc.plot.plot_run(run, {str(tmp_path / 'run.png')!r})
+andyc.plot.plot_sticks(run, {str(tmp_path / 'sticks.png')!r})
+andyc.plot.animate_run(run, {str(tmp_path / 'run.gif')!r}, max_frames=3)
+print("matplotlib.pyplot" in sys.modules, matplotlib.get_backend())
+"""
+    env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["False", "pdf"]
+    assert all((tmp_path / name).stat().st_size > 0 for name in ("run.png", "sticks.png", "run.gif"))
+
+
+# -- andyc plot ------------------------------------------------------------------------------------------
 
 def invoke_plot(*args):
     try:
@@ -275,36 +380,34 @@ def invoke_plot(*args):
 
 
 def test_cli_plot_writes_sticks_only_for_runs_with_frame_parents(tmp_path):
-    walker = walker_like_run().save(tmp_path / "walker.h5")
-    result = invoke_plot(walker)
-    assert result.exit_code == 0, result.output
-    assert (tmp_path / "walker.png").stat().st_size > 0 and (tmp_path / "walker_sticks.png").stat().st_size > 0
-    assert "walker_sticks.png" in result.output
+    walker = hybrid_run().save(tmp_path / "walker.h5")
     result = invoke_plot(walker, "-o", tmp_path / "other.png")
-    assert result.exit_code == 0 and (tmp_path / "other_sticks.png").exists()
-
-    plain = swing_bar_like_run().save(tmp_path / "plain.h5")
-    result = invoke_plot(plain)
     assert result.exit_code == 0, result.output
-    assert result.output.strip() == f"wrote {tmp_path / 'plain.png'}"
-    assert not (tmp_path / "plain_sticks.png").exists()
+    assert (tmp_path / "other.png").stat().st_size > 0 and (tmp_path / "other_sticks.png").stat().st_size > 0
+    assert "other_sticks.png" in result.output
+
+    orphans = planar_run()
+    orphans.frame_parents = {}                              # the same frames, their parents unknown
+    result = invoke_plot(orphans.save(tmp_path / "orphans.h5"))
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "orphans.png").stat().st_size > 0
+    assert not (tmp_path / "orphans_sticks.png").exists() and result.output.count("wrote") == 1
 
 
-def test_compass_gait_run_plots_after_an_h5_round_trip(compiled, tmp_path):
+def test_compass_gait_through_andyc_plot(compiled, tmp_path):
+    """End to end: a shipped hybrid model, simulated with its frames logged, through the run file and
+    `andyc plot` (the figure, the stick figures, the animation)."""
     model = compiled("compass_gait")
-    run = andyc.simulate(model, 2.0, dt=1e-3, method="projection", frames="all", progress=False)
+    run = andyc.simulate(model, 2.0, dt=1e-3, method="projection", frames="all", every=10, progress=False)
     assert len(run.events["time"]) >= 2
-    run = read_h5(run.save(tmp_path / "r.h5"))
-    panels = axes_by_ylabel(figure_for(run))
-    assert [label.get_text() for label in panels["flow"].get_yticklabels()] == ["stance1", "stance2"]
-    assert np.array_equal(panels["flow"].get_lines()[0].get_ydata(), run.flow)
-    assert [line.get_label() for line in panels["discrete states"].get_lines()] == ["fx"]
-    _, lines = stick_lines(sticks_figure(run))
-    assert {(p, c) for p, c, _ in lines} == {("hip", "leg1"), ("leg1", "foot1"), ("hip", "leg2"), ("leg2", "foot2")}
-    plot_run(run, tmp_path / "main.png")
-    plot_sticks(run, tmp_path / "sticks.png")
-    assert (tmp_path / "main.png").stat().st_size > 0 and (tmp_path / "sticks.png").stat().st_size > 0
-    result = invoke_plot(tmp_path / "r.h5")
+    path = run.save(tmp_path / "r.h5")
+    result = invoke_plot(path)
     assert result.exit_code == 0, result.output
-    assert (tmp_path / "r.png").stat().st_size > 0 and (tmp_path / "r_sticks.png").stat().st_size > 0
+    for name in ("r.png", "r_sticks.png"):
+        with Image.open(tmp_path / name) as im:
+            assert im.format == "PNG" and min(im.size) > 300
     assert "r_sticks.png" in result.output
+    result = invoke_plot(path, "--animate", "--frames-max", 6)
+    assert result.exit_code == 0, result.output
+    with Image.open(tmp_path / "r.gif") as im:
+        assert im.format == "GIF" and im.n_frames == 6

@@ -1,0 +1,242 @@
+"""The figure of a run against time: `figure_for(run)` builds it, `plot_run(run, out)` saves it.
+
+Panels, each only when it applies, each an axes whose gid names it: the world trajectories of the
+logged frames in 3-D ('trajectories', as Fig. 6 of the ANDY paper shows the ends of the swing bar)
+and their x, y, z against time ('frame_x', 'frame_y', 'frame_z'; a world axis along which no frame
+moves is left out), coordinates ('coordinates'), speeds ('speeds'), quaternion signals
+('quaternions'), position signals ('position_signals'), other signals ('other_signals'), inputs
+that change ('inputs'), multipliers and constraint residuals ('multipliers', 'residuals'), energy
+and its relative change ('energy', 'energy_change'). A hybrid run (more than one flow, or any jump)
+also gets, at the top of the time series, the active flow against time with the jumps marked
+('flow'), and its discrete states against time ('discrete', as Fig. 10 of the paper).
+"""
+
+from __future__ import annotations
+
+from functools import partial
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from andyc.outputs import write_atomic
+from andyc.plot.scene import is_hybrid
+from andyc.runtime.run import Run
+
+QUATERNION = ("_qw", "_qx", "_qy", "_qz")
+POSITION = ("_x", "_y", "_z")
+
+
+def plot_run(run: Run, out) -> None:
+    """Write the figure of `run` to `out` (PNG)."""
+    with write_atomic(out) as tmp:
+        figure_for(run).savefig(tmp, dpi=110)
+
+
+def figure_for(run: Run) -> Figure:
+    """3-D frame trajectories on the left (energy below them), time series on the right;
+    without frames, one column of time series. On an Agg canvas of its own (no pyplot)."""
+    series = _series_panels(run)
+    energy = [("energy", _energy), ("energy_change", _energy_change)]
+    if run.frames:
+        fig = Figure(figsize=(16, max(10, 1.8 * len(series))), layout="constrained")
+        grid = fig.add_gridspec(1, 2, width_ratios=[1, 1.1])
+        left = grid[0].subgridspec(3, 1, height_ratios=[5, 1.5, 1.5])
+        ax = fig.add_subplot(left[0], projection="3d", gid="trajectories")
+        _trajectories(ax, run)
+        right = grid[1].subgridspec(len(series), 1, height_ratios=[_height(gid, run) for gid, _ in series])
+        axes = _time_axes(fig, right, series, run)
+        _time_axes(fig, [left[1], left[2]], energy, run, sharex=axes[0])
+    else:
+        panels = series + energy
+        ratios = [3 * _height(gid, run) for gid, _ in series] + [2, 2]
+        fig = Figure(figsize=(10, 0.75 * sum(ratios) + 1), layout="constrained")
+        _time_axes(fig, fig.add_gridspec(len(panels), 1, height_ratios=ratios), panels, run)
+    fig.suptitle(f"{run.model}: {run.method}, dt = {run.dt:g} s, {run.status}")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _series_panels(run: Run) -> list:
+    """[(gid, draw)]: the panels of the right-hand (or only) column, top to bottom."""
+    panels = []
+    if is_hybrid(run):
+        panels.append(("flow", _flows))
+    if run.discrete_names:
+        panels.append(("discrete", _discrete))
+    panels += [(f"frame_{'xyz'[k]}", partial(_frame_axis, k=k)) for k in range(3) if _moves(run.frames, k)]
+    if run.nq:          # a free body has speeds and signals only
+        panels.append(("coordinates", partial(_states, cols=range(run.nq), ylabel="coordinates q, rad | m")))
+    panels.append(("speeds", partial(_states, cols=range(run.nq, run.nq + run.nv), ylabel="speeds v, rad/s | m/s")))
+    quaternions, positions, others = _signal_groups(run.signal_names)
+    if quaternions:
+        panels.append(("quaternions", partial(_quaternions, bases=quaternions)))
+    for gid, names, ylabel in (("position_signals", positions, "position signals, m"),
+                               ("other_signals", others, "other signals")):
+        if names:
+            panels.append((gid, partial(_states, cols=[run.state_names.index(n) for n in names], ylabel=ylabel)))
+    if run.input_names and len(run.time) and np.ptp(run.input_values, axis=0).max() > 0:
+        panels.append(("inputs", _inputs))      # inputs that change (driven, or set by flows)
+    if run.multiplier_names:
+        panels += [("multipliers", _multipliers), ("residuals", _residuals)]
+    return panels
+
+
+def _height(gid: str, run: Run) -> float:
+    """Relative height of a time-series panel: the flow panel (unless there are many flows) and the
+    discrete panel are shorter."""
+    if gid == "flow":
+        return min(0.5 + 0.1 * len(run.flow_names), 1.0)
+    return 0.7 if gid == "discrete" else 1.0
+
+
+def _time_axes(fig, specs, panels, run, sharex=None) -> list:
+    """One axes per (gid, draw) panel down `specs`, sharing the time axis; only the bottom one labels it."""
+    axes = []
+    for spec, (gid, draw) in zip(specs, panels):
+        ax = fig.add_subplot(spec, sharex=sharex or (axes[0] if axes else None), gid=gid)
+        draw(ax, run)
+        ax.grid(alpha=0.3)
+        ax.tick_params(labelbottom=False)
+        axes.append(ax)
+    axes[-1].tick_params(labelbottom=True)
+    axes[-1].set_xlabel("time, s")
+    return axes
+
+
+def _legend(ax) -> None:
+    ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small", frameon=False)
+
+
+def _moves(frames: dict, k: int) -> bool:
+    """Whether any frame moves along world axis k."""
+    if not frames:
+        return False
+    xyz = np.concatenate(list(frames.values()))
+    scale = max(np.nanmax(np.abs(xyz)), 1.0)
+    return any(np.nanmax(p[:, k]) - np.nanmin(p[:, k]) > 1e-9 * scale for p in frames.values())
+
+
+def _signal_groups(names: list) -> tuple:
+    """(quaternion base names, position signal names, the other signal names)."""
+    bases = [n[:-3] for n in names if n.endswith("_qw") and all(n[:-3] + s in names for s in QUATERNION)]
+    in_quaternion = {b + s for b in bases for s in QUATERNION}
+    positions = [n for n in names if n.endswith(POSITION) and n not in in_quaternion]
+    others = [n for n in names if n not in in_quaternion and n not in positions]
+    return bases, positions, others
+
+
+def _frame_paths(frames: dict) -> list:
+    """[(label, xyz)]: frames whose paths coincide (e.g. a joint frame at a link's end) share one
+    line labelled 'a = b', so that no line hides another."""
+    paths = []
+    for name, xyz in frames.items():
+        same = next((p for p in paths if np.allclose(p[1], xyz, rtol=1e-9, atol=1e-12, equal_nan=True)), None)
+        if same:
+            same[0].append(name)
+        else:
+            paths.append(([name], xyz))
+    return [(" = ".join(names), xyz) for names, xyz in paths]
+
+
+def _trajectories(ax, run: Run) -> None:
+    """Each frame's path in world coordinates, start (●) and end (■) marked, on equal axes."""
+    for i, (name, xyz) in enumerate(_frame_paths(run.frames)):
+        ax.plot(*xyz.T, color=f"C{i}", lw=0.8, label=name)
+        ax.scatter(*xyz[0], color=f"C{i}", marker="o", s=30)
+        ax.scatter(*xyz[-1], color=f"C{i}", marker="s", s=30)
+    points = np.concatenate(list(run.frames.values()))
+    lo, hi = np.nanmin(points, axis=0), np.nanmax(points, axis=0)
+    centre, half = (lo + hi) / 2, max(np.max(hi - lo) / 2, 1e-3) * 1.05
+    for setter, c, label in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), centre, "xyz"):
+        setter(c - half, c + half)
+        getattr(ax, f"set_{label}label")(f"{label}, m", labelpad=10)
+    ax.set_box_aspect((1, 1, 1), zoom=0.92)
+    ax.set_title("frame trajectories in world (● start, ■ end)")
+    ax.legend(loc="upper left", fontsize="small")
+
+
+def _frame_axis(ax, run: Run, k: int) -> None:
+    for i, (name, xyz) in enumerate(_frame_paths(run.frames)):
+        ax.plot(run.time, xyz[:, k], color=f"C{i}", lw=1, label=name)
+    ax.set_ylabel(f"frame {'xyz'[k]}, m")
+    _legend(ax)
+
+
+def _states(ax, run: Run, cols, ylabel: str) -> None:
+    for j in cols:
+        ax.plot(run.time, run.state[:, j], lw=1, label=run.state_names[j])
+    ax.set_ylabel(ylabel)
+    _legend(ax)
+
+
+def _inputs(ax, run: Run) -> None:
+    for j, name in enumerate(run.input_names):
+        ax.plot(run.time, run.input_values[:, j], lw=1, label=name)
+    ax.set_ylabel("inputs u")
+    _legend(ax)
+
+
+def _quaternions(ax, run: Run, bases: list) -> None:
+    """Components w, x, y, z in fixed colours; one line style per quaternion."""
+    for b, style in zip(bases, ["-", "--", ":", "-."] * len(bases)):
+        for c, s in enumerate(QUATERNION):
+            ax.plot(run.time, run.column(b + s), color=f"C{c}", ls=style, lw=1, label=b + s)
+    ax.set_ylabel("quaternion (w, x, y, z), 1")
+    _legend(ax)
+
+
+def _multipliers(ax, run: Run) -> None:
+    for j, name in enumerate(run.multiplier_names):
+        ax.plot(run.time, run.multipliers[:, j], lw=1, label=name)
+    ax.set_ylabel("multipliers λ, N | N m")
+    _legend(ax)
+
+
+def _residuals(ax, run: Run) -> None:
+    """|phi| (solid) and |c| (dashed) per row, on a log scale floored at 1e-17 (exact zeros)."""
+    names = run.multiplier_names
+    for j in range(run.residual_position.shape[1]):
+        ax.semilogy(run.time, np.maximum(np.abs(run.residual_position[:, j]), 1e-17), color=f"C{j}", lw=1,
+                    label=f"φ {names[j]}")
+    for j in range(run.residual_velocity.shape[1]):
+        ax.semilogy(run.time, np.maximum(np.abs(run.residual_velocity[:, j]), 1e-17), color=f"C{j}", lw=1,
+                    ls="--", label=f"c {names[j]}")
+    ax.set_ylabel("constraint residuals")
+    _legend(ax)
+
+
+def _energy(ax, run: Run) -> None:
+    ax.plot(run.time, run.energy, color="k", lw=1)
+    ax.set_ylabel("energy E, J")
+    ax.ticklabel_format(axis="y", useOffset=False)
+
+
+def _energy_change(ax, run: Run) -> None:
+    e = run.energy
+    ax.plot(run.time, (e - e[0]) / max(abs(e[0]), np.abs(e).max(), 1e-300), color="tab:red", lw=0.8)
+    ax.set_ylabel("(E - E(0)) / max|E|, 1")
+
+
+def _flows(ax, run: Run) -> None:
+    """The active flow as a step line, flow names as tick labels; the jumps as dashed vertical
+    lines, one colour (and legend entry) per jump."""
+    ax.step(run.time, run.flow, where="post", color="k", lw=1.2, label="active flow")
+    n = len(run.flow_names)
+    ax.set_yticks(range(n), labels=run.flow_names)
+    ax.set_ylim(-0.5, n - 0.5)
+    ev = run.events
+    for j, name in enumerate(run.jump_names):
+        times = ev["time"][ev["jump"] == j]
+        if len(times):
+            ax.vlines(times, 0, 1, transform=ax.get_xaxis_transform(), colors=f"C{j % 10}", lw=0.9, ls="--",
+                      label=f"{name} ({len(times)})", gid=f"jump:{name}")
+    ax.set_ylabel("flow")
+    _legend(ax)
+
+
+def _discrete(ax, run: Run) -> None:
+    for j, name in enumerate(run.discrete_names):
+        ax.step(run.time, run.discrete[:, j], where="post", lw=1, label=name)
+    ax.set_ylabel("discrete states")
+    _legend(ax)
