@@ -132,23 +132,9 @@ def load_compiled(path) -> CompiledModel:
         raise SimulationError(_import_failure(path, exc)) from None
     finally:
         sys.modules.pop(mod_name, None)     # (it registers its equations under the name their cache knows)
-    model = CompiledModel(
-        module=module, numerics=module.NUMERICS, ref=module.MODEL, path=path, name=module.NAME, spec_sha256=module.SPEC_SHA256,
-        nq=module.NQ, nv=module.NV, ns=module.NS, nx=module.NX, state_names=tuple(module.STATES),
-        quaternions=tuple(int(k) for k in module.QUATERNIONS),
-        parameter_names=tuple(module.PARAMETERS), parameter_defaults=module.PARAMETER_DEFAULTS,
-        input_names=tuple(module.INPUTS), input_defaults=module.INPUT_DEFAULTS,
-        frame_names=tuple(module.FRAMES), nh=module.NH, nc=module.NC,
-        multiplier_names=tuple(module.MULTIPLIERS), constraint_rows=tuple(module.CONSTRAINT_ROWS),
-        constraint_gains=tuple(tuple(g) for g in module.CONSTRAINT_GAINS),
-        conserves_energy=bool(module.CONSERVES_ENERGY), source=module.SOURCE,
-        constraint_where=tuple(tuple(w) for w in module.CONSTRAINT_WHERE),
-        discrete_names=tuple(module.DISCRETE_STATES), flow_names=tuple(module.FLOWS),
-        initial_flow=int(module.INITIAL_FLOW), jump_names=tuple(module.JUMPS),
-        frame_parents=tuple(module.FRAME_PARENTS), input_expressions=tuple(module.INPUT_EXPRESSIONS.items()),
-        closed_form=module.closed_form if module.HAS_CLOSED_FORM else None,
-        closed_form_where=tuple(tuple(w) for w in module.CLOSED_FORM_WHERE))
-    return model          # (the leaves compile, or load from Numba's cache, as the module is imported)
+    # The leaves compiled (or loaded from Numba's cache) as the module was imported; the module says in one
+    # dict what the model is (METADATA: every field below but the first four).
+    return CompiledModel(module=module, numerics=module.NUMERICS, ref=module.MODEL, path=path, **module.METADATA)
 
 
 def _import_failure(path: Path, exc: BaseException) -> str:
