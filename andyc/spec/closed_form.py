@@ -43,7 +43,7 @@ def build_closed_form(given: dict | None, jumps: list, scope: Scope, input_expre
         except ExpressionError:
             scope.expr(value, where, allowed, context)       # reports it, listing the names allowed here
             continue
-        scope.report.used |= expr.free_symbols
+        scope.report.used.update(expr.free_symbols)
         inside = [f"{kinds[n]} '{n}'" for n, s in states.items() if s in expr.free_symbols]
         if inside:
             scope.report.error(where, f"in {value!r}: the closed form of '{name}' uses {' and '.join(inside)}",

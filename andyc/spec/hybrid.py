@@ -112,7 +112,7 @@ def _jump(i: int, j: dict, written: list, flows: list, constraint_names: list, s
                 message = f"in {text!r}: {scope.kind_of(exc.name)} '{exc.name}' cannot be used here"
             scope.report.error(path, message, exc.hint + (f" ({context})" if exc.name else ""))
             continue
-        scope.report.used |= set().union(*(e.free_symbols for e in conditions))
+        scope.report.used.update(*(e.free_symbols for e in conditions))
         enabled += conditions
     resets = []
     for name, value in (j.get("reset") or {}).items():

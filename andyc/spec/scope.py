@@ -9,8 +9,9 @@
   tables named for their readers (`kinematic` for links, `forcing` for forces, `rates` for velocities)
   and parses an expression against one of them, reporting what is wrong.
 
-A Scope never changes: a later stage gets a new one (`with_states`, `with_frames`), so the order in which
-names become usable is the order of the calls in andyc.spec.load.
+A Scope's names never change: a later stage gets a new Scope (`with_states`, `with_frames`), so the
+order in which names become usable is the order of the calls in andyc.spec.load. (The Report it holds
+is the one every stage writes to.)
 """
 
 from __future__ import annotations
@@ -101,7 +102,7 @@ class Scope:
                 message = f"in {value!r}: {self.kind_of(exc.name)} '{exc.name}' cannot be used here"
             self.report.error(where, message, exc.hint + (f" ({context})" if exc.name else ""))
             return sp.Integer(0)
-        self.report.used |= result.free_symbols
+        self.report.used.update(result.free_symbols)
         return result
 
     def vector(self, values, where, names: dict, context: str) -> sp.Matrix:
