@@ -25,12 +25,13 @@ the text is bounded before any work is done on it:
 from __future__ import annotations
 
 import ast
-import difflib
 import math
 import string
 import sys
 
 import sympy as sp
+
+from andyc.spec.suggest import did_you_mean
 
 FUNCTIONS = {
     "sin": sp.sin, "cos": sp.cos, "tan": sp.tan,
@@ -178,11 +179,12 @@ def parse(text, names: dict[str, sp.Symbol], allow_time: bool = True, dotted=Non
         raise ExpressionError(f"cannot parse {shown(text)}: {exc.msg} {where}",
                               "check the brackets and operators (allowed: + - * / ** and the functions "
                               + ", ".join(sorted(FUNCTIONS)) + ")") from None
-    return _Builder(text, names, allow_time, dotted).expression(tree)
+    return _SympyBuilder(text, names, allow_time, dotted).expression(tree)
 
 
-class _Builder:
-    """Walks a checked tree into SymPy; beside each value, its float when it is a constant (else None)."""
+class _SympyBuilder:
+    """Builds the SymPy expression of a checked syntax tree, node by node; beside each value, its float when
+    it is a constant (else None)."""
 
     def __init__(self, text, names, allow_time, dotted):
         self.text = text
@@ -284,8 +286,7 @@ class _Builder:
         if ident == "t" and self.allow_time:
             return TIME
         known = sorted(set(self.names) | set(CONSTANTS) | ({"t"} if self.allow_time else set()))
-        close = difflib.get_close_matches(ident, known, n=1)
-        hint = (f"did you mean '{close[0]}'? " if close else "") + "names allowed here: " + ", ".join(known)
+        hint = did_you_mean(ident, known) + "names allowed here: " + ", ".join(known)
         if ident in FUNCTIONS:
             self.fail(f"function '{ident}' used as a value", f"call it, e.g. {ident}(x)")
         self.fail(f"unknown name '{ident}'", hint, ident)
@@ -293,10 +294,8 @@ class _Builder:
     def call(self, node: ast.Call) -> tuple[sp.Expr, float | None]:
         if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
             called = ast.unparse(node.func)
-            close = difflib.get_close_matches(called, list(FUNCTIONS), n=1)
             self.fail(f"unknown function '{called}'",
-                      (f"did you mean '{close[0]}'? " if close else "")
-                      + "allowed functions: " + ", ".join(sorted(FUNCTIONS)))
+                      did_you_mean(called, FUNCTIONS) + "allowed functions: " + ", ".join(sorted(FUNCTIONS)))
         if node.keywords:
             self.fail("keyword arguments are not allowed", "pass arguments by position")
         name = node.func.id
@@ -351,7 +350,7 @@ def parse_condition(text, names: dict[str, sp.Symbol], allow_time: bool = True, 
     if not isinstance(tree, ast.Compare) or not all(type(op) in _COMPARE for op in tree.ops):
         raise ExpressionError(f"{shown(text)} is not a comparison", "write a comparison with <, <=, > or >=, such as "
                               '"foot.x > fx"; give several as a list (all must hold)')
-    builder = _Builder(text, names, allow_time, dotted)
+    builder = _SympyBuilder(text, names, allow_time, dotted)
     sides = [builder.expression(side) for side in [tree.left] + tree.comparators]
     out = []
     for op, a, b in zip(tree.ops, sides, sides[1:]):

@@ -8,11 +8,11 @@ made from a URDF (andyc.spec.urdf) back to the URDF element it came from.
 
 from __future__ import annotations
 
-import difflib
 import math
 import re
 
 from andyc.errors import Diagnostic, SpecError
+from andyc.spec.suggest import did_you_mean
 from andyc.spec.yamlpos import SourceMap
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
@@ -161,10 +161,8 @@ class XmlReader:
             label = f"joint[{name}]"
             kind = j.get("type")
             if kind not in JOINT_TYPES:
-                close = difflib.get_close_matches(str(kind), JOINT_TYPES, n=1)
                 self.error(j, label, f"unknown joint type {kind!r}" if kind else "the joint has no type",
-                           (f"did you mean '{close[0]}'? " if close else "") + "URDF joint types: "
-                           + ", ".join(JOINT_TYPES))
+                           did_you_mean(kind, JOINT_TYPES) + "URDF joint types: " + ", ".join(JOINT_TYPES))
             for end in ("parent", "child"):
                 element = j.find(end)
                 link = element.get("link") if element is not None else None
@@ -172,10 +170,8 @@ class XmlReader:
                     self.error(element if element is not None else j, f"{label}.{end}",
                                f"the joint has no <{end} link=...>", f'add <{end} link="LINK"/>')
                 elif link not in links:
-                    close = difflib.get_close_matches(link, list(links), n=1)
                     self.error(element, f"{label}.{end}", f"{end} link '{link}' does not exist",
-                               (f"did you mean '{close[0]}'? " if close else "")
-                               + f'define <link name="{link}"/> or name an existing link')
+                               did_you_mean(link, links) + f'define <link name="{link}"/> or name an existing link')
             self.origin(j, label)
             if j.find("axis") is not None:
                 axis = self.numbers(j.find("axis"), "xyz", label + ".axis", 3, "1 0 0")

@@ -1,0 +1,203 @@
+"""The hybrid automaton (ANDY §2.4, eq. 16-19): flows and the jumps between them.
+
+A flow names the constraints active in it and may set inputs to constants. A jump goes from one flow to
+another where its guard crosses 0 in its direction, while its enabling conditions hold; it then applies
+its resets (simultaneously, from the values before the jump) and its impact map (plastic, or a
+restitution e, on the target flow's constraints or the ones named). A model without `hybrid:` is one
+flow with every constraint active.
+"""
+
+from __future__ import annotations
+
+import builtins
+
+import sympy as sp
+
+from andyc.errors import format_path
+from andyc.spec.constraints import QUANTITY_HINT, FrameQuantities
+from andyc.spec.expressions import TIME, ExpressionError, parse_condition
+from andyc.spec.model import EITHER, FALLING, RISING, Flow, Jump
+from andyc.spec.scope import Scope
+from andyc.spec.suggest import did_you_mean
+
+# A jump's function in <model>_jumps.py is named after it: not a builtin, nor a name that file uses.
+JUMP_FILE_NAMES = frozenset(dir(builtins)) | {"math", "np", "JUMPS"}
+
+
+def build_hybrid(h: dict | None, constraints: list, scope: Scope,
+                 quantities: FrameQuantities) -> tuple[list, list, int]:
+    """Flows, jumps and the initial flow's index; without a hybrid section, one flow with every constraint.
+
+    A constraint active in no flow and taking no impact is warned about."""
+    names = [c.name for c in constraints]
+    if h is None:
+        return [Flow("default", tuple(names), {}, ())], [], 0
+    flows, impacted = [], set()
+    for i, f in enumerate(h["flows"]):
+        where = ("hybrid", "flows", i)
+        first = next((g.where for g in flows if g.name == f["name"]), None)
+        if first is not None:
+            scope.report.error(where + ("name",), f"duplicate flow name '{f['name']}' (first defined at line "
+                               f"{scope.report.smap.line(first + ('name',))}, {format_path(first + ('name',))})",
+                               "give each flow its own name")
+        active = f.get("constraints", [])
+        for j, name in enumerate(active):
+            scope.known(name, names, where + ("constraints", j), "constraint")
+            if name in active[:j]:
+                scope.report.error(where + ("constraints", j), f"constraint '{name}' is listed twice",
+                                   "list it once")
+        inputs = {}
+        for name, value in (f.get("inputs") or {}).items():
+            if scope.known(name, list(scope.inputs), where + ("inputs", name), "input"):
+                inputs[name] = scope.constant(value, where + ("inputs", name), allow_time=True)[0]
+                if TIME in inputs[name].free_symbols:
+                    scope.report.error(where + ("inputs", name), f"the value {value!r} of input '{name}' in flow "
+                                       f"'{f['name']}' depends on t", "a flow sets its inputs to constants: a "
+                                       "number or an expression of parameters")
+        flows.append(Flow(f["name"], tuple(n for n in names if n in active), inputs, where))
+    flow_names = [f.name for f in flows]
+    initial = h.get("initial", flow_names[0])
+    initial_index = flow_names.index(initial) if scope.known(initial, flow_names, ("hybrid", "initial"),
+                                                             "flow") else 0
+    jumps = []
+    written = h.get("jumps") or []
+    for i, j in enumerate(written):
+        jump = _jump(i, j, written, flows, names, scope, quantities)
+        if jump is not None:
+            jumps.append(jump)
+            impacted |= set(jump.impact_constraints)
+    used = {n for f in flows for n in f.constraints} | impacted
+    for c in constraints:
+        if c.name not in used:
+            scope.report.warn(c.where, f"constraint '{c.name}' is active in no flow and takes no impact",
+                              "list it in a flow's 'constraints', or remove it")
+    return flows, jumps, initial_index
+
+
+def _jump(i: int, j: dict, written: list, flows: list, constraint_names: list, scope: Scope,
+          quantities: FrameQuantities) -> Jump | None:
+    """One jump, or None when its source or target flow does not exist (reported)."""
+    where = ("hybrid", "jumps", i)
+    flow_names = [f.name for f in flows]
+    ok = scope.known(j["from"], flow_names, where + ("from",), "flow")
+    ok = scope.known(j["to"], flow_names, where + ("to",), "flow") and ok
+    if j["name"] in JUMP_FILE_NAMES:
+        scope.report.error(where + ("name",), f"'{j['name']}' cannot name a jump: the jump's function in the "
+                           f"jumps file (<model>_jumps.py) would hide Python's '{j['name']}'", "choose another name")
+    earlier = [k for k, x in enumerate(written[:i]) if x["name"] == j["name"]]
+    if earlier:
+        first = ("hybrid", "jumps", earlier[0], "name")
+        scope.report.error(where + ("name",), f"duplicate jump name '{j['name']}' (first defined at line "
+                           f"{scope.report.smap.line(first)}, {format_path(first)})", "give each jump its own name")
+    found = {}
+
+    def quantity(owner, attribute):
+        return quantities.symbol(owner, attribute, "world", found)
+
+    states = {**{c.name: c.q for c in scope.coordinates}, **scope.rates}
+    discrete = scope.discrete_names
+    names = {**scope.forcing, **scope.rates, **discrete}
+    context = ("guards, conditions and resets use parameters, inputs, coordinates, speeds (<coordinate>_dot "
+               "and declared speeds), discrete states, t and " + QUANTITY_HINT)
+    guard = _guard(j, where, names, context, states, found, quantity, scope)
+    enabled = []
+    texts = j.get("enabled", [])
+    for k, text in enumerate(texts if isinstance(texts, list) else [texts]):
+        path = where + ("enabled",) + ((k,) if isinstance(texts, list) else ())
+        try:
+            conditions = parse_condition(text, names, True, quantity)
+        except ExpressionError as exc:
+            message = str(exc)
+            if exc.name in scope.declared:   # a frame, body, ... written as a value
+                message = f"in {text!r}: {scope.kind_of(exc.name)} '{exc.name}' cannot be used here"
+            scope.report.error(path, message, exc.hint + (f" ({context})" if exc.name else ""))
+            continue
+        scope.report.used.update(*(e.free_symbols for e in conditions))
+        enabled += conditions
+    resets = []
+    for name, value in (j.get("reset") or {}).items():
+        path = where + ("reset", name)
+        if name in states or name in discrete:
+            resets.append((name, scope.expr(value, path, names, context, dotted=quantity)))
+        else:
+            kind = scope.kind_of(name)
+            why = {"parameter": "parameters keep their value for the whole run",
+                   "input": "inputs are set by the run or by a flow's 'inputs'"}.get(
+                kind, "it is not a coordinate, speed or discrete state")
+            fix = {"parameter": "for a value that changes at jumps, declare a discrete state under "
+                                "'discrete:' and reset that; ",
+                   "input": f"set it in flow '{j['to']}' with 'inputs: {{{name}: <value>}}'; "}.get(kind, "")
+            scope.report.error(path, f"cannot reset {kind + ' ' if kind else ''}'{name}': {why}",
+                               did_you_mean(name, list(states) + list(discrete)) + fix + "resets assign "
+                               "coordinates, speeds (<coordinate>_dot and declared speeds) and discrete states: "
+                               + ", ".join(list(states) + list(discrete)))
+    impact, restitution, impact_constraints = _impact(j, where, flows, constraint_names, scope)
+    if not ok:
+        return None
+    direction = {"falling": FALLING, "rising": RISING, "either": EITHER}[j["direction"]]
+    return Jump(j["name"], j["from"], j["to"], guard, direction, tuple(enabled), impact, restitution,
+                impact_constraints, tuple(resets), int(j.get("priority", i)), found, where, dict(j))
+
+
+def _guard(j: dict, where, names: dict, context: str, states: dict, found: dict, quantity,
+           scope: Scope) -> sp.Expr:
+    """A jump's guard: a signed expression that changes during a flow (0 after a reported problem).
+
+    The frame quantities it uses are recorded in `found` (through `quantity`)."""
+    before = len(scope.report.problems)
+    written = j["guard"] if isinstance(j["guard"], str) else ""
+    op = next((op for op in (">=", "<=", "==", ">", "<") if op in written), None)
+    if op is not None:              # a guard is a signed expression, not a condition
+        a, b = (side.strip() for side in written.split(op, 1))
+        b = f"({b})" if any(c in b for c in "+-") else b
+        turn = {">": "rising", "<": "falling"}.get(op[0], "either")
+        scope.report.error(where + ("guard",), f"the guard {written!r} is a comparison",
+                           f"a guard is a signed expression that crosses 0 where the jump happens: write "
+                           f"'guard: {a} - {b}' with 'direction: {turn}'; conditions that must also hold go "
+                           "under 'enabled:'")
+    guard = (sp.Integer(0) if op is not None
+             else scope.expr(j["guard"], where + ("guard",), names, context, dotted=quantity))
+    moving = set(states.values()) | set(found) | {TIME}
+    if len(scope.report.problems) == before and not guard.free_symbols & moving:
+        scope.report.error(where + ("guard",), f"the guard {j['guard']!r} does not change during a flow",
+                           "a guard is a signed expression of the coordinates, speeds, frame quantities or t "
+                           "that crosses 0 where the jump happens")
+    return guard
+
+
+def _impact(j: dict, where, flows: list, constraint_names: list, scope: Scope) -> tuple[str, sp.Expr, tuple]:
+    """(kind, restitution e, constraint names) of a jump's impact map."""
+    spec = j.get("impact", "none")
+    target = next((f for f in flows if f.name == j["to"]), None)
+    if spec == "none":
+        return "none", sp.Integer(0), ()
+    if spec == "plastic":
+        restitution, named = sp.Integer(0), None
+    else:
+        path = where + ("impact", "restitution")
+        before = len(scope.report.problems)
+        restitution, e = scope.constant(spec["restitution"], path, allow_time=True)
+        if len(scope.report.problems) > before:         # a bad expression is reported already
+            pass
+        elif TIME in restitution.free_symbols:
+            scope.report.error(path, f"the coefficient of restitution {spec['restitution']!r} depends on t",
+                               "give a constant from 0 (plastic) to 1 (elastic): a number or an expression of "
+                               "parameters")
+        elif not 0 <= e <= 1:
+            shown = f"{e:g}" if restitution.is_number else f"{spec['restitution']} = {e:g}"
+            scope.report.error(path, f"the coefficient of restitution is {shown}, outside [0, 1]",
+                               "give 0 (plastic) to 1 (elastic); more than 1 would add energy at every impact")
+        named = spec.get("constraints")
+        for k, name in enumerate(named or []):
+            if scope.known(name, constraint_names, where + ("impact", "constraints", k), "constraint") \
+                    and name in named[:k]:
+                scope.report.error(where + ("impact", "constraints", k), f"constraint '{name}' is listed twice",
+                                   "list it once")
+    chosen = named if named is not None else (target.constraints if target else ())
+    if target is not None and not chosen:
+        scope.report.error(where + ("impact",), f"the impact has no constraint rows to act on: the target flow "
+                           f"'{target.name}' has no constraints",
+                           "name the constraints that take the impact: impact: {restitution: e, constraints: "
+                           "[names]}, or write the velocity change as a reset")
+    return ("plastic" if spec == "plastic" else "restitution"), restitution, \
+        tuple(n for n in constraint_names if n in chosen)
