@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from andyc.numerics.status import EITHER, FALLING, RISING  # noqa: F401  (the one table of guard directions)
 from andyc.spec.yamlpos import SourceMap
 
 
@@ -187,7 +188,6 @@ class Flow:
     where: tuple
 
 
-FALLING, EITHER, RISING = -1, 0, 1
 
 
 @dataclass(frozen=True)
