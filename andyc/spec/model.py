@@ -188,8 +188,6 @@ class Flow:
     where: tuple
 
 
-
-
 @dataclass(frozen=True)
 class Jump:
     """An edge of the hybrid automaton (ANDY eq. 16): guard, impact map and resets.
