@@ -25,7 +25,7 @@ import andyc
 from andyc.analysis import stability, workprecision
 from andyc.analysis.sweep import Reference, reference
 from andyc.plot import animate_run
-from andyc.reference.closed_forms import fourbar_branch
+from andyc.independent.closed_forms import fourbar_branch
 from andyc.runtime.simulate import FIXED_STEP
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,7 +54,7 @@ class Case:
 def fourbar_reference(model, t_end: float) -> Reference:
     """The four-bar's exact motion: its parallelogram branch, a one-degree-of-freedom pendulum.
 
-    (andyc.reference.closed_forms.fourbar_branch, DOP853 at 1e-13 on the reduced ODE.)
+    (andyc.independent.closed_forms.fourbar_branch, DOP853 at 1e-13 on the reduced ODE.)
     The coupler translates, so th2 = -th1 and th3 = th1 at all times; velocity is
     continuous through the flat pose, where the crossed branch meets this one at
     another tangent, so the exact motion cannot change branch there.

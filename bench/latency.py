@@ -37,7 +37,7 @@ SIM = ["--t-end", "1", "--dt", "1e-3", "--out", "run.csv"]
 
 
 def _panda(folder: Path) -> Path:
-    from andyc.reference.robots import robots_dir
+    from andyc.independent.robots import robots_dir
 
     path = folder / "panda.yaml"
     path.write_text(f"name: panda\nurdf:\n  file: {robots_dir() / 'panda_description/urdf/panda.urdf'}\n"

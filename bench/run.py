@@ -39,9 +39,10 @@ import numpy as np
 from numba import njit
 
 import andyc
-from andyc.reference.chains import chain_yaml, kane_model, random_chain
-from andyc.reference.closed_forms import ball_first_integral
-from andyc.reference.robots import robots_dir
+from andyc.independent.chains import chain_yaml, random_chain
+from andyc.independent.closed_forms import ball_first_integral
+from andyc.independent.kane import kane_model
+from andyc.independent.robots import robots_dir
 from andyc.runtime.compiled import work
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -1,6 +1,6 @@
 """andyc's M(q) and G(q, v) against an independent KanesMethod derivation.
 
-Random serial chains (andyc.reference.chains) are written as andyc YAML,
+Random serial chains (andyc.independent.chains) are written as andyc YAML,
 compiled into pytest's tmp_path, and compared at random states with
 sympy.physics.mechanics.KanesMethod (M du/dt = forcing, u = dq/dt), which is
 andyc's convention M dv/dt = G. Two closed-form systems pin the reference
@@ -17,8 +17,9 @@ import numpy as np
 import pytest
 
 import andyc
-from andyc.reference import chains
-from andyc.reference.chains import Chain, Link, chain_yaml, kane_model, random_chain
+from andyc.independent import chains, kane
+from andyc.independent.chains import Chain, Link, chain_yaml, random_chain
+from andyc.independent.kane import kane_model
 
 RTOL = 1e-10
 TINY = 1e-300
@@ -182,7 +183,9 @@ def test_generated_yaml_loads(tmp_path):
 
 
 def test_reference_is_independent_of_andyc_stages():
-    tree = ast.parse(Path(chains.__file__).read_text())
-    imported = {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
-    imported |= {node.module or "" for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
-    assert not any(name.startswith("andyc") for name in imported), imported
+    for module in (chains, kane):
+        tree = ast.parse(Path(module.__file__).read_text())
+        imported = {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
+        imported |= {node.module or "" for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
+        assert not any(name.startswith("andyc") and not name.startswith("andyc.independent")
+                       for name in imported), (module.__name__, imported)

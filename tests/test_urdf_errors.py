@@ -13,7 +13,7 @@ import pytest
 
 import andyc
 from andyc.errors import SpecError
-from andyc.reference.robots import robots_dir
+from andyc.independent.robots import robots_dir
 from tests.test_check_errors import LINE_FORMAT, check, edit, line_of
 
 # The URDFs that ship in example-robot-data (also used by test_urdf_pinocchio and test_reduce).
