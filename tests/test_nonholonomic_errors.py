@@ -11,8 +11,10 @@ import re
 from pathlib import Path
 
 import pytest
+import sympy as sp
 
 import andyc
+from andyc.spec.expressions import TIME
 from tests.test_check_errors import LINE_FORMAT, andyc_cli, assert_at, edit, line_of, one_problem, problems
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -263,7 +265,16 @@ def test_velocity_linear_in_speeds_with_coordinate_coefficients_is_accepted(tmp_
     text = edit(SLED, "velocity: [v, 0, 0]", "velocity: ['v*cos(th) + th_dot', 'v*sin(th)', 't*w']")
     file = tmp_path / "model.yaml"
     file.write_text(text)
-    andyc.load(file)
+    spec = andyc.load(file)
+    link = next(f for f in spec.frames if f.name == "cart").transforms[-1]
+    th, (v, w) = spec.coordinates[0], (s.v for s in spec.speeds)
+    expected = sp.Matrix([v * sp.cos(th.q) + th.v, v * sp.sin(th.q), TIME * w])
+    assert sp.simplify(link.velocity - expected) == sp.zeros(3, 1)       # read as written, coefficients and all
+    # and the cart's position signals move with it (the body axes are the world's at the initial quaternion)
+    model = andyc.derive(spec)
+    at_start = dict(zip(model.signals[3:], (1, 0, 0, 0)))
+    rates = [expanded(model, r).subs(at_start) for r in model.signal_rates[:3]]
+    assert [sp.simplify(r - e) for r, e in zip(rates, expected)] == [0, 0, 0]
 
 
 # -- 6. names andyc makes ---------------------------------------------------------
@@ -376,9 +387,26 @@ def test_in_world_is_not_allowed(tmp_path, base, old, new, path):
 
 
 def test_in_parent_is_accepted(tmp_path):
-    file = tmp_path / "model.yaml"
-    file.write_text(edit(SLED, "in: body", "in: parent"))
-    andyc.derive(andyc.load(file))
+    """in: parent: the angular velocity is written in the parent's axes, so quat' = 1/2 [0, w] (x) quat (ANDY eq. 4)
+    rather than 1/2 quat (x) [0, w]; the two differ once the quaternion has turned."""
+    body, parent = tmp_path / "body.yaml", tmp_path / "parent.yaml"
+    body.write_text(SLED)
+    parent.write_text(edit(SLED, "in: body", "in: parent"))
+    assert andyc.load(parent).frames[0].transforms[-1].in_body is False
+    rates = []
+    for file in (body, parent):
+        model = andyc.derive(andyc.load(file))
+        turned = dict(zip(model.signals[3:], (sp.cos(sp.Rational(1, 3)), 0, sp.sin(sp.Rational(1, 3)), 0)))  # about y
+        rates.append([sp.simplify(expanded(model, r).subs(turned)) for r in model.signal_rates[3:]])
+    assert rates[0] != rates[1]
+
+
+def expanded(model, expr):
+    """expr with the symbolic model's intermediate symbols replaced by what they stand for, recursively."""
+    definitions = dict(model.assignments)
+    while expr.free_symbols & definitions.keys():
+        expr = expr.xreplace(definitions)
+    return expr
 
 
 # -- 10. the command line ---------------------------------------------------------
