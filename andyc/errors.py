@@ -1,4 +1,5 @@
-"""User-facing errors: one line per problem, `FILE:LINE: PATH: what; fix`."""
+"""User-facing errors: one line per problem, `FILE:LINE: PATH: what; fix`; and the helpers of user-facing text
+(printable, plural)."""
 
 from __future__ import annotations
 
@@ -38,6 +39,11 @@ def printable(text: str) -> str:
     backslash escape, so that text from a model or a user's code cannot start a line of its own."""
     return "".join(ch if ch.isprintable() else ch.encode("unicode_escape", "backslashreplace").decode("ascii")
                    for ch in text)
+
+
+def plural(n: int, word: str, words: str | None = None) -> str:
+    """'1 frame', '3 frames', '2 bodies': n and the word, in the plural (words, default word + 's') unless n is 1."""
+    return f"{n} {word if n == 1 else words or word + 's'}"
 
 
 def format_path(path) -> str:

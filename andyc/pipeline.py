@@ -1,4 +1,5 @@
-"""The stages, chained: load -> derive -> generate -> compile.
+"""The stages, chained: load -> derive -> generate -> compile; and reduction_report, which chains load, derive
+and the code generator's operation counts to say what reduction saved on a URDF robot.
 
 `build` skips derive and generate when the build folder holds equations of the
 same build key (what shapes the equations, and the same andyc), and then only
@@ -18,6 +19,7 @@ import numpy as np
 
 from andyc.codegen.buildfiles import (BuildResult, build_key, equations_path, jumps_path, module_name, module_path,
                                      numerics_package, numerics_path, written_constant)
+from andyc.errors import plural
 from andyc.outputs import OutputError
 from andyc.spec.yamlpos import MAX_YAML_BYTES
 
@@ -64,6 +66,27 @@ def load(path, unlock: bool = False):
 def derive(spec):
     from andyc.symbolic import derive as _derive
     return _derive(spec)
+
+
+def reduction_report(file, spec, model) -> str:
+    """One line, what reduction saved on a URDF robot (`andyc check` prints it): the robot as written (every
+    joint free, every body its own: `file` loaded again unlocked, derived without reduction) against `model`,
+    derived from `spec` with the locked joints held and the bodies fixed to one moving frame merged
+    (andyc.symbolic.reduce); degrees of freedom, bodies and the operations of the generated functions."""
+    from dataclasses import replace
+
+    from andyc.codegen.leaves import leaves
+
+    free = load(file, unlock=True) if spec.locked else spec
+    full_model = derive(replace(free, reduce=False))
+    full, reduced = leaves(full_model).operations, leaves(model).operations
+    dof = (f"{full_model.dof} -> {model.dof} degrees of freedom ({plural(len(spec.locked), 'joint')} locked: "
+           f"{', '.join(spec.locked)})" if spec.locked else f"{model.dof} degrees of freedom")
+    bodies = plural(len(spec.bodies), "body", "bodies")
+    merged = (f"{bodies} merged into {len(model.spec.bodies)} (one per moving frame)"
+              if len(model.spec.bodies) < len(spec.bodies) else f"{bodies}, none fixed to another's frame")
+    return (f"  reduced: {dof}; {merged}; dynamics {full['dynamics']} -> {reduced['dynamics']} operations, "
+            f"all functions {sum(full.values())} -> {sum(reduced.values())}")
 
 
 def generate(model, out_dir="build", force: bool = False) -> BuildResult:

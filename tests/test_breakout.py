@@ -21,7 +21,7 @@ import andyc
 from andyc.codegen.generate import render, render_front, render_jumps
 from andyc.runtime.run import Run
 from andyc.symbolic.eom import equations
-from andyc.symbolic.eom import render as render_eom
+from andyc.symbolic.eom import equations_text
 from tests.conftest import yaml_text
 
 MODEL = """\
@@ -75,8 +75,8 @@ def generated(spec) -> dict:
     eq = equations(model)
     return {"module.py": render_front(spec, "key"), "equations.py": render(model, "key")[0],
             "jumps.py": render_jumps(model),
-            "eom.py": render_eom(eq, "sympy"), "eom.json": render_eom(eq, "json"),
-            "eom.tex": render_eom(eq, "latex", standalone=True)}
+            "eom.py": equations_text(eq, "sympy"), "eom.json": equations_text(eq, "json"),
+            "eom.tex": equations_text(eq, "latex", standalone=True)}
 
 
 def shape(source: str) -> str:

@@ -200,15 +200,32 @@ def test_the_adaptive_methods_locate_with_the_compiled_illinois(compiled):
 
 
 def test_progress_reports_after_the_first_second_at_most_once_a_second(monkeypatch, capsys):
-    from andyc.runtime import simulate as sim_module
+    from andyc.runtime import progress as progress_module
 
     clock = iter([0.0, 0.5, 1.2, 1.7, 2.4, 2.5])       # perf_counter readings
-    monkeypatch.setattr(sim_module.time, "perf_counter", lambda: next(clock))
-    bar = sim_module.Progress("model rk4", 10.0, enabled=True)   # reads 0.0
+    monkeypatch.setattr(progress_module.time, "perf_counter", lambda: next(clock))
+    bar = progress_module.Progress("model rk4", 10.0, enabled=True)   # reads 0.0
     for t in (1.0, 2.0, 3.0, 4.0, 5.0):                 # reads 0.5, 1.2, 1.7, 2.4, 2.5
         bar(t)
     lines = [ln for ln in capsys.readouterr().err.replace("\r", "\n").splitlines() if ln]
     assert lines == ["model rk4: t = 2 / 10 s (20%), 1 s elapsed", "model rk4: t = 4 / 10 s (40%), 2 s elapsed"]
+
+
+def test_progress_of_counted_work_shows_its_last_count_once_a_line_is_up(monkeypatch, capsys):
+    """The command line's long work (an animation's frames) through the same printer: done of total, the
+    total given with each report; the last count is shown even within the second, but only after a line."""
+    from andyc.runtime import progress as progress_module
+
+    clock = iter([0.0, 0.5, 0.9, 0.0, 1.5, 1.8])       # perf_counter readings
+    monkeypatch.setattr(progress_module.time, "perf_counter", lambda: next(clock))
+    quick = progress_module.Progress("quick", unit="frames", enabled=True)      # reads 0.0
+    quick(1, 2)                                         # reads 0.5: too early
+    quick(2, 2)                                         # reads 0.9: the last, but no line is up
+    slow = progress_module.Progress("slow", unit="frames", enabled=True)        # reads 0.0
+    slow(1, 2)                                          # reads 1.5
+    slow(2, 2)                                          # reads 1.8: within the second, but the last
+    lines = [ln for ln in capsys.readouterr().err.replace("\r", "\n").splitlines() if ln]
+    assert lines == ["slow: 1 of 2 frames, 2 s elapsed", "slow: 2 of 2 frames, 2 s elapsed"]
 
 
 def test_generated_code_does_not_depend_on_the_hash_seed(tmp_path):

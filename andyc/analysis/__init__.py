@@ -1,6 +1,7 @@
-"""Accuracy against cost, and where methods fail: work-precision sweeps and stability scans.
+"""Accuracy against cost, and where methods fail: work-precision sweeps and stability scans; and the
+linearization about a point given by name (linearization.py, `andyc linearize`).
 
-Both run a compiled model many times through andyc.simulate and compare each
+The sweeps and scans run a compiled model many times through andyc.simulate and compare each
 run with a reference over the same horizon: the model's closed form where it
 declares one (closed_form:), else DOP853 at rtol = atol = 1e-13.
 A fixed step h is adjusted to divide the horizon T (h = T / round(T / h)), so

@@ -63,8 +63,10 @@ def reference(model, t_end: float, source: str | Reference = "auto", **options) 
 
 
 def _dop853_reference(model, t_end: float, label: str, **options) -> Reference:
+    """The DOP853 reference run; the one long run of a sweep or scan, so it shows its progress on a terminal
+    (andyc.runtime.progress)."""
     run = andyc.simulate(model, t_end, dt=t_end / REFERENCE_SAMPLES, method="DOP853", rtol=REFERENCE_TOL,
-                         atol=REFERENCE_TOL, progress=False, **options)
+                         atol=REFERENCE_TOL, **options)
     if not run.finished:
         raise SimulationError(f"the reference run (DOP853, rtol {REFERENCE_TOL:g}) did not finish: {run.status}")
     return Reference(t_end, run.state[-1].copy(), max(float(np.abs(run.state).max()), 1e-300),

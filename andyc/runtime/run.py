@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 import andyc
-from andyc.errors import printable
+from andyc.errors import plural, printable
 from andyc.outputs import write_atomic
 
 
@@ -87,6 +87,30 @@ class Run:
         """Name of the jump of each event."""
         return [self.jump_names[k] for k in self.events["jump"]]
 
+    def summary(self) -> str:
+        """One paragraph, what the run did (`andyc sim` prints it, then the files it wrote): method, time span,
+        steps, right-hand-side evaluations, wall time and the energy at both ends; with constraints the
+        largest residuals (and how far the initial state was projected), with jumps how many of each and the
+        flow the run ended in."""
+        s = self.stats
+        constraints = ""
+        if self.multiplier_names:
+            constraints = (f"; largest constraint residuals: position {_largest(self.residual_position):.3g}, "
+                           f"velocity {_largest(self.residual_velocity):.3g}")
+            if "initial_projection" in s:
+                constraints += f" (initial state projected from {s['initial_projection']:.3g})"
+        if self.jump_names:
+            counts = {}
+            for name in self.event_names():
+                counts[name] = counts.get(name, 0) + 1
+            constraints += (f"; {plural(len(self.events['time']), 'jump')}"
+                            + (f" ({', '.join(f'{k} {v}' for k, v in counts.items())})" if counts else "")
+                            + f", ending in flow {self.flow_names[self.flow[-1]]}")
+        return (f"{self.model}: {self.method}, t = 0 .. {self.time[-1]:.6g} s, {s['steps']} steps, "
+                f"{s['rhs_evaluations']} rhs evaluations, {s['wall_seconds']:.3f} s wall; energy "
+                f"{self.energy[0]:.10g} -> {self.energy[-1]:.10g} J (change {self.energy[-1] - self.energy[0]:.3g} J)"
+                f"{constraints}")
+
     def attributes(self) -> dict:
         """The run's metadata as HDF5 attributes; text on one line, control characters and lone surrogates
         escaped (a status can quote a user's exception or a file name, and HDF5 takes neither NUL nor them)."""
@@ -117,6 +141,11 @@ class Run:
 
 
 RUN_SUFFIXES = (".h5", ".hdf5", ".csv")
+
+
+def _largest(a: np.ndarray) -> float:
+    """The largest |entry|, skipping NaN (the rows a sample's flow does not use)."""
+    return float(np.nanmax(np.abs(a), initial=0.0)) if a.size else 0.0
 
 
 def write_h5(run: Run, path: Path) -> None:

@@ -21,19 +21,19 @@ driver; _Assembly turns the driver's log into the Run. The concepts live in thei
     status.py      the run's status and its messages
     inputs.py      constants, expressions, tables or a controller, evaluated at every stage and logged
     interrupts.py  SIGINT, SIGTERM, the wall-clock limit and the watchdog
+    progress.py    the progress line of long runs (on a terminal)
 
 Runs stop, keep their samples and say why when the state becomes non-finite
 or grows by orders of magnitude within one step (it diverges), the mass matrix
 stops being positive definite or a controller fails; and when SIGINT or SIGTERM
 arrives or a wall-clock limit passes (andyc.runtime.interrupts). Long runs
-print progress.
+print progress (andyc.runtime.progress).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 import time
 from dataclasses import dataclass
 
@@ -49,31 +49,8 @@ from andyc.runtime.inputs import InputSource, input_source, inputs_at
 from andyc.runtime.interrupts import Interrupts
 from andyc.runtime.methods import FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
 from andyc.runtime.options import Events, Init, Projection
+from andyc.runtime.progress import Progress
 from andyc.runtime.run import Run
-
-
-class Progress:
-    """Prints `t / t_end` to stderr at most once a second, after the first second."""
-
-    def __init__(self, label: str, t_end: float, enabled: bool | None = None):
-        self.label, self.t_end = label, t_end
-        self.enabled = sys.stderr.isatty() if enabled is None else enabled
-        self.start = self.last = time.perf_counter()
-        self.shown = False
-
-    def __call__(self, t: float) -> None:
-        now = time.perf_counter()
-        if not self.enabled or now - self.start < 1.0 or now - self.last < 1.0:
-            return
-        self.last = now
-        self.shown = True
-        end = "\r" if sys.stderr.isatty() else "\n"
-        print(f"{self.label}: t = {t:.6g} / {self.t_end:g} s ({100 * t / self.t_end:.0f}%), "
-              f"{now - self.start:.0f} s elapsed", end=end, file=sys.stderr, flush=True)
-
-    def close(self) -> None:
-        if self.shown and sys.stderr.isatty():
-            print(file=sys.stderr)
 
 
 def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str = "rk4", *,
@@ -118,7 +95,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     initial = consistent_initial_state(model, x, u, p, d, flow, init) if model.nc else {}
     if method in ("lagrange", "baumgarte") and model.nc:
         require_independent_rows(model, method, x, u, p, d, flow)
-    bar = Progress(f"{model.name} {method}", t_end, progress)
+    bar = Progress(f"{model.name} {method}", t_end, enabled=progress)
     interrupts = interrupts or Interrupts()
     start = time.perf_counter()
     run_of = _Assembly(model, method, dt, rtol, atol, t_end, p, source, frame_names, jumps,

@@ -330,6 +330,6 @@ def to_json(eq: Equations) -> str:
 FORMATS = ("latex", "sympy", "json")
 
 
-def render(eq: Equations, fmt: str, standalone: bool = False) -> str:
+def equations_text(eq: Equations, fmt: str, standalone: bool = False) -> str:
     """eq as text in one of FORMATS (`standalone`: a whole LaTeX document)."""
     return to_latex(eq, standalone) if fmt == "latex" else {"sympy": to_sympy, "json": to_json}[fmt](eq)

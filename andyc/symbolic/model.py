@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from andyc.errors import plural
 from andyc.spec.model import Spec
 from andyc.symbolic.constraints import ConstraintTerms
 from andyc.symbolic.hybrid import HybridTerms
@@ -41,6 +42,32 @@ class SymbolicModel:
     @property
     def dof(self) -> int:
         return len(self.v)
+
+    def summary(self, file, spec: Spec | None = None) -> str:
+        """One line, what the model is (`andyc check` prints it): its degrees of freedom (or speeds less
+        constraint rows), flows and jumps, states, bodies, frames, parameters, inputs, force elements and the
+        intermediate expressions derived. `spec`: the Spec as loaded, when the derivation reduced it (a URDF's
+        bodies merged): its bodies are counted as written. Default self.spec."""
+        spec = self.spec if spec is None else spec
+        speeds = ", ".join([c.name for c in spec.coordinates] + [s.name for s in spec.speeds])
+        cons = self.constraints
+        freedom = (f"{plural(self.dof, 'degree')} of freedom ({speeds})" if not spec.constraints else
+                   f"{self.dof} speeds ({speeds}) less {plural(cons.nc, 'constraint row')} ({cons.nh} holonomic) "
+                   f"in {plural(len(spec.constraints), 'constraint')}")
+        signals = f" incl. {len(self.signals)} nonholonomic signals" if self.signals else ""
+        if spec.jumps:
+            def rows(flow) -> int:
+                return sum(len(c.rows) for c in spec.constraints if c.name in flow.constraints)
+            flows = ", ".join(f"{f.name} ({plural(rows(f), 'row')})" for f in spec.flows)
+            freedom += (f"; hybrid: {plural(len(spec.flows), 'flow')} ({flows}), {plural(len(spec.jumps), 'jump')}, "
+                        f"{plural(len(spec.discrete), 'discrete state')}")
+        n_elements = len(spec.loads) + len(spec.dampers) + len(spec.springs) + len(spec.potentials)
+        n_frames = len([f for f in spec.frames if not f.internal])
+        return (f"{file}: model '{spec.name}' is valid: {freedom}, "
+                f"{plural(len(self.q) + self.dof + len(self.signals), 'state')}{signals}, "
+                f"{plural(len(spec.bodies), 'body', 'bodies')}, {plural(n_frames, 'frame')} besides world, "
+                f"{plural(len(spec.parameters), 'parameter')}, {plural(len(spec.inputs), 'input')}, "
+                f"{plural(n_elements, 'force element')}; {len(self.assignments)} intermediate expressions.")
 
     def intermediates_of(self, exprs) -> set:
         """The intermediate symbols (of `assignments`) the expressions depend on, directly or through others."""

@@ -1,4 +1,5 @@
-"""Values of command-line options, checked: finite numbers in range, NAME=VALUE items, lists of numbers.
+"""Values of command-line options, checked: finite numbers in range, NAME=VALUE items, lists of numbers,
+method names, --stop-after's JUMP=N and --input's drives; and --set's split into parameters and inputs.
 
 Every numeric option of andyc goes through these, so NaN, the infinities, zero, negative and absurd
 values get click's usual `Error: Invalid value for '--opt': ...` and exit 2 before any work is done.
@@ -9,6 +10,8 @@ from __future__ import annotations
 import math
 
 import click
+
+from andyc.runtime.methods import METHODS
 
 
 class Number(click.ParamType):
@@ -58,6 +61,54 @@ def parse_sets(values, option: str = "--set") -> dict:
         if not math.isfinite(out[name.strip()]):
             raise click.BadParameter(f"'{item}': {value.strip()} is not a finite number", param_hint=option)
     return out
+
+
+def split_sets(values: dict, input_names) -> tuple[dict, dict]:
+    """--set's {name: value} as (parameters, inputs): a name in input_names is an input, any other a parameter
+    (one the model lacks is refused where the parameters are used, as an unknown parameter)."""
+    inputs = {name: value for name, value in values.items() if name in input_names}
+    return {name: value for name, value in values.items() if name not in inputs}, inputs
+
+
+def stop_counts(items) -> dict:
+    """--stop-after's ('strike=2',) -> {'strike': 2}, each count a whole number of at least 1."""
+    stops = {}
+    for item in items:
+        name, sep, count = item.partition("=")
+        if not sep or not count.strip().isdigit() or int(count) < 1:
+            raise click.BadParameter(f"'{item}' is not JUMP=N with N >= 1", param_hint="--stop-after")
+        stops[name.strip()] = int(count)
+    return stops
+
+
+def input_drives(items) -> dict:
+    """--input's ('F=2', 'G=-k*x', 'H=table.csv') -> {name: text}: a number, an expression or a CSV table (which
+    andyc.simulate tells apart); each name once, a value that reads as a number finite."""
+    inputs = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not value.strip():
+            raise click.BadParameter(f"'{item}' is not NAME=VALUE", param_hint="--input")
+        if name.strip() in inputs:
+            raise click.BadParameter(f"input '{name.strip()}' given twice", param_hint="--input")
+        try:
+            number = float(value)
+        except ValueError:
+            number = 0.0
+        if not math.isfinite(number):
+            raise click.BadParameter(f"'{item}': {value.strip()} is not a finite number", param_hint="--input")
+        inputs[name.strip()] = value.strip()
+    return inputs
+
+
+def method_names(text: str, option: str) -> list:
+    """'rk4, DOP853' -> ['rk4', 'DOP853'], each one of andyc's METHODS."""
+    names = [m.strip() for m in text.split(",") if m.strip()]
+    unknown = [m for m in names if m not in METHODS]
+    if unknown or not names:
+        raise click.BadParameter(f"unknown method(s) {', '.join(unknown) or '(none given)'}; available: "
+                                 f"{', '.join(METHODS)}", param_hint=option)
+    return names
 
 
 def floats(text: str | None, option: str) -> list | None:

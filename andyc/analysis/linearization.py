@@ -1,0 +1,95 @@
+"""Linearization about an operating point given by name (`andyc linearize`): the point, the report, the files.
+
+The derivatives are andyc.symbolic.linearize's (exact, forward mode); here the point is put together from
+names -- the model's initial state with some coordinates and speeds given, its parameters and inputs with
+some overridden, a flow, a time; optionally moved to the nearest rest point first -- and the result is
+written out: a report for reading and, on request, DIR/<name>_linearization.npz with DIR/<name>_A.csv and
+DIR/<name>_B.csv.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from andyc.errors import plural
+from andyc.outputs import write_atomic
+from andyc.symbolic.linearize import Linearization, LinearizeError, default_point, find_equilibrium, linearize
+from andyc.symbolic.model import SymbolicModel
+
+
+def linearize_at(model: SymbolicModel, at: dict | None = None, parameters: dict | None = None,
+                 inputs: dict | None = None, flow: str | None = None, t: float = 0.0,
+                 equilibrium: bool = False) -> Linearization:
+    """A and B of `flow` (a name; default the initial flow) at time t about the model's initial state with the
+    coordinates and speeds in `at` {name: value} set, at its parameters and inputs with `parameters` and
+    `inputs` {name: value} overriding their defaults (the flow's own inputs win). equilibrium: first move the
+    coordinates to the rest point nearest them (speeds 0, dv/dt = 0; andyc.symbolic.linearize.find_equilibrium).
+
+    LinearizeError for an unknown flow, input, parameter, coordinate or speed, and for a point the
+    linearization does not handle; the message names what exists."""
+    spec = model.spec
+    flows = model.hybrid.flows
+    if flow is not None and flow not in flows:
+        raise LinearizeError(f"{spec.name}: no flow named '{flow}'; flows: {', '.join(flows)}")
+    k = flows.index(flow) if flow is not None else None
+    unknown = sorted(set(inputs or {}) - set(spec.inputs))
+    if unknown:
+        raise LinearizeError(f"{spec.name}: no input named {', '.join(unknown)} (--input); inputs: "
+                             f"{', '.join(spec.inputs) or 'none'}")
+    x, u, p, d = default_point(model, parameters, inputs, k)
+    names = [c.name for c in spec.coordinates] + list(spec.speed_names)
+    for name, value in (at or {}).items():
+        if name not in names:
+            raise LinearizeError(f"{spec.name}: no coordinate or speed named '{name}' (--at); "
+                                 f"states: {', '.join(names)}")
+        x[names.index(name)] = value
+    if equilibrium:
+        n = len(spec.coordinates)
+        x[:n] = find_equilibrium(model, x[:n], u, p, d, t, k)
+        x[n:] = 0.0
+    return linearize(model, x, u, p, d, t, k)
+
+
+def report(lin: Linearization, name: str) -> str:
+    """The linearization of model `name` for reading: the point, the null-space bases of a constrained flow,
+    A and B with their states and inputs, the eigenvalues and how many have a positive real part."""
+    with np.printoptions(precision=6, suppress=False, linewidth=120):
+        point = ", ".join(f"{n} = {v:.10g}" for n, v in zip(lin.state_names, lin.x))
+        inputs = ", ".join(f"{n} = {v:.10g}" for n, v in zip(lin.input_names, lin.u)) or "none"
+        lines = [f"{name}: linearized in flow '{lin.flow}' at t = {lin.t:g} about {point}; inputs {inputs}"]
+        if lin.form == "null-space":
+            lines.append(f"flow '{lin.flow}' is constrained: null-space form, dq = N_q z, dv = N_v w (orthonormal "
+                         f"bases of the null space of its constraint rows at the point)\nN_q =\n{lin.basis_q}\n"
+                         f"N_v =\n{lin.basis_v}")
+        lines.append(f"states: {', '.join(lin.state_names)}\nA =\n{lin.A}")
+        if lin.input_names:
+            lines.append(f"inputs: {', '.join(lin.input_names)}\nB =\n{lin.B}")
+    ev = lin.eigenvalues
+    lines.append("eigenvalues: " + ", ".join(f"{e.real:.10g}{e.imag:+.10g}j" if e.imag else f"{e.real:.10g}"
+                                             for e in ev))
+    unstable = int(np.sum(ev.real > 1e-9 * max(1.0, np.abs(ev).max())))     # (past round-off of the largest)
+    lines.append(f"{plural(unstable, 'eigenvalue')} with positive real part" + (" (unstable)" if unstable else ""))
+    return "\n".join(lines)
+
+
+def output_paths(out_dir, name: str) -> list[Path]:
+    """The files `save` writes for model `name`: the .npz, then A's and B's CSV."""
+    return [Path(out_dir) / f"{name}{suffix}" for suffix in ("_linearization.npz", "_A.csv", "_B.csv")]
+
+
+def save(lin: Linearization, out_dir, name: str) -> list[Path]:
+    """Write output_paths(out_dir, name), each whole (andyc.outputs.write_atomic): the .npz holds A, B, x, u,
+    t, state_names, input_names, eigenvalues, flow, form (and N_q, N_v in the null-space form); the CSVs A and
+    B with their states' and inputs' names as the header."""
+    npz, a_csv, b_csv = paths = output_paths(out_dir, name)
+    bases = {"N_q": lin.basis_q, "N_v": lin.basis_v} if lin.form == "null-space" else {}
+    with write_atomic(npz) as tmp, open(tmp, "wb") as fh:
+        np.savez(fh, A=lin.A, B=lin.B, x=lin.x, u=lin.u, t=lin.t,
+                 state_names=np.array(lin.state_names), input_names=np.array(lin.input_names, dtype=str),
+                 eigenvalues=lin.eigenvalues, flow=lin.flow, form=lin.form, **bases)
+    for matrix, names, path in ((lin.A, lin.state_names, a_csv), (lin.B, lin.input_names, b_csv)):
+        with write_atomic(path) as tmp:
+            np.savetxt(tmp, matrix, delimiter=",", header=",".join(names), comments="")
+    return paths

@@ -1,0 +1,87 @@
+"""Command line: a thin layer over the Python API (andyc.pipeline, andyc.simulate, andyc.analysis).
+
+Here the command group, with what every command shares: text that cannot be encoded is escaped, and a
+refused output, Ctrl-C and bugs end with a message and an exit code, not a traceback. One module per
+command or family of commands, each a click command over the API:
+
+    build.py      check (validate, print each model's summary) and build
+    sim.py        sim (simulate, write the run files, print the run's summary)
+    plot.py       plot (plots, stick figures, animations of a run)
+    eom.py        eom (the equations written out for reading)
+    linearize.py  linearize (A, B and eigenvalues about a point)
+    analysis.py   bench (work-precision) and stability (stability maps)
+    common.py     what the commands share: a refused request, a model's problems, a model derived or compiled
+    values.py     the options' values, checked; --set's split into parameters and inputs
+
+Exit codes: 0 success, 1 an invalid model or a run that stopped, 2 usage, 130 / 143 a run interrupted by
+SIGINT / SIGTERM (its samples written), 70 a bug in andyc.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import click
+
+import andyc
+from andyc.cli import analysis, build, eom, linearize, plot, sim
+from andyc.cli.common import Refused
+from andyc.outputs import OutputError
+
+
+class _Andyc(click.Group):
+    """The command group: text that cannot be encoded is escaped, not fatal (a message may quote a file name
+    with undecodable bytes); an output that must not be written, Ctrl-C and bugs get a message, not a
+    traceback (ANDYC_DEBUG=1 shows the traceback of a bug)."""
+
+    def main(self, *args, **kwargs):
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.reconfigure(errors="backslashreplace")
+            except (AttributeError, ValueError):
+                pass
+        return super().main(*args, **kwargs)
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except OutputError as exc:
+            raise Refused(str(exc)) from None
+        except KeyboardInterrupt:
+            click.echo("andyc: interrupted", err=True)
+            ctx.exit(130)
+        except RecursionError:
+            raise Refused("the input is nested too deeply for andyc to process; simplify it") from None
+        except (click.ClickException, click.exceptions.Exit, click.exceptions.Abort, SystemExit):
+            raise
+        except Exception as exc:
+            if os.environ.get("ANDYC_DEBUG"):
+                raise
+            click.echo(f"andyc: internal error ({type(exc).__name__}: {exc}); this is a bug in andyc: please "
+                       f"report it with the command and its input (ANDYC_DEBUG=1 shows the traceback)", err=True)
+            ctx.exit(70)
+
+
+@click.group(cls=_Andyc, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(andyc.__version__, prog_name="andyc")
+def main():
+    """andyc: compile multibody models (YAML or URDF) into fast simulation code.
+
+    \b
+    andyc check model.yaml      validate, print a summary (also robot.urdf)
+    andyc build model.yaml      write build/<name>/<name>.py
+    andyc sim model.yaml        build if needed, simulate, write run files
+    andyc plot run.h5           plot states and energy
+    andyc linearize model.yaml  A, B and eigenvalues about a state
+    andyc bench model.yaml      work-precision: error against cost per method
+    andyc stability model.yaml  stability map: step against method, failures named
+    andyc eom model.yaml        M, G, constraint Jacobian, per element (LaTeX)
+    """
+
+
+for _command in (build.check, build.build, sim.sim, plot.plot, linearize.linearize, analysis.bench,
+                 analysis.stability, eom.eom):
+    main.add_command(_command)
+
+__all__ = ["main", "Refused"]

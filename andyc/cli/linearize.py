@@ -1,0 +1,49 @@
+"""`andyc linearize`: A and B of a flow about a point, with the eigenvalues (andyc.analysis.linearization)."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from andyc.cli.common import derived
+from andyc.cli.values import Number, parse_sets, split_sets
+from andyc.outputs import check_folder, check_output
+
+
+@click.command()
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("--at", "at", multiple=True, metavar="NAME=VALUE",
+              help="The state to linearize about: a coordinate or speed (the others: the model's initial state).")
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
+@click.option("--input", "input_values", multiple=True, metavar="NAME=VALUE",
+              help="The inputs at the point (default: their held values); the same as --set for an input.")
+@click.option("--flow", default=None, help="The flow to linearize (default: the initial flow).")
+@click.option("--time", "t", default=0.0, show_default=True, type=Number(), help="Time t of the point, s.")
+@click.option("--find-equilibrium", is_flag=True,
+              help="First find the rest point (speeds 0, dv/dt = 0) nearest the coordinates given (Newton on G = 0).")
+@click.option("-o", "--out", "out_dir", default=None, metavar="DIR",
+              help="Also write DIR/<name>_linearization.npz (A, B, x, u, names, eigenvalues) and DIR/<name>_A.csv, "
+                   "DIR/<name>_B.csv.")
+def linearize(file, at, sets, input_values, flow, t, find_equilibrium, out_dir):
+    """Linearize FILE's equations of motion: dx' = A dx + B du, from exact derivatives; print the eigenvalues."""
+    from andyc.analysis.linearization import linearize_at, output_paths, report, save
+    from andyc.symbolic.linearize import LinearizeError
+
+    spec, model = derived(file)
+    if out_dir:
+        check_folder(out_dir, spec.files)
+        for path in output_paths(out_dir, spec.name):
+            check_output(path, spec.files, "linearization")
+    parameters, inputs = split_sets(parse_sets(sets), spec.inputs)
+    inputs.update(parse_sets(input_values, "--input"))
+    states = parse_sets(at, "--at")
+    try:
+        lin = linearize_at(model, states, parameters, inputs, flow, t, find_equilibrium)
+    except LinearizeError as exc:
+        click.echo(f"{file}: {exc}", err=True)
+        sys.exit(1)
+    click.echo(report(lin, spec.name))
+    if out_dir:
+        npz = save(lin, out_dir, spec.name)[0]
+        click.echo(f"wrote {npz}, {spec.name}_A.csv and {spec.name}_B.csv")

@@ -1,0 +1,85 @@
+"""`andyc plot`: a run's states and energy against time, its frames as stick figures, or an animation."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from andyc.outputs import check_output
+
+
+@click.command()
+@click.argument("run_file", type=click.Path(exists=True, dir_okay=False))
+@click.option("-o", "--out", default=None, help="PNG file; default RUN.png beside the run. With --animate: the "
+              "animation, OUT.gif or OUT.mp4 (needs ffmpeg); default RUN.gif beside the run.")
+@click.option("--animate", is_flag=True, help="Instead of the plots, write a 3-D stick animation of the frames the "
+              "run logged (andyc sim ... --frames all).")
+@click.option("--fps", default=None, type=click.IntRange(1, 100), metavar="N",
+              help="With --animate: frames per second (default 30; a GIF frame lasts whole hundredths of a "
+                   "second: 30 plays at 33.3).")
+@click.option("--frames-max", default=None, type=click.IntRange(min=1), metavar="N",
+              help="With --animate: at most N frames, evenly spread in time (default 300); a run longer than "
+                   "N / fps seconds plays faster than real time.")
+def plot(run_file, out, animate, fps, frames_max):
+    """Plot the states and the energy of a run against time (and, for a hybrid run, its flows,
+    jumps and discrete states); when the run logged frames with their parents, also draw them as
+    stick figures, into RUN_sticks.png (or OUT_sticks.png beside OUT). With --animate, write an
+    animation of the logged frames instead."""
+    from andyc.runtime.run import read_h5
+
+    if Path(run_file).suffix.lower() not in (".h5", ".hdf5"):
+        raise click.BadParameter(f"{run_file}: andyc plot reads the HDF5 run file (.h5) that andyc sim writes; "
+                                 f"write one with --out RUN.h5", param_hint="RUN_FILE")
+    if not animate:
+        given = [name for name, value in (("--fps", fps), ("--frames-max", frames_max)) if value is not None]
+        if given:
+            raise click.BadParameter("only with --animate", param_hint=" and ".join(given))
+    out = out or str(Path(run_file).with_suffix(".gif" if animate else ".png"))
+    check_output(out, [run_file], "plot")
+    if not animate:
+        check_output(sticks_path(out), [run_file], "plot")
+    try:
+        run = read_h5(run_file)
+    except (OSError, KeyError, ValueError) as exc:
+        raise click.BadParameter(f"{run_file}: not a run file that andyc sim wrote ({exc})",
+                                 param_hint="RUN_FILE") from None
+    if animate:
+        animate_file(run, run_file, out, fps or 30, frames_max or 300)
+    else:
+        plot_file(run, out)
+
+
+def sticks_path(out) -> Path:
+    """Where the stick figures of a plot OUT go: OUT_sticks.png beside it."""
+    return Path(out).with_name(Path(out).stem + "_sticks.png")
+
+
+def plot_file(run, out) -> None:
+    """The plots of `run` into `out`, and its stick figures beside it when it logged frames with parents."""
+    from andyc.plot import plot_run, plot_sticks, stick_edges
+
+    plot_run(run, out)
+    click.echo(f"wrote {out}")
+    if stick_edges(run):
+        plot_sticks(run, sticks_path(out))
+        click.echo(f"wrote {sticks_path(out)} (stick figures of the frames)")
+
+
+def animate_file(run, run_file, out, fps: int, frames_max: int) -> None:
+    """The animation of `run`'s logged frames into `out` (GIF or MP4), with its progress on a terminal."""
+    from andyc.plot import animate_run, animation_writer
+    from andyc.runtime.progress import Progress
+
+    if not run.frames:
+        raise click.BadParameter(f"{run_file}: this run of {run.model} logged no frames to animate; re-run it "
+                                 f"with `andyc sim MODEL.yaml --frames all --out {run_file}`", param_hint="RUN_FILE")
+    try:
+        animation_writer(out, fps)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="'-o' / '--out'") from None
+    with Progress(run.model, unit="frames") as progress:
+        info = animate_run(run, out, fps=fps, max_frames=frames_max, progress=progress)
+    pace = "real time" if info["speed"] < 1.01 else f"{info['speed']:.2f} x real time"
+    click.echo(f"wrote {out} ({info['frames']} frames, {info['seconds']:.1f} s at {info['fps']:.3g} fps, {pace}; "
+               f"rendered in {info['render_seconds']:.1f} s)")

@@ -1,0 +1,127 @@
+"""`andyc sim`: build a model if needed, simulate it, write its run files and print the run's summary."""
+
+from __future__ import annotations
+
+import sys
+import warnings
+from pathlib import Path
+
+import click
+
+import andyc
+from andyc.cli.common import Refused, compiled, report_jumps_file
+from andyc.cli.values import (COUNT, NON_NEGATIVE, POSITIVE, TOLERANCE, Number, input_drives, parse_sets, split_sets,
+                              stop_counts)
+from andyc.errors import SimulationError, plural
+from andyc.outputs import check_folder, check_output
+from andyc.runtime.methods import MAX_STEPS, METHODS
+
+
+@click.command()
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("--t-end", default=10.0, show_default=True, type=POSITIVE, help="End time, s.")
+@click.option("--dt", default=1e-3, show_default=True, type=POSITIVE, help="Step (rk4) or output spacing (adaptive methods), s.")
+@click.option("--method", default="rk4", show_default=True,
+              type=click.Choice(list(METHODS)))
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
+@click.option("--input", "input_specs", multiple=True, metavar="NAME=VALUE|EXPR|FILE.csv",
+              help="Drive an input: a number; an expression of t, the states, parameters and discrete states "
+                   "(\"-10*th - 2*th_dot\"); or a CSV table with a time column t and a column NAME, interpolated.")
+@click.option("--controller", type=click.Path(dir_okay=False), default=None, metavar="FILE.py",
+              help="A Python file defining control(t, x, d, p), returning the inputs (compiled with Numba when it can "
+                   "be); it drives every input.")
+@click.option("--out", "outs", multiple=True, metavar="RUN.h5|RUN.csv",
+              help="Run file(s) to write; default runs/<name>.h5.")
+@click.option("--every", default=1, show_default=True, type=COUNT, help="Log one sample every N steps.")
+@click.option("--frames", default=None, metavar="all|F1,F2", help="Log the world positions of these frames.")
+@click.option("--init", "init", default="check", show_default=True, type=click.Choice(["check", "project", "as-is"]),
+              help="Initial state off the constraint manifold: refuse past --init-tol (check), project it onto "
+                   "the manifold (project), or start from it anyway (as-is).")
+@click.option("--init-tol", default=1e-6, show_default=True, type=NON_NEGATIVE, help="Largest initial constraint residual accepted by check.")
+@click.option("--energy-correction/--no-energy-correction", default=None,
+              help="Braun & Goldfarb energy correction of the projection method; default on when the model "
+                   "declares conserves_energy.")
+@click.option("--energy-tol", default=1e-6, show_default=True, type=NON_NEGATIVE,
+              help="Energy correction only where 2T exceeds this (Braun & Goldfarb eq. 6).")
+@click.option("--event-tol", default=1e-12, show_default=True, type=Number(0, 1, low_open=True),
+              help="Guard crossings are located to this many seconds (relative beyond t = 1 s).")
+@click.option("--max-instant-jumps", default=100, show_default=True, type=COUNT,
+              help="Stop after this many jumps at one instant (a jump loop).")
+@click.option("--zeno-tol", default=1e-6, show_default=True, type=NON_NEGATIVE,
+              help="Stop when jump times accumulate at a point less than this many seconds ahead (Zeno).")
+@click.option("--stop-after", "stop_after", multiple=True, metavar="JUMP=N",
+              help="End the run right after the N-th occurrence of JUMP.")
+@click.option("--rtol", default=1e-8, show_default=True, type=TOLERANCE, help="Relative tolerance (adaptive methods).")
+@click.option("--atol", default=1e-10, show_default=True, type=POSITIVE, help="Absolute tolerance (adaptive methods).")
+@click.option("--timeout", default=None, type=POSITIVE, metavar="SECONDS",
+              help="Stop the run after this much wall time, keeping its samples (also when a controller never "
+                   "returns).")
+@click.option("-o", "--out-dir", default="build", show_default=True, help="Build folder.")
+def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, frames, init, init_tol, energy_correction,
+        energy_tol, event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, timeout, out_dir):
+    """Build FILE if needed, simulate it and write run files.
+
+    SIGINT (Ctrl-C) or SIGTERM stop the run and write the samples so far, with the status "interrupted";
+    the exit code is then 130 or 143."""
+    from andyc.runtime.inputs import InputWarning
+    from andyc.runtime.interrupts import Interrupts
+    from andyc.runtime.run import RUN_SUFFIXES
+
+    overrides = parse_sets(sets)
+    stops = stop_counts(stop_after)
+    inputs = input_drives(input_specs)
+    read = [file, controller] + [v for v in inputs.values() if v.lower().endswith(".csv")]
+    for out in outs:
+        if Path(out).suffix.lower() not in RUN_SUFFIXES:
+            raise click.BadParameter(f"unknown run file type '{Path(out).suffix}'; use .h5 or .csv",
+                                     param_hint="--out")
+        check_output(out, read, "run file")
+    check_folder(out_dir, read)
+    if t_end / dt > MAX_STEPS:
+        raise click.BadParameter(f"t_end / dt = {t_end / dt:.3g} steps, past the limit of {MAX_STEPS:.0e}; raise "
+                                 f"--dt or shorten --t-end", param_hint="--dt")
+    model, result = compiled(file, out_dir)
+    if not result.skipped:
+        report_jumps_file(result)
+    outs = outs or (f"runs/{model.name}.h5",)
+    read += [model.path, result.jumps_path]
+    for out in outs:
+        check_output(out, read, "run file")
+    if result.compiled:
+        click.echo(f"{model.name}: compiled {plural(result.compiled, 'function')} in {result.timings['compile']:.1f} s "
+                   f"(once per build: Numba caches them)", err=True)
+    params, set_inputs = split_sets(overrides, model.input_names)
+    for name, value in set_inputs.items():
+        if name in inputs:
+            raise click.BadParameter(f"input '{name}' given twice", param_hint="--input")
+        inputs[name] = value
+
+    def save(run) -> None:
+        for out in outs:
+            run.save(out)
+
+    def abandon(run) -> None:       # the watchdog's: the run never returned
+        save(run)
+        click.echo(f"{run.status}; wrote {', '.join(outs)}", err=True)
+
+    interrupts = Interrupts(timeout, abandon)
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", InputWarning)
+            run = andyc.simulate(model, t_end, dt=dt, method=method, parameters=params, inputs=inputs,
+                                 controller=controller, every=every, frames=frames, rtol=rtol, atol=atol,
+                                 interrupts=interrupts, init=andyc.Init(mode=init, tol=init_tol),
+                                 projection=andyc.Projection(energy_correction=energy_correction,
+                                                             energy_tol=energy_tol),
+                                 events=andyc.Events(tol=event_tol, max_instant_jumps=max_instant_jumps,
+                                                     zeno_tol=zeno_tol, stop_after=stops))
+    except SimulationError as exc:
+        raise Refused(str(exc))
+    finally:
+        for w in caught:
+            click.echo(f"warning: {w.message}", err=True)
+    save(run)
+    click.echo(f"{run.summary()}; wrote {', '.join(outs)}")
+    if not run.finished:
+        click.echo(run.status, err=True)
+        sys.exit(interrupts.exit_code if run.status.startswith("interrupted") else 1)
