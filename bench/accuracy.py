@@ -23,7 +23,7 @@ import numpy as np
 
 import andyc
 from andyc.analysis import stability, workprecision
-from andyc.analysis.sweep import Reference, reference
+from andyc.analysis.accuracy import ReferenceSolution, reference_solution
 from andyc.plot import animate_run
 from andyc.independent.closed_forms import fourbar_branch
 from andyc.runtime.simulate import FIXED_STEP
@@ -47,11 +47,11 @@ class Case:
     rates: list | None = None        # Baumgarte rates w, 1/s (constrained models)
     rate_steps: list | None = None
     options: dict = field(default_factory=dict)
-    reference: object = "auto"       # "auto" or a function (model, t_end) -> Reference
+    reference: object = "auto"       # "auto" or a function (model, t_end) -> ReferenceSolution
     notes: object = None             # a function (model, t_end) -> more measured facts for the reading
 
 
-def fourbar_reference(model, t_end: float) -> Reference:
+def fourbar_reference(model, t_end: float) -> ReferenceSolution:
     """The four-bar's exact motion: its parallelogram branch, a one-degree-of-freedom pendulum.
 
     (andyc.independent.closed_forms.fourbar_branch, DOP853 at 1e-13 on the reduced ODE.)
@@ -65,7 +65,7 @@ def fourbar_reference(model, t_end: float) -> Reference:
     times = np.linspace(0.0, t_end, 201)
     th, w = fourbar_branch(p, x0[0], x0[3], times)
     states = np.column_stack([th, -th, th, w, -w, w])
-    return Reference(t_end, states[-1].copy(), float(np.abs(states).max()), 0, time.perf_counter() - tic,
+    return ReferenceSolution(t_end, states[-1].copy(), float(np.abs(states).max()), 0, time.perf_counter() - tic,
                      "the parallelogram branch, a 1-DOF pendulum, DOP853 at 1e-13")
 
 
@@ -130,9 +130,9 @@ ANIMATIONS = {"swing_bar": {"t_end": 5.0, "dt": 1e-3, "every": 10},
 @dataclass
 class Result:
     case: Case
-    ref: Reference
+    ref: ReferenceSolution
     points: list
-    scan_ref: Reference
+    scan_ref: ReferenceSolution
     verdicts: list
     rate_verdicts: list
     figures: dict                    # what -> path relative to docs/
@@ -146,7 +146,7 @@ def run_case(case: Case, build: Path, out: Path, log=print) -> Result:
     figures = {}
 
     def ref_for(t_end):
-        return case.reference(model, t_end) if callable(case.reference) else reference(model, t_end,
+        return case.reference(model, t_end) if callable(case.reference) else reference_solution(model, t_end,
                                                                                        **case.options)
 
     ref = ref_for(case.t_end)
@@ -310,7 +310,7 @@ def write_markdown(results: list, animations: dict, speed_text: str, seconds: fl
            "`andyc stability models/NAME.yaml --horizon T [--gains geom:A:B:N]`.", ""]
     for r in results:
         out += [f"## {r.case.title}", "", r.case.about, "",
-                f"Reference: {r.ref.source}; amplitude (largest |x|) {r.ref.scale:.3g}, {r.ref.jumps} jumps to "
+                f"ReferenceSolution: {r.ref.source}; amplitude (largest |x|) {r.ref.scale:.3g}, {r.ref.jumps} jumps to "
                 f"T = {r.ref.t_end:g} s. {len(r.points)} sweep runs, {len(r.verdicts) + len(r.rate_verdicts)} scan "
                 f"runs, {r.seconds:.0f} s in all.", ""]
         for what, fig in r.figures.items():

@@ -12,7 +12,7 @@ import pytest
 
 import andyc
 from andyc.analysis.stability import scan
-from andyc.analysis.sweep import divides, reference, run_point
+from andyc.analysis.accuracy import divides, reference_solution, run_point
 from andyc.analysis.workprecision import sweep
 from andyc.errors import SimulationError, SpecError
 from tests.conftest import MODELS
@@ -81,32 +81,32 @@ def test_the_generated_closed_form_matches_a_dop853_run(spring):
 
 
 def test_the_reference_is_the_closed_form_by_default_and_follows_the_parameters(spring):
-    auto, dop = reference(spring, T), reference(spring, T, source="DOP853")
+    auto, dop = reference_solution(spring, T), reference_solution(spring, T, source="DOP853")
     assert auto.source == "closed form" and dop.source == "DOP853, rtol = atol = 1e-13"
     assert auto.jumps == dop.jumps == 0
     assert np.abs(auto.final - dop.final).max() < 1e-10
     assert auto.scale == pytest.approx(dop.scale, rel=1e-8)         # the same 201 samples
     assert auto.wall < dop.wall                                   # 201 evaluations against an integration
     # k = 2.5e3: w = 50 rad/s, for both references
-    slow = reference(spring, T, source="closed-form", parameters={"k": 2.5e3})
-    slow_dop = reference(spring, T, source="DOP853", parameters={"k": 2.5e3})
+    slow = reference_solution(spring, T, source="closed-form", parameters={"k": 2.5e3})
+    slow_dop = reference_solution(spring, T, source="DOP853", parameters={"k": 2.5e3})
     assert np.abs(slow.final - oscillation(50.0, T)).max() < 1e-14
     assert np.abs(slow.final - slow_dop.final).max() < 1e-10
     assert np.abs(slow.final - auto.final).max() > 0.1
     # A model without one: "auto" falls back to DOP853, "closed-form" says there is none.
     bare = dataclasses.replace(spring, closed_form=None)
-    assert reference(bare, 0.1).source == "DOP853, rtol = atol = 1e-13"
+    assert reference_solution(bare, 0.1).source == "DOP853, rtol = atol = 1e-13"
     with pytest.raises(SimulationError, match="no closed-form reference: stiff_spring declares none"):
-        reference(bare, 0.1, source="closed-form")
+        reference_solution(bare, 0.1, source="closed-form")
     with pytest.raises(SimulationError, match="unknown reference 'exact'"):
-        reference(spring, 0.1, source="exact")
+        reference_solution(spring, 0.1, source="exact")
 
 
 def test_sweep_and_scan_pass_the_reference_choice_on(spring):
     assert sweep(spring, ["rk4"], 0.1, steps=[1e-3], repeats=1)[0].source == "closed form"
     assert sweep(spring, ["rk4"], 0.1, steps=[1e-3], repeats=1, reference="DOP853")[0].source.startswith("DOP853")
     assert scan(spring, ["rk4"], [1e-3], horizon=0.1, reference="DOP853")[0].source.startswith("DOP853")
-    made = reference(spring, 0.1, source="DOP853")             # a reference made already is used as it is
+    made = reference_solution(spring, 0.1, source="DOP853")             # a reference made already is used as it is
     assert sweep(spring, ["rk4"], 0.1, steps=[1e-3], repeats=1, reference=made)[0] is made
     with pytest.raises(SimulationError, match="the reference ends at T = 0.1 s, the runs at 0.2 s"):
         sweep(spring, ["rk4"], 0.2, steps=[1e-3], repeats=1, reference=made)
@@ -118,7 +118,7 @@ def test_rk4_error_against_the_closed_form_is_its_phase_lag(spring):
     speed -X0 w (1 - a) sin(w T - d) is then off by X0 w |d cos(w T) + a sin(w T)|; the lag alone (the
     formula of tests/test_analysis.py) is 98% of it here. Against the exact solution nothing else enters:
     the rest is O(y^2) = 1e-4 of it."""
-    ref = reference(spring, T)
+    ref = reference_solution(spring, T)
     h = divides(1e-4, T)
     lag, loss = OMEGA**5 * h**4 * T / 120, OMEGA**6 * h**5 * T / 144
     predicted = X0 * OMEGA * abs(lag * math.cos(OMEGA * T) + loss * math.sin(OMEGA * T))
@@ -130,16 +130,16 @@ def test_rk4_error_against_the_closed_form_is_its_phase_lag(spring):
 def test_a_closed_form_off_the_initial_state_is_refused_with_its_line(wrong_start):
     line = line_of(WRONG_START, "  x: 2*x0")
     with pytest.raises(SimulationError) as info:
-        reference(wrong_start, T)
+        reference_solution(wrong_start, T)
     assert str(info.value) == (f"wrong_start.yaml:{line}: closed_form.x: x is 0.02 at t = 0, the initial state "
                                "0.01; fix the closed form or the initial values")
     # From the start it describes, it is the solution: with F = 3 N held, about x = F/k.
     start = {"x0": [2 * X0 + 3e-4, 0.0], "inputs": {"F": 3.0}}
-    exact = reference(wrong_start, T, source="closed-form", **start)
-    assert np.abs(exact.final - reference(wrong_start, T, source="DOP853", **start).final).max() < 1e-10
+    exact = reference_solution(wrong_start, T, source="closed-form", **start)
+    assert np.abs(exact.final - reference_solution(wrong_start, T, source="DOP853", **start).final).max() < 1e-10
     # A run that drives F is not what it describes.
     with pytest.raises(SimulationError, match=r"no closed-form reference: the run drives F \(expression 0\*t\)"):
-        reference(wrong_start, T, source="closed-form", inputs={"F": "0*t"})
+        reference_solution(wrong_start, T, source="closed-form", inputs={"F": "0*t"})
 
 
 SPRING = "name: spring\n" + SPRING_BODY + "closed_form:\n"

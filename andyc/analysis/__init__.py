@@ -6,4 +6,9 @@ run with a reference over the same horizon: the model's closed form where it
 declares one (closed_form:), else DOP853 at rtol = atol = 1e-13.
 A fixed step h is adjusted to divide the horizon T (h = T / round(T / h)), so
 that every run ends at T and one reference serves them all.
+
+    accuracy.py       one run against the reference solution (closed form or DOP853): its error and cost
+    workprecision.py  error against cost per method (andyc bench)
+    stability.py      where each fixed-step method fails (andyc stability)
+    linearization.py  A, B about a point given by name (andyc linearize)
 """

@@ -28,9 +28,9 @@ from pathlib import Path
 import numpy as np
 
 # (the reference function under another name: `reference` is scan's keyword choosing it)
-from andyc.analysis.sweep import Point, Reference, divides, run_point
+from andyc.analysis.accuracy import Point, ReferenceSolution, divides, run_point
 from andyc.errors import SimulationError
-from andyc.analysis.sweep import reference as reference_run
+from andyc.analysis.accuracy import reference_solution
 from andyc.outputs import write_atomic
 
 ACCURATE, INACCURATE, FAILED = "accurate", "inaccurate", "failed"
@@ -96,7 +96,7 @@ def baumgarte_rates(model, rates) -> list[Variant]:
                     changes_solution=False) for w in rates]
 
 
-def classify(point: Point, ref: Reference, tol: float = 1e-3, blowup: float = 1e3,
+def classify(point: Point, ref: ReferenceSolution, tol: float = 1e-3, blowup: float = 1e3,
              residual_tol: float = 1e-6) -> Verdict:
     if not point.finished:
         return Verdict(point, FAILED, point.status.removeprefix("stopped: ").split("; the ")[0])
@@ -115,12 +115,12 @@ def classify(point: Point, ref: Reference, tol: float = 1e-3, blowup: float = 1e
 
 
 def scan(model, methods, steps, horizon: float, tol: float = 1e-3, blowup: float = 1e3,
-         residual_tol: float = 1e-6, progress=None, reference: str | Reference = "auto", variants=None,
-         **options) -> tuple[Reference, list[Verdict]]:
+         residual_tol: float = 1e-6, progress=None, reference: str | ReferenceSolution = "auto", variants=None,
+         **options) -> tuple[ReferenceSolution, list[Verdict]]:
     """Every method (fixed-step) at every step (adjusted to divide the horizon) and every variant, classified
-    against the reference (andyc.analysis.sweep.reference: "auto", "closed-form" or "DOP853"). Returns the
-    first variant's reference and the verdicts."""
-    if isinstance(reference, Reference) and any(v.changes_solution for v in variants or []):
+    against the reference (andyc.analysis.accuracy.reference_solution: "auto", "closed-form" or "DOP853").
+    Returns the first variant's reference and the verdicts."""
+    if isinstance(reference, ReferenceSolution) and any(v.changes_solution for v in variants or []):
         raise SimulationError("one reference cannot serve a scan over parameters that change the solution")
     settings = sorted({divides(h, horizon) for h in steps})
     parameters = options.pop("parameters", None) or {}
@@ -130,7 +130,7 @@ def scan(model, methods, steps, horizon: float, tol: float = 1e-3, blowup: float
         run_options = {**options, "parameters": {**parameters, **(variant.parameters if variant else {})}}
         key = variant.value if variant and variant.changes_solution else None
         if key not in refs:
-            refs[key] = reference_run(model, horizon, reference, **run_options)
+            refs[key] = reference_solution(model, horizon, reference, **run_options)
         ref = refs[key]
         for method in methods:
             for h in settings:
@@ -165,7 +165,8 @@ def write_csv(verdicts: list[Verdict], path: Path) -> None:
             w.writerow([*asdict(v.point).values(), "" if v.variant is None else v.variant, v.verdict, v.reason])
 
 
-def draw_map(verdicts: list[Verdict], ref: Reference, title: str, stem: Path, axis: str | None = None) -> list[Path]:
+def draw_map(verdicts: list[Verdict], ref: ReferenceSolution, title: str, stem: Path,
+             axis: str | None = None) -> list[Path]:
     """Method against step, one square per run coloured by its verdict; with variants (their axis label
     `axis`), one panel per method, the variant's value against step. PNG and SVG."""
     from matplotlib.figure import Figure

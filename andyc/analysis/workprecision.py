@@ -18,8 +18,8 @@ from dataclasses import asdict
 from pathlib import Path
 
 # (the reference function under another name: `reference` is sweep's keyword choosing it)
-from andyc.analysis.sweep import Point, Reference, divides, run_point
-from andyc.analysis.sweep import reference as reference_run
+from andyc.analysis.accuracy import Point, ReferenceSolution, divides, run_point
+from andyc.analysis.accuracy import reference_solution
 from andyc.runtime.simulate import FIXED_STEP
 from andyc.outputs import write_atomic
 
@@ -32,10 +32,11 @@ def default_steps(t_end: float) -> list:
 
 
 def sweep(model, methods, t_end: float, steps=None, tols=DEFAULT_TOLS, repeats: int = 3, progress=None,
-          reference: str | Reference = "auto", **options) -> tuple[Reference, list[Point]]:
+          reference: str | ReferenceSolution = "auto", **options) -> tuple[ReferenceSolution, list[Point]]:
     """Every method at every step or tolerance, against the reference: "auto", "closed-form" or "DOP853"
-    (andyc.analysis.sweep.reference), or a Reference to t_end made already with the same options."""
-    ref = reference_run(model, t_end, reference, **options)
+    (andyc.analysis.accuracy.reference_solution), or a ReferenceSolution to t_end made already with the same
+    options."""
+    ref = reference_solution(model, t_end, reference, **options)
     steps = sorted({divides(h, t_end) for h in (steps or default_steps(t_end))}, reverse=True)
     points = []
     for method in methods:
@@ -55,7 +56,7 @@ def write_csv(points: list[Point], path: Path) -> None:
             w.writerow(asdict(p).values())
 
 
-def draw(points: list[Point], ref: Reference, title: str, stem: Path) -> list[Path]:
+def draw(points: list[Point], ref: ReferenceSolution, title: str, stem: Path) -> list[Path]:
     """Error against wall time and against right-hand-side evaluations, log-log; PNG and SVG."""
     from matplotlib.figure import Figure
 

@@ -38,7 +38,7 @@ _REFERENCE = click.option(
 def bench(file, methods, steps, tols, t_end, repeats, sets, reference, out_dir, build_dir):
     """Work-precision of FILE: each method at each step or tolerance against a reference (the model's closed form,
     or DOP853 at rtol 1e-13); error at T against wall time and evaluations, as a table, a CSV and diagrams."""
-    from andyc.analysis.sweep import reference as reference_run
+    from andyc.analysis.accuracy import reference_solution
     from andyc.analysis.workprecision import DEFAULT_TOLS, draw, sweep, write_csv
 
     check_folder(out_dir, [file])
@@ -52,7 +52,7 @@ def bench(file, methods, steps, tols, t_end, repeats, sets, reference, out_dir, 
     parameters, inputs = split_sets(overrides, model.input_names)
     options = {"parameters": parameters, "inputs": inputs}
     try:
-        ref = reference_run(model, t_end, reference, **options)
+        ref = reference_solution(model, t_end, reference, **options)
     except SimulationError as exc:
         raise click.UsageError(str(exc))
     click.echo(f"{model.name}: work-precision over T = {t_end:g} s; reference: {ref.source}")

@@ -1,4 +1,5 @@
-"""One sweep point: a run of the model against the reference, reduced to the figures both analyses use.
+"""A run against the reference solution, reduced to the figures the work-precision sweeps and the stability
+scans both use (one point of either).
 
 The reference is the model's closed form where it declares one (closed_form:), else a DOP853 run at
 rtol = atol = 1e-13. The closed form is the exact solution, so a run's error against it is the run's own
@@ -28,7 +29,7 @@ START_TOL = 1e-9                 # the closed form at t = 0 must match the initi
 
 
 @dataclass
-class Reference:
+class ReferenceSolution:
     """The reference to T: its final state, amplitude and jump count, and which reference it is."""
     t_end: float
     final: np.ndarray
@@ -38,14 +39,16 @@ class Reference:
     source: str = DOP853_SOURCE  # what it is, for tables and titles: "closed form" or "DOP853, rtol = atol = 1e-13"
 
 
-def reference(model, t_end: float, source: str | Reference = "auto", **options) -> Reference:
+def reference_solution(model, t_end: float, source: str | ReferenceSolution = "auto",
+                       **options) -> ReferenceSolution:
     """The reference run to t_end for `model` with andyc.simulate's `options` (parameters, inputs, x0, ...).
 
     source: "auto" -- the model's closed form when it declares one that holds for this run, else DOP853;
     "closed-form" -- the closed form, or SimulationError saying why there is none; "DOP853" -- always DOP853;
-    or a Reference made already (another model of the same motion, say), used as it is if it ends at t_end.
+    or a ReferenceSolution made already (another model of the same motion, say), used as it is if it ends at
+    t_end.
     """
-    if isinstance(source, Reference):
+    if isinstance(source, ReferenceSolution):
         if not math.isclose(source.t_end, t_end, rel_tol=1e-12):
             raise SimulationError(f"the reference ends at T = {source.t_end:g} s, the runs at {t_end:g} s")
         return source
@@ -62,15 +65,15 @@ def reference(model, t_end: float, source: str | Reference = "auto", **options) 
     return _dop853_reference(model, t_end, DOP853_SOURCE, **options)
 
 
-def _dop853_reference(model, t_end: float, label: str, **options) -> Reference:
+def _dop853_reference(model, t_end: float, label: str, **options) -> ReferenceSolution:
     """The DOP853 reference run; the one long run of a sweep or scan, so it shows its progress on a terminal
     (andyc.runtime.progress)."""
     run = andyc.simulate(model, t_end, dt=t_end / REFERENCE_SAMPLES, method="DOP853", rtol=REFERENCE_TOL,
                          atol=REFERENCE_TOL, **options)
     if not run.finished:
         raise SimulationError(f"the reference run (DOP853, rtol {REFERENCE_TOL:g}) did not finish: {run.status}")
-    return Reference(t_end, run.state[-1].copy(), max(float(np.abs(run.state).max()), 1e-300),
-                     len(run.events["time"]), run.stats["wall_seconds"], label)
+    return ReferenceSolution(t_end, run.state[-1].copy(), max(float(np.abs(run.state).max()), 1e-300),
+                             len(run.events["time"]), run.stats["wall_seconds"], label)
 
 
 def _closed_form_setting(model, t_end: float, options: dict) -> tuple:
@@ -94,7 +97,7 @@ def _closed_form_setting(model, t_end: float, options: dict) -> tuple:
     return p, inputs.held(model.initial_flow).copy(), None
 
 
-def _closed_form_reference(model, t_end: float, p: np.ndarray, u: np.ndarray, x0=None) -> Reference:
+def _closed_form_reference(model, t_end: float, p: np.ndarray, u: np.ndarray, x0=None) -> ReferenceSolution:
     """The closed form at the reference's samples t_k = k T / 200: x(T), max |x|, no jumps; wall is the
     time to evaluate it. Checked first at t = 0 against the run's initial state (x0, or the model's)."""
     times = np.linspace(0.0, t_end, REFERENCE_SAMPLES + 1)      # (its last entry is t_end exactly)
@@ -110,7 +113,7 @@ def _closed_form_reference(model, t_end: float, p: np.ndarray, u: np.ndarray, x0
     if initial.shape != (model.nx,):
         raise SimulationError(f"initial state has shape {initial.shape}, expected ({model.nx},)")
     _check_start(model, xs, initial)
-    return Reference(t_end, xs[-1].copy(), max(float(np.abs(xs).max()), 1e-300), 0, wall, CLOSED_FORM_SOURCE)
+    return ReferenceSolution(t_end, xs[-1].copy(), max(float(np.abs(xs).max()), 1e-300), 0, wall, CLOSED_FORM_SOURCE)
 
 
 def _check_start(model, xs: np.ndarray, initial: np.ndarray) -> None:
@@ -149,7 +152,7 @@ class Point:
     residual_at: float = math.nan  # first time a constraint residual passed `residual_tol`
 
 
-def run_point(model, ref: Reference, method: str, setting: float, repeats: int = 1, blowup: float = 1e3,
+def run_point(model, ref: ReferenceSolution, method: str, setting: float, repeats: int = 1, blowup: float = 1e3,
               residual_tol: float = 1e-6, **options) -> Point:
     """Run `method` at `setting` to ref.t_end and compare with the reference."""
     if method in FIXED_STEP:
