@@ -21,7 +21,7 @@ import numpy as np
 
 from .compiler import jit
 from .model import input_callback
-from .status import RECORD
+from .status import RECORD, WRONG_SHAPE
 
 
 @input_callback
@@ -49,6 +49,18 @@ def interpolate(data, start, n, t):
     """Linear interpolation at t in the table data[start:start + n] (times), data[start + n:start + 2n] (values);
     the end values beyond its ends."""
     return np.interp(t, data[start:start + n], data[start + n:start + 2 * n])
+
+
+@jit
+def take(r, u, sets, flow, data, record, t, x):
+    """u <- the controller's values r, except the inputs the flow sets itself (sets[flow, i]); a wrong number
+    of values is recorded as a failure (the callback's nonzero status)."""
+    if len(r) != len(u):
+        return failed(data, record, WRONG_SHAPE, t, x, len(r))
+    for i in range(len(u)):
+        if not sets[flow, i]:
+            u[i] = r[i]
+    return 0
 
 
 @jit

@@ -412,8 +412,7 @@ def _controller_callback(model, ctrl: Controller, record: int):
     InputSource.failure). Compiled for each run, from closures over the controller (nothing executed as text)."""
     from numba import cfunc, njit, objmode
 
-    failed = model.numerics.inputs.failed
-    nu = len(model.input_names)
+    failed, take = model.numerics.inputs.failed, model.numerics.inputs.take
     sets = np.ascontiguousarray(model.module.FLOW_SETS_INPUT)
     if ctrl.compiled is None:
         python = ctrl.function
@@ -437,12 +436,7 @@ def _controller_callback(model, ctrl: Controller, record: int):
             r, ok = call_python(t, x, d, p)
             if not ok:
                 return failed(data, record, RAISED, t, x, 0)
-            if len(r) != nu:
-                return failed(data, record, WRONG_SHAPE, t, x, len(r))
-            for i in range(nu):
-                if not sets[flow, i]:
-                    u[i] = r[i]
-            return 0
+            return take(r, u, sets, flow, data, record, t, x)
     elif ctrl.returns_scalar:
         control = ctrl.compiled
 
@@ -462,12 +456,7 @@ def _controller_callback(model, ctrl: Controller, record: int):
                 r = control(t, x, d, p)
             except Exception:
                 return failed(data, record, RAISED, t, x, 0)
-            if len(r) != nu:
-                return failed(data, record, WRONG_SHAPE, t, x, len(r))
-            for i in range(nu):
-                if not sets[flow, i]:
-                    u[i] = r[i]
-            return 0
+            return take(r, u, sets, flow, data, record, t, x)
 
     try:
         return cfunc(model.numerics.model.INPUTS_SIGNATURE, error_model="numpy")(inputs)
