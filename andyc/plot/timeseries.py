@@ -163,18 +163,21 @@ def _frame_axis(ax, run: Run, k: int) -> None:
     _legend(ax)
 
 
-def _states(ax, run: Run, cols, ylabel: str) -> None:
-    for j in cols:
-        ax.plot(run.time, run.state[:, j], lw=1, label=run.state_names[j])
+def _lines(ax, run: Run, values, names, ylabel: str) -> None:
+    """One line per column of values (samples x names) against time, labelled by name."""
+    for j, name in enumerate(names):
+        ax.plot(run.time, values[:, j], lw=1, label=name)
     ax.set_ylabel(ylabel)
     _legend(ax)
 
 
+def _states(ax, run: Run, cols, ylabel: str) -> None:
+    cols = list(cols)
+    _lines(ax, run, run.state[:, cols], [run.state_names[j] for j in cols], ylabel)
+
+
 def _inputs(ax, run: Run) -> None:
-    for j, name in enumerate(run.input_names):
-        ax.plot(run.time, run.input_values[:, j], lw=1, label=name)
-    ax.set_ylabel("inputs u")
-    _legend(ax)
+    _lines(ax, run, run.input_values, run.input_names, "inputs u")
 
 
 def _quaternions(ax, run: Run, bases: list) -> None:
@@ -187,10 +190,7 @@ def _quaternions(ax, run: Run, bases: list) -> None:
 
 
 def _multipliers(ax, run: Run) -> None:
-    for j, name in enumerate(run.multiplier_names):
-        ax.plot(run.time, run.multipliers[:, j], lw=1, label=name)
-    ax.set_ylabel("multipliers λ, N | N m")
-    _legend(ax)
+    _lines(ax, run, run.multipliers, run.multiplier_names, "multipliers λ, N | N m")
 
 
 def _residuals(ax, run: Run) -> None:
