@@ -1,4 +1,13 @@
-"""Symbolic stage: Spec -> SymbolicModel (recursive kinematics, elements, EOM)."""
+"""Symbolic stage: Spec -> SymbolicModel (recursive kinematics, elements, EOM).
+
+    kinematics.py   the frame tree's recursive kinematics (ANDY eq. 1-3)
+    dynamics.py     the elements' terms and M dv/dt = G (ANDY eq. 5-8)
+    constraints.py  constraint residuals, Jacobian and velocity-product term (ANDY eq. 10-12)
+    hybrid.py       active rows per flow, guards, resets, impacts (ANDY eq. 16-19)
+    reduce.py       bodies fixed to one moving frame merged into one
+    emitter.py      the ordered intermediate assignments;  model.py: SymbolicModel and its summary
+    linearize.py    A, B by exact forward-mode derivatives;  eom.py: the equations written out for reading
+"""
 
 from __future__ import annotations
 
