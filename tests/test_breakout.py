@@ -18,6 +18,7 @@ import sys
 import pytest
 
 import andyc
+from andyc.codegen.buildfiles import write_numerics
 from andyc.codegen.generate import render, render_front, render_jumps
 from andyc.runtime.run import Run
 from andyc.symbolic.eom import equations
@@ -101,8 +102,8 @@ def files(tmp_path_factory):
     spec = andyc.load(hostile)
     assert spec.description == text                  # the payload arrives intact through YAML
     # Past the expression parser (which refuses such text): the texts the Spec carries into the files.
-    jumps = [dataclasses.replace(j, written={**j.written, "guard": text, "enabled": text, "reset": {"n": text},
-                                            "impact": {"restitution": text, "constraints": [text]}})
+    jumps = [dataclasses.replace(j, text={**j.text, "guard": text, "enabled": text, "reset": {"n": text},
+                                         "impact": {"restitution": text, "constraints": [text]}})
              for j in spec.jumps]
     spec = dataclasses.replace(spec, jumps=jumps, input_expressions={"F": text})
     return generated(andyc.load(benign)), generated(spec), text, marker, folder
@@ -122,6 +123,7 @@ def test_importing_the_hostile_module_and_its_jumps_file_runs_no_payload(files):
     (build / "breakout.py").write_text(hostile["module.py"], encoding="utf-8")
     (build / "breakout_equations.py").write_text(hostile["equations.py"], encoding="utf-8")
     (build / "breakout_jumps.py").write_text(hostile["jumps.py"], encoding="utf-8")
+    write_numerics(folder / "build", "breakout")      # as a build has it: the module imports it from its folder
     spec = importlib.util.spec_from_file_location("andyc_breakout_test", build / "breakout.py")
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module
@@ -135,7 +137,7 @@ def test_importing_the_hostile_module_and_its_jumps_file_runs_no_payload(files):
         for function in module.USER_JUMPS:
             assert function(0.0, None, None, None, None) is None
     finally:
-        for name in (spec.name, module.MODULE_NAME, spec.name + "_jumps"):
+        for name in (spec.name, getattr(module, "MODULE_NAME", None), spec.name + "_jumps"):
             sys.modules.pop(name, None)
     assert not marker.exists()
 

@@ -54,3 +54,20 @@ def test_the_module_imports_by_its_name_reuses_the_cache_and_carries_its_input_e
     assert np.max(np.abs(np.array(out["y"]) - run.state)) < 1e-10
     after = {p.name: p.stat().st_mtime_ns for p in cache.iterdir()}
     assert after == before                    # nothing compiled again: Numba loaded andyc's cache
+
+
+def test_a_build_missing_its_numerics_fails_to_import_and_leaves_no_half_made_module(compiled, tmp_path):
+    """A copy of the module without its andyc_numerics folder: the import fails, and, as with Python's own
+    imports, no partly executed module stays in sys.modules to poison the next import of that name."""
+    built = compiled("double_pendulum").path.parent
+    copy = tmp_path / "double_pendulum"
+    copy.mkdir()
+    for name in ("double_pendulum.py", "double_pendulum_equations.py"):
+        (copy / name).write_bytes((built / name).read_bytes())
+    script = ("import json, sys\nsys.modules['andyc'] = None\ntry:\n    import double_pendulum\n"
+              "except Exception as exc:\n    failed = type(exc).__name__\nelse:\n    failed = None\n"
+              "print(json.dumps({'failed': failed, 'left': [m for m in sys.modules if 'andyc_numerics' in m]}))\n")
+    out = subprocess.run([sys.executable, "-c", script], cwd=copy, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)
+    assert result["failed"] is not None and result["left"] == []

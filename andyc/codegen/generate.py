@@ -164,26 +164,14 @@ def render_jumps(model: SymbolicModel) -> str:
     spec = model.spec
     jumps = {}
     for j in spec.jumps:
-        w = j.written
-        jumps[j.name] = {"from": j.source, "to": j.target, "guard": _plain(w["guard"]),
-                         "direction": _DIRECTION[j.direction], "enabled": _plain(w.get("enabled")),
-                         "reset": _plain(w.get("reset") or {}), "impact": _plain(w.get("impact", "none"))}
+        jumps[j.name] = {"from": j.source, "to": j.target, "guard": j.text["guard"],
+                         "direction": _DIRECTION[j.direction], "enabled": j.text["enabled"],
+                         "reset": j.text["reset"], "impact": j.text["impact"]}
     states = state_names(spec)
     return _environment().get_template("jumps.py.j2").render(
         name=spec.name, version=andyc.__version__, source=Path(spec.file).name, jumps=jumps, states=states,
         discrete=[x.name for x in spec.discrete], parameters=list(spec.parameters), inputs=list(spec.inputs))
 
-
-def _plain(value):
-    """A value of the model file as plain data for `literal` (numbers and text as they are, anything else
-    as its text)."""
-    if value is None or isinstance(value, (str, bool, int)) or (isinstance(value, float) and math.isfinite(value)):
-        return value
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    return str(value)
 
 
 def write_front(spec, out_dir, key: str) -> bool:

@@ -10,6 +10,7 @@ flow with every constraint active.
 from __future__ import annotations
 
 import builtins
+import math
 
 import sympy as sp
 
@@ -136,7 +137,24 @@ def _jump(i: int, j: dict, written: list, flows: list, constraint_names: list, s
         return None
     direction = {"falling": FALLING, "rising": RISING, "either": EITHER}[j["direction"]]
     return Jump(j["name"], j["from"], j["to"], guard, direction, tuple(enabled), impact, restitution,
-                impact_constraints, tuple(resets), int(j.get("priority", i)), found, where, dict(j))
+                impact_constraints, tuple(resets), int(j.get("priority", i)), found, where, _texts(j))
+
+
+def _texts(j: dict) -> dict:
+    """What the entry writes of the jump, as plain data (numbers and text as written, anything else as its
+    text), for the jump template's documentation: guard, enabled, reset, impact."""
+    return {"guard": _plain(j["guard"]), "enabled": _plain(j.get("enabled")), "reset": _plain(j.get("reset") or {}),
+            "impact": _plain(j.get("impact", "none"))}
+
+
+def _plain(value):
+    if value is None or isinstance(value, (str, bool, int)) or (isinstance(value, float) and math.isfinite(value)):
+        return value
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    return str(value)
 
 
 def _guard(j: dict, where, names: dict, context: str, states: dict, found: dict, quantity,

@@ -212,7 +212,7 @@ class Jump:
     priority: int
     quantities: dict            # symbol -> FrameQuantity used by guard, enabled and resets
     where: tuple
-    written: dict = field(default_factory=dict)     # the entry as written in the model file (for docs)
+    text: dict = field(default_factory=dict)        # guard, enabled, reset, impact as the model file writes them
 
 
 @dataclass
