@@ -46,7 +46,10 @@ def _panda(folder: Path) -> Path:
 
 
 def _andyc(root: Path, args, cwd: Path, env: dict) -> tuple[float, str]:
-    """Wall seconds of one `andyc ...` process and what it printed (both streams)."""
+    """Wall seconds of one `andyc ...` process and what it printed (both streams). Python's bytecode cache on,
+    as on a user's machine (pip compiles andyc's .pyc at install): PYTHONDONTWRITEBYTECODE, set on some
+    machines, would make every command compile andyc's ~50 modules from source."""
+    env = {key: value for key, value in env.items() if key != "PYTHONDONTWRITEBYTECODE"}
     start = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "andyc.cli", *map(str, args)], cwd=cwd, capture_output=True,
                           text=True, env={**env, "PYTHONPATH": str(root)})
