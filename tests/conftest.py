@@ -9,9 +9,8 @@ from pathlib import Path
 import pytest
 
 import andyc
+from tests.support import MODELS, ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
-MODELS = ROOT / "models"
 SHIPPED_BUILD = ROOT / "build" / "tests"
 
 
@@ -40,17 +39,3 @@ def compiled(build_dir, shipped_build):
         return cache[path]
 
     return get
-
-
-def yaml_text(text: str) -> str:
-    """`text` as a YAML double-quoted scalar (every character escaped that YAML needs escaped)."""
-    out = []
-    for ch in text:
-        code = ord(ch)
-        if ch in '"\\':
-            out.append("\\" + ch)
-        elif code < 0x20 or 0xD800 <= code <= 0xDFFF or code in (0x2028, 0x2029):
-            out.append(f"\\u{code:04x}")
-        else:
-            out.append(ch)
-    return '"' + "".join(out) + '"'

@@ -8,13 +8,12 @@ import math
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 from andyc.analysis.stability import (ACCURATE, FAILED, baumgarte_rates, boundaries, geometric, parameter_values,
                                       rk4_bound, scan)
 from andyc.analysis.workprecision import sweep
-from andyc.cli import main
-from tests.conftest import MODELS
+from tests.support import MODELS
+from tests.support.cli import invoke
 
 OMEGA = 100.0       # models/stiff_spring.yaml: sqrt(k/m)
 # RK4 on y' = z y is stable on the negative real axis for z >= z*, the real root of
@@ -67,9 +66,8 @@ def test_the_sweep_shows_rk4_is_fourth_order(compiled):
 
 
 def test_cli_bench_and_stability_write_their_tables_and_diagrams(tmp_path, shipped_build):
-    runner = CliRunner()
-    result = runner.invoke(main, ["bench", str(MODELS / "stiff_spring.yaml"), "--t-end", "1", "--repeats", "1",
-                                  "--tols", "geom:1e-4:1e-10:5", "-o", str(tmp_path), "--build-dir", str(shipped_build)])
+    result = invoke("bench", str(MODELS / "stiff_spring.yaml"), "--t-end", "1", "--repeats", "1",
+                    "--tols", "geom:1e-4:1e-10:5", "-o", str(tmp_path), "--build-dir", str(shipped_build))
     assert result.exit_code == 0, result.output
     with open(tmp_path / "stiff_spring_work_precision.csv") as fh:
         rows = list(csv.DictReader(fh))
@@ -78,12 +76,12 @@ def test_cli_bench_and_stability_write_their_tables_and_diagrams(tmp_path, shipp
     assert all(math.isfinite(float(r["error"])) for r in rows)
     for suffix in (".png", ".svg"):
         assert (tmp_path / f"stiff_spring_work_precision{suffix}").stat().st_size > 5000
-    result = runner.invoke(main, ["stability", str(MODELS / "stiff_spring.yaml"), "--steps", "0.02,0.025,0.03",
-                                  "--horizon", "3", "-o", str(tmp_path), "--build-dir", str(shipped_build)])
+    result = invoke("stability", str(MODELS / "stiff_spring.yaml"), "--steps", "0.02,0.025,0.03",
+                    "--horizon", "3", "-o", str(tmp_path), "--build-dir", str(shipped_build))
     assert result.exit_code == 0, result.output
     assert "rk4: largest accurate step none; fails from h = 0.03 s (blew up" in result.output
     assert (tmp_path / "stiff_spring_stability_T3.png").exists()
-    result = runner.invoke(main, ["stability", str(MODELS / "stiff_spring.yaml"), "--methods", "DOP853"])
+    result = invoke("stability", str(MODELS / "stiff_spring.yaml"), "--methods", "DOP853")
     assert result.exit_code == 2 and "for fixed-step methods" in result.output
 
 
@@ -141,10 +139,9 @@ def test_baumgarte_gains_past_rk4s_real_bound_fail(ball):
 
 
 def test_cli_scans_baumgarte_gains_into_a_map(tmp_path, shipped_build):
-    runner = CliRunner()
-    result = runner.invoke(main, ["stability", str(MODELS / "ball_in_bowl.yaml"), "--methods", "baumgarte",
-                                  "--gains", "1,100", "--steps", "0.02,0.005", "--horizon", "1", "-o", str(tmp_path),
-                                  "--build-dir", str(shipped_build)])
+    result = invoke("stability", str(MODELS / "ball_in_bowl.yaml"), "--methods", "baumgarte",
+                    "--gains", "1,100", "--steps", "0.02,0.005", "--horizon", "1", "-o", str(tmp_path),
+                    "--build-dir", str(shipped_build))
     assert result.exit_code == 0, result.output
     with open(tmp_path / "ball_in_bowl_stability_T1.csv") as fh:
         rows = list(csv.DictReader(fh))
@@ -152,9 +149,9 @@ def test_cli_scans_baumgarte_gains_into_a_map(tmp_path, shipped_build):
                                                                              (100, 0.02)]
     assert "baumgarte at Baumgarte w = 100: " in result.output
     assert (tmp_path / "ball_in_bowl_stability_T1.svg").stat().st_size > 5000
-    result = runner.invoke(main, ["stability", str(MODELS / "stiff_spring.yaml"), "--gains", "1,10",
-                                  "--build-dir", str(shipped_build)])
+    result = invoke("stability", str(MODELS / "stiff_spring.yaml"), "--gains", "1,10",
+                    "--build-dir", str(shipped_build))
     assert result.exit_code == 2 and "has no constraints, so no Baumgarte gains to scan" in result.output
-    result = runner.invoke(main, ["stability", str(MODELS / "stiff_spring.yaml"), "--scan", "kk=1,2",
-                                  "--build-dir", str(shipped_build)])
+    result = invoke("stability", str(MODELS / "stiff_spring.yaml"), "--scan", "kk=1,2",
+                    "--build-dir", str(shipped_build))
     assert result.exit_code == 2 and "NAME a parameter of stiff_spring (m, k, x0)" in result.output

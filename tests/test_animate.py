@@ -1,32 +1,23 @@
 """andyc.plot's animation (`andyc plot RUN.h5 --animate`): the samples shown, the sticks, joints,
 traces and title drawn at each, the view of a planar and of a spatial run, and the GIF (or MP4,
-with ffmpeg) written; on the synthetic runs of tests/test_plot.py (no model is compiled)."""
+with ffmpeg) written; on the synthetic runs of tests/support/runs.py (no model is compiled)."""
 
 import shutil
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from matplotlib import animation
 from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from PIL import Image
 
-from andyc import cli
 from andyc.plot import (TRACE_SECONDS, GifWriter, animate_run, animation_figure, animation_samples,
                         animation_view, animation_writer, stick_segments, world_links)
 from andyc.runtime.run import Run
-from tests.test_plot import hybrid_run, plain_run, planar_run, spatial_run
+from tests.support.cli import invoke
+from tests.support.runs import hybrid_run, plain_run, planar_run, spatial_run
 
 GIF_FPS = 100 / 3                   # what fps 30 plays at: GIF frames last whole hundredths of a second
-
-
-def invoke(*args):
-    try:
-        runner = CliRunner(mix_stderr=False)          # click 8.1
-    except TypeError:
-        runner = CliRunner()                          # click >= 8.2 always keeps stderr apart
-    return runner.invoke(cli.main, ["plot", *map(str, args)])
 
 
 def gif_frames(path) -> list:
@@ -193,7 +184,7 @@ def test_animate_run_writes_an_mp4_with_ffmpeg(tmp_path):
 
 def test_cli_writes_a_gif_of_the_run(tmp_path):
     run_file = planar_run().save(tmp_path / "pendulum.h5")
-    result = invoke(run_file, "--animate", "--frames-max", 12)
+    result = invoke("plot", run_file, "--animate", "--frames-max", 12)
     gif = run_file.with_suffix(".gif")
     assert result.exit_code == 0, result.output + result.stderr
     assert str(gif) in result.output
@@ -204,7 +195,7 @@ def test_cli_writes_a_gif_of_the_run(tmp_path):
 def test_a_run_without_frames_says_to_log_them(tmp_path):
     bare = plain_run()
     bare.save(tmp_path / "bare.h5")
-    result = invoke(tmp_path / "bare.h5", "--animate")
+    result = invoke("plot", tmp_path / "bare.h5", "--animate")
     assert result.exit_code == 2
     assert "--frames all" in result.stderr
     assert not (tmp_path / "bare.gif").exists()
@@ -215,7 +206,7 @@ def test_a_run_without_frames_says_to_log_them(tmp_path):
 def test_mp4_without_ffmpeg_says_so_and_suggests_a_gif(tmp_path, monkeypatch):
     run_file = planar_run().save(tmp_path / "pendulum.h5")
     monkeypatch.setattr(shutil, "which", lambda *args, **kwargs: None)     # matplotlib looks ffmpeg up so
-    result = invoke(run_file, "--animate", "-o", tmp_path / "movie.mp4")
+    result = invoke("plot", run_file, "--animate", "-o", tmp_path / "movie.mp4")
     assert result.exit_code == 2
     assert "ffmpeg" in result.stderr and str(tmp_path / "movie.gif") in result.stderr
     assert not (tmp_path / "movie.mp4").exists()
@@ -225,10 +216,10 @@ def test_mp4_without_ffmpeg_says_so_and_suggests_a_gif(tmp_path, monkeypatch):
 
 def test_other_output_types_and_animation_options_without_animate_are_refused(tmp_path):
     run_file = planar_run().save(tmp_path / "pendulum.h5")
-    result = invoke(run_file, "--animate", "-o", tmp_path / "movie.png")
+    result = invoke("plot", run_file, "--animate", "-o", tmp_path / "movie.png")
     assert result.exit_code == 2 and ".gif or .mp4" in result.stderr
     with pytest.raises(ValueError, match=".gif or .mp4"):
         animation_writer(tmp_path / "movie.png")
-    result = invoke(run_file, "--fps", 10)
+    result = invoke("plot", run_file, "--fps", 10)
     assert result.exit_code == 2 and "--animate" in result.stderr
     assert not run_file.with_suffix(".png").exists()            # nothing plotted either

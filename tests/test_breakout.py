@@ -23,7 +23,7 @@ from andyc.codegen.generate import render, render_front, render_jumps
 from andyc.runtime.run import Run
 from andyc.symbolic.eom import equations
 from andyc.symbolic.eom import equations_text
-from tests.conftest import yaml_text
+from tests.support import yaml_text
 
 MODEL = """\
 name: breakout

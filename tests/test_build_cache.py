@@ -2,9 +2,6 @@
 initial values leave the compiled equations (and Numba's cache of them) untouched, and the new
 values are used; an edit of an equation rebuilds; two models of one name never share a build."""
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
@@ -14,6 +11,7 @@ from andyc.outputs import OutputError
 from andyc.pipeline import unchanged
 from andyc.runtime.compiled import compilations
 from andyc.spec.meaning import meaning_sha256
+from tests.support.cli import run_python
 
 PENDULUM = """\
 name: cached_pendulum
@@ -94,7 +92,7 @@ def test_runtime_data_edits_reuse_the_build_and_an_equation_edit_rebuilds(tmp_pa
               f"    main(['sim', {str(path)!r}, '-o', {str(build)!r}, '--t-end', '0.1', '--out', 'run.csv'])\n"
               "except SystemExit as exc:\n    assert exc.code in (0, None), exc.code\n"
               "print(sorted(m for m in ('sympy', 'scipy.integrate', 'jinja2', 'jsonschema') if m in sys.modules))")
-    proc = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True)
+    proc = run_python(script, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.splitlines()[-1] == "[]" and (tmp_path / "run.csv").exists()
     path.write_text(path.read_text() + "# one more comment\n")

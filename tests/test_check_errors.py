@@ -8,21 +8,14 @@ document path, and that the text says what is wrong and what to do.
 from __future__ import annotations
 
 import re
-import shutil
-import subprocess
-import sys
-from pathlib import Path
-
-import pytest
-from click.testing import CliRunner
 
 import andyc
-from andyc import cli
-from andyc.errors import SpecError
+from tests.support import MODELS
+from tests.support.cli import andyc_cli
+from tests.support.diagnostics import LINE_FORMAT, assert_at, edit, line_of, one_problem, problems
 
-ROOT = Path(__file__).resolve().parents[1]
-MODELS = sorted((ROOT / "models").glob("*.yaml"))
-CHAIN3D = (ROOT / "models" / "chain3d.yaml").read_text()
+SHIPPED = sorted(MODELS.glob("*.yaml"))
+CHAIN3D = (MODELS / "chain3d.yaml").read_text()
 
 # A small valid model; the cases below break one thing at a time.
 BASE = """\
@@ -42,73 +35,6 @@ bodies:
     frame: b
     mass: m1
 """
-
-LINE_FORMAT = re.compile(r"^(?P<file>[^:]+):(?P<line>\d+): (?P<path>\S+): (?P<what>.+?); (?P<fix>.+)$")
-
-
-def line_of(text: str, needle: str, occurrence: int = 1) -> int:
-    """1-based number of the line holding the `occurrence`-th `needle`."""
-    hits = [n for n, line in enumerate(text.splitlines(), 1) if needle in line]
-    assert len(hits) >= occurrence, f"{needle!r} not in the test model"
-    return hits[occurrence - 1]
-
-
-def edit(text: str, old: str, new: str) -> str:
-    assert text.count(old) == 1, f"{old!r} must occur once in the model being edited"
-    return text.replace(old, new)
-
-
-def problems(tmp_path, text: str, derive: bool = False):
-    """Load `text` as a model file; return the diagnostics it must raise."""
-    file = tmp_path / "model.yaml"
-    file.write_text(text)
-    with pytest.raises(SpecError) as info:
-        spec = andyc.load(file)
-        if derive:
-            andyc.derive(spec)
-    found = info.value.diagnostics
-    for d in found:
-        assert d.file == str(file)
-        assert d.message and d.hint, f"every problem says what is wrong and what to do: {d}"
-        match = LINE_FORMAT.match(str(d))
-        assert match, f"not FILE:LINE: PATH: what; fix: {d}"
-        assert (int(match["line"]), match["path"]) == (d.line, d.path or "<document>")
-        assert "\n" not in str(d)
-    return found
-
-
-def one_problem(tmp_path, text: str, derive: bool = False):
-    found = problems(tmp_path, text, derive)
-    assert len(found) == 1, "expected exactly one problem, got:\n" + "\n".join(map(str, found))
-    return found[0]
-
-
-def assert_at(d, line: int, path: str):
-    assert (d.line, d.path) == (line, path), f"expected line {line}, path {path!r}: {d}"
-
-
-def check(*files):
-    """`andyc check FILES` in process; stderr kept apart from stdout."""
-    try:
-        runner = CliRunner(mix_stderr=False)          # click 8.1
-    except TypeError:
-        runner = CliRunner()                          # click >= 8.2 always keeps stderr apart
-    return runner.invoke(cli.main, ["check", *map(str, files)])
-
-
-def check_all_at_once(tmp_path, monkeypatch, text: str, total: int) -> list:
-    """`andyc check` on a model with `total` problems: exit 1, one FILE:LINE: PATH line each, a count.
-    Returns the regex matches of the lines, in the order printed."""
-    (tmp_path / "bad.yaml").write_text(text)
-    monkeypatch.chdir(tmp_path)
-    result = check("bad.yaml")
-    assert result.exit_code == 1 and result.stdout == ""
-    *lines, last = result.stderr.splitlines()
-    assert last == f"{total} problems found"
-    found = [LINE_FORMAT.match(x) for x in lines]
-    assert all(found), lines
-    return found
-
 
 def test_base_model_is_valid(tmp_path):
     file = tmp_path / "model.yaml"
@@ -472,13 +398,6 @@ def test_several_meaning_problems_reported_together_in_line_order(tmp_path):
 
 # -- the command line -----------------------------------------------------------
 
-def andyc_cli(*args, cwd):
-    exe = Path(sys.executable).with_name("andyc")
-    command = [str(exe)] if exe.exists() else ([shutil.which("andyc")] if shutil.which("andyc")
-                                               else [sys.executable, "-m", "andyc.cli"])
-    return subprocess.run(command + list(args), cwd=cwd, capture_output=True, text=True, timeout=120)
-
-
 def test_cli_check_bad_model_prints_only_diagnostics(tmp_path):
     text = edit(BASE, "    parent: a\n", "    parent: aa\n")
     text = edit(text, "mass: m1", "mass: -1")
@@ -510,17 +429,17 @@ def test_cli_check_bad_yaml_prints_one_line(tmp_path):
 
 
 def test_cli_check_models_prints_a_summary(tmp_path):
-    result = andyc_cli("check", *map(str, MODELS), cwd=tmp_path)
+    result = andyc_cli("check", *SHIPPED, cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert "Traceback" not in result.stderr
     summaries = result.stdout.strip().splitlines()
-    assert len(summaries) == len(MODELS)          # one paragraph (a single line) per model
-    for model, summary in zip(MODELS, summaries):
+    assert len(summaries) == len(SHIPPED)          # one paragraph (a single line) per model
+    for model, summary in zip(SHIPPED, summaries):
         assert summary.startswith(f"{model}: model '{model.stem}' is valid")
         for word in ("state", "bod", "frame"):
             assert word in summary
         assert ("of freedom" in summary) != ("constraint row" in summary)   # constrained models count rows
-    chain = summaries[[m.name for m in MODELS].index("chain3d.yaml")]
+    chain = summaries[[m.name for m in SHIPPED].index("chain3d.yaml")]
     assert "4 degrees of freedom (q1, q2, q3, q4), 8 states, 4 bodies, 5 frames besides world" in chain
 
 
@@ -534,7 +453,7 @@ def test_cli_check_missing_file(tmp_path):
 
 def test_cli_check_good_and_bad_together(tmp_path):
     (tmp_path / "bad.yaml").write_text(edit(BASE, "mass: m1", "mass: -1"))
-    result = andyc_cli("check", str(ROOT / "models" / "pendulum_a01.yaml"), "bad.yaml", cwd=tmp_path)
+    result = andyc_cli("check", MODELS / "pendulum_a01.yaml", "bad.yaml", cwd=tmp_path)
     assert result.returncode == 1
     assert "pendulum_a01" in result.stdout and "is valid" in result.stdout
     assert "bad.yaml:" in result.stderr and "mass must be positive" in result.stderr

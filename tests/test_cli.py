@@ -1,18 +1,11 @@
 """The command line, as a user runs it: exit codes, files written, messages."""
 
-import subprocess
-import sys
-
 import h5py
 import pytest
 
 import andyc
-from tests.conftest import MODELS
-
-
-def andyc_cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "andyc.cli", *map(str, args)], capture_output=True,
-                          text=True, cwd=cwd)
+from tests.support import MODELS
+from tests.support.cli import andyc_cli, run_python
 
 
 def test_version():
@@ -64,6 +57,6 @@ def test_version_and_check_import_neither_numba_nor_scipy_nor_matplotlib(args):
     code = ("import sys\nfrom andyc.cli import main\ntry:\n    main(sys.argv[1:])\nexcept SystemExit as exc:\n"
             "    code = exc.code\nprint(sorted(m for m in ('numba', 'scipy', 'matplotlib', 'h5py') if m in sys.modules))\n"
             "sys.exit(code)\n")
-    proc = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True)
+    proc = run_python(code, *args)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip().splitlines()[-1] == "[]"

@@ -14,8 +14,9 @@ import andyc
 from andyc.analysis.stability import scan
 from andyc.analysis.accuracy import divides, reference_solution, run_point
 from andyc.analysis.workprecision import sweep
-from andyc.errors import SimulationError, SpecError
-from tests.conftest import MODELS
+from andyc.errors import SimulationError
+from tests.support import MODELS, diagnostics
+from tests.support.diagnostics import line_of
 
 OMEGA, X0 = 100.0, 0.01     # models/stiff_spring.yaml: sqrt(k/m), the initial displacement
 T = 1.3                     # 20.7 periods: the phase at T is no multiple of pi/2
@@ -54,10 +55,6 @@ def wrong_start(tmp_path_factory):
     folder = tmp_path_factory.mktemp("wrong_start")
     (folder / "wrong_start.yaml").write_text(WRONG_START)
     return andyc.compile_model(folder / "wrong_start.yaml", folder / "build")[0]
-
-
-def line_of(text: str, needle: str) -> int:
-    return next(n for n, line in enumerate(text.splitlines(), 1) if needle in line)
 
 
 def oscillation(omega: float, t: float) -> np.ndarray:
@@ -148,12 +145,8 @@ X_DOT = "  x_dot: -x0*sqrt(k/m)*sin(sqrt(k/m)*t)\n"
 
 
 def problems(tmp_path, text: str) -> list[str]:
-    """The loader's diagnostics for `text`, as `andyc check` prints them (FILE:LINE: PATH: what; fix)."""
-    file = tmp_path / "model.yaml"
-    file.write_text(text)
-    with pytest.raises(SpecError) as info:
-        andyc.load(file)
-    return [str(d).removeprefix(f"{file}:") for d in info.value.diagnostics]
+    """The loader's diagnostics for `text`, as `andyc check` prints them (FILE:LINE: PATH: what; fix), FILE left out."""
+    return [str(d).removeprefix(f"{d.file}:") for d in diagnostics.problems(tmp_path, text)]
 
 
 def test_the_spring_with_its_closed_form_loads(tmp_path):

@@ -21,7 +21,7 @@ import andyc
 from andyc.errors import SimulationError
 from andyc.independent.closed_forms import ball_first_integral, fourbar_crank_angle
 from andyc.runtime.run import read_h5
-from tests.conftest import MODELS
+from tests.support import MODELS
 
 
 def largest(a):

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import yaml
 
-from tests.conftest import MODELS
+from tests.support import MODELS
 
 EPS = 1e-5
 

@@ -8,15 +8,15 @@ document path, and that the message says what is wrong and the hint what to do.
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import pytest
 
 import andyc
-from tests.test_check_errors import assert_at, check, check_all_at_once, edit, line_of, one_problem, problems
+from tests.support import MODELS
+from tests.support.cli import check
+from tests.support.diagnostics import assert_at, check_all_at_once, edit, line_of, one_problem, problems
 
-ROOT = Path(__file__).resolve().parents[1]
-BALL_IN_BOWL = ROOT / "models" / "ball_in_bowl.yaml"
+BALL_IN_BOWL = MODELS / "ball_in_bowl.yaml"
 
 # A bead on three prismatic joints held on a circle (holonomic, written with frame
 # positions) and skating (nonholonomic, with a frame velocity in frame slide's axes).

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import andyc
-from tests.conftest import MODELS
+from tests.support import MODELS
 
 PENDULUM = textwrap.dedent("""\
     name: loaded_pendulum

@@ -12,7 +12,7 @@ import yaml
 from scipy.integrate import simpson
 
 import andyc
-from tests.conftest import MODELS
+from tests.support import MODELS
 
 
 def relative_drift(run):

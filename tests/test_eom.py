@@ -27,14 +27,13 @@ import textwrap
 import numpy as np
 import pytest
 import sympy as sp
-from click.testing import CliRunner
 from sympy.core.function import AppliedUndef
 from sympy.parsing.latex import parse_latex
 
 import andyc
-from andyc.cli import main
 from andyc.symbolic.eom import equations
-from tests.conftest import MODELS
+from tests.support import MODELS
+from tests.support.cli import invoke
 
 L1, L2, m1, m2, g, q1, q2, q1_dot, q2_dot = sp.symbols("L1 L2 m1 m2 g q1 q2 q1_dot q2_dot", real=True)
 M12 = m2 * L2**2 + m2 * L1 * L2 * sp.cos(q2)
@@ -90,7 +89,7 @@ def written_out(name):
 
 
 def eom(*args):
-    return CliRunner().invoke(main, ["eom", *map(str, args)])
+    return invoke("eom", *args)
 
 
 def display_names(model) -> dict:
@@ -298,7 +297,7 @@ def test_an_invalid_model_is_reported_as_andyc_check_does(tmp_path):
     path.write_text((MODELS / "double_pendulum.yaml").read_text().replace("parent: elbow", "parent: elbo"))
     result = eom(path)
     assert result.exit_code == 1 and result.stdout == ""
-    check = CliRunner().invoke(main, ["check", str(path)])
+    check = invoke("check", path)
     assert check.exit_code == 1 and result.stderr == check.stderr
     assert result.stderr.startswith(f"{path}:") and "elbo" in result.stderr
     result = eom(MODELS / "cart_pole.yaml", "--format", "json", "--standalone")

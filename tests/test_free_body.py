@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 
 from andyc.runtime.options import Projection
 from andyc.runtime.simulate import simulate
-from tests.conftest import MODELS
+from tests.support import MODELS
 
 T_END, DT = 20.0, 1e-3
 MASS = 48.0

@@ -22,10 +22,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
 
-from andyc.cli import main
-from tests.conftest import MODELS, yaml_text
+from tests.support import MODELS, yaml_text
+from tests.support.cli import invoke
 
 MARKER = "PWNED"
 RUN = f'__import__("os").system("touch {MARKER}")'
@@ -552,8 +551,8 @@ def test_hostile_input_gets_a_message_not_a_traceback(case, tmp_path, build_dir,
     monkeypatch.chdir(tmp_path)                             # payloads would touch MARKER here
     args = [str(a).replace("{d}", str(tmp_path)).replace("{b}", str(build_dir)).replace("{m}", str(MODELS))
             .replace("{ro}", str(read_only(tmp_path))).replace("{run}", str(run_file(tmp_path))) for a in case.args]
-    result = CliRunner().invoke(main, args)
-    text = result.output + (result.stderr if result.stderr_bytes is not None else "")
+    result = invoke(*args)
+    text = result.output                                    # stdout and stderr, as a terminal shows them
     assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
     assert result.exit_code in case.codes, text
     assert not [f for f in case.forbid if f in text], text

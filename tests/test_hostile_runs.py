@@ -18,7 +18,7 @@ import pytest
 import andyc
 from andyc.runtime.run import Run, read_h5
 from andyc.runtime.status import diverging_constraints
-from tests.conftest import MODELS
+from tests.support import MODELS
 
 HANG = 300          # seconds after which a command counts as hung (a hang detector, not a speed bound)
 

@@ -8,15 +8,15 @@ document path, and that the message says what is wrong and the hint what to do.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 
 import andyc
 from andyc.errors import SimulationError
-from tests.test_check_errors import LINE_FORMAT, assert_at, check, check_all_at_once, edit, line_of, one_problem, problems
+from tests.support import MODELS
+from tests.support.cli import check
+from tests.support.diagnostics import (LINE_FORMAT, assert_at, check_all_at_once, edit, line_of, load_text, one_problem,
+                                       problems)
 
-ROOT = Path(__file__).resolve().parents[1]
 HYBRID_MODELS = ["bouncing_ball", "rimless_wheel", "compass_gait"]
 
 # A point foot on two prismatic joints: it flies (pushed by an input the flight flow sets), lands
@@ -84,14 +84,8 @@ NOT_A_GUARD = ("a guard is a signed expression of the coordinates, speeds, frame
                "where the jump happens")
 
 
-def load(tmp_path, text: str):
-    file = tmp_path / "model.yaml"
-    file.write_text(text)
-    return andyc.load(file)
-
-
 def test_the_base_model_is_valid(tmp_path):
-    spec = load(tmp_path, HOPPER)
+    spec = load_text(tmp_path, HOPPER)
     assert spec.warnings == []
     assert [(f.name, f.constraints) for f in spec.flows] == [("flight", ()), ("stance", ("ground", "pin"))]
     assert [(j.name, j.source, j.target, j.impact, j.impact_constraints) for j in spec.jumps] == [
@@ -103,7 +97,7 @@ def test_the_base_model_is_valid(tmp_path):
 
 @pytest.mark.parametrize("name", HYBRID_MODELS)
 def test_the_shipped_hybrid_models_load_without_warnings(name):
-    spec = andyc.load(ROOT / "models" / f"{name}.yaml")
+    spec = andyc.load(MODELS / f"{name}.yaml")
     assert spec.jumps and spec.warnings == []
 
 
@@ -508,7 +502,7 @@ def warning_of(spec):
 
 def test_constraint_active_in_no_flow_and_taking_no_impact_warns(tmp_path):
     text = edit(HOPPER, "constraints: [ground, pin]", "constraints: [ground]")
-    w = warning_of(load(tmp_path, text))
+    w = warning_of(load_text(tmp_path, text))
     assert_at(w, line_of(text, "{name: pin"), "constraints[1]")
     assert w.message == "constraint 'pin' is active in no flow and takes no impact"
     assert w.hint == "list it in a flow's 'constraints', or remove it"
@@ -516,12 +510,12 @@ def test_constraint_active_in_no_flow_and_taking_no_impact_warns(tmp_path):
 
 def test_constraint_that_only_takes_an_impact_does_not_warn(tmp_path):
     text = edit(HOPPER, "constraints: [ground, pin]", "constraints: [pin]")
-    assert load(tmp_path, text).warnings == []            # 'ground' takes the impact of 'lift'
+    assert load_text(tmp_path, text).warnings == []            # 'ground' takes the impact of 'lift'
 
 
 def test_unused_discrete_state_warns(tmp_path):
     text = edit(HOPPER, "  fx: 0\n", "  fx: 0\n  steps: 0\n")
-    w = warning_of(load(tmp_path, text))
+    w = warning_of(load_text(tmp_path, text))
     assert_at(w, line_of(text, "steps: 0"), "discrete.steps")
     assert w.message == "discrete state 'steps' is not used"
     assert w.hint == "remove it, or use it in a constraint, guard or reset"
@@ -530,7 +524,7 @@ def test_unused_discrete_state_warns(tmp_path):
 def test_discrete_state_used_only_in_a_reset_counts_as_used(tmp_path):
     text = edit(HOPPER, "  fx: 0\n", "  fx: 0\n  steps: 0\n")
     text = edit(text, RESET, "reset: {fx: foot.x, steps: steps + 1}")
-    assert load(tmp_path, text).warnings == []
+    assert load_text(tmp_path, text).warnings == []
 
 
 # -- 9. the command line (click's CliRunner, in process) --------------------------------
@@ -576,7 +570,7 @@ def test_cli_check_prints_hybrid_warnings_and_passes(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("name", HYBRID_MODELS)
 def test_cli_check_shipped_hybrid_models_are_valid(name):
-    result = check(ROOT / "models" / f"{name}.yaml")
+    result = check(MODELS / f"{name}.yaml")
     assert result.exit_code == 0, result.stderr
     assert result.stderr == ""
     assert f"model '{name}' is valid" in result.stdout

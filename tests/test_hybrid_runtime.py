@@ -5,10 +5,9 @@ import re
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 import andyc
-from andyc import cli
+from tests.support.cli import invoke
 
 # A mass pushed by an input force u along x; at t = t_off the push stops (the flow
 # 'coast' sets u = 0), and when x passes x_wall the mass is put back to 0 with a
@@ -83,7 +82,7 @@ def test_user_jump_file_is_kept_called_and_reported(push, tmp_path):
     assert run.events["state_after"][k][1] == 1.0
     assert run.events["discrete_after"][k][0] == 1.0          # the YAML's reset ran too
     # the CLI says it kept the file
-    out = CliRunner().invoke(cli.main, ["build", str(path), "-o", str(build), "--force"])
+    out = invoke("build", str(path), "-o", str(build), "--force")
     assert out.exit_code == 0 and "push_jumps.py: kept" in out.output
 
 

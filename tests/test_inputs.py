@@ -1,8 +1,6 @@
 """Inputs a run drives (issue 8): expressions in the model and on the command line, tables,
 controllers (the cart-pole balanced by LQR), and the messages when they go wrong."""
 
-import subprocess
-import sys
 import textwrap
 
 import h5py
@@ -12,7 +10,8 @@ import pytest
 import andyc
 from andyc.errors import SimulationError
 from andyc.runtime.inputs import InputWarning
-from tests.conftest import MODELS
+from tests.support import MODELS
+from tests.support.cli import andyc_cli, run_python
 
 # A mass on a spring-less rail pushed by an input F; the model drives F by an
 # expression of t and x (a sinusoidal force plus a spring written as an input):
@@ -45,11 +44,6 @@ def cart(tmp_path_factory):
     folder = tmp_path_factory.mktemp("cart")
     (folder / "driven_cart.yaml").write_text(CART)
     return andyc.compile_model(folder / "driven_cart.yaml", folder / "build")[0]
-
-
-def andyc_cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "andyc.cli", *map(str, args)], capture_output=True, text=True,
-                          cwd=cwd)
 
 
 def write(path, text):
@@ -272,7 +266,7 @@ def test_a_command_line_expression_is_generated_into_the_build_and_reused(tmp_pa
               "'--input', 'F=2 - k*x', '--out', 'run.csv'])\n"
               "except SystemExit as exc:\n    assert exc.code in (0, None), exc.code\n"
               "print('sympy' in sys.modules)")
-    first = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True)
+    first = run_python(script, cwd=tmp_path)
     assert first.returncode == 0, first.stderr
     generated = list((tmp_path / "build" / "driven_cart" / "run_inputs").glob("r_*.py"))
     assert len(generated) == 1
@@ -281,7 +275,7 @@ def test_a_command_line_expression_is_generated_into_the_build_and_reused(tmp_pa
     cache = generated[0].parent / "__pycache__"
     stamps = {p.name: p.stat().st_mtime_ns for p in cache.iterdir()}
     assert any(name.endswith(".nbc") for name in stamps)
-    again = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True)
+    again = run_python(script, cwd=tmp_path)
     assert again.returncode == 0, again.stderr
     assert again.stdout.splitlines()[-1] == "False"                       # no SymPy: the module was found
     assert {p.name: p.stat().st_mtime_ns for p in cache.iterdir()} == stamps   # and nothing compiled again

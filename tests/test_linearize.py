@@ -8,12 +8,11 @@ and through the command line.
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 import andyc
-from andyc.cli import main
 from andyc.symbolic.linearize import LinearizeError, default_point, find_equilibrium, linearize
-from tests.conftest import MODELS
+from tests.support import MODELS
+from tests.support.cli import invoke
 
 
 def derived(name):
@@ -97,8 +96,8 @@ def test_find_equilibrium_reaches_the_rest_points():
 
 
 def test_cli_prints_and_writes_the_linearization(tmp_path):
-    result = CliRunner().invoke(main, ["linearize", str(MODELS / "cart_pole.yaml"), "--at", "th=0",
-                                       "--set", "mc=2", "--input", "F=1.5", "-o", str(tmp_path)])
+    result = invoke("linearize", str(MODELS / "cart_pole.yaml"), "--at", "th=0",
+                    "--set", "mc=2", "--input", "F=1.5", "-o", str(tmp_path))
     assert result.exit_code == 0, result.output
     assert "1 eigenvalue with positive real part (unstable)" in result.output
     saved = np.load(tmp_path / "cart_pole_linearization.npz")
@@ -122,7 +121,7 @@ def test_cli_prints_and_writes_the_linearization(tmp_path):
     (["swing_bar"], "also has signals"),
 ])
 def test_cli_errors_say_what_and_how(args, message):
-    result = CliRunner().invoke(main, ["linearize", str(MODELS / f"{args[0]}.yaml"), *args[1:]])
+    result = invoke("linearize", str(MODELS / f"{args[0]}.yaml"), *args[1:])
     assert result.exit_code == 1
     assert message in result.output, result.output
     assert "Traceback" not in result.output
@@ -137,7 +136,7 @@ def test_no_equilibrium_is_an_error():
 
 
 def test_cli_a_malformed_at_names_the_option():
-    result = CliRunner().invoke(main, ["linearize", str(MODELS / "cart_pole.yaml"), "--at", "th"])
+    result = invoke("linearize", str(MODELS / "cart_pole.yaml"), "--at", "th")
     assert result.exit_code == 2
     assert "'th' is not NAME=NUMBER" in result.output and "--at" in result.output
 
@@ -198,7 +197,7 @@ def test_the_fourbar_at_rest_swings_at_its_closed_form_frequency():
 def test_cli_prints_the_null_space_bases_of_a_constrained_flow(tmp_path):
     args = ["linearize", str(MODELS / "fourbar.yaml"), "-o", str(tmp_path)] + [
         item for name in ("th1_dot", "th2_dot", "th3_dot") for item in ("--at", f"{name}=0")]
-    result = CliRunner().invoke(main, args)
+    result = invoke(*args)
     assert result.exit_code == 0, result.output
     assert "null-space form, dq = N_q z, dv = N_v w" in result.output
     saved = np.load(tmp_path / "fourbar_linearization.npz")

@@ -8,17 +8,17 @@ document path, and that the message says what is wrong and the hint what to do.
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import pytest
 import sympy as sp
 
 import andyc
 from andyc.spec.expressions import TIME
-from tests.test_check_errors import LINE_FORMAT, andyc_cli, assert_at, edit, line_of, one_problem, problems
+from tests.support import MODELS
+from tests.support.cli import andyc_cli
+from tests.support.diagnostics import LINE_FORMAT, assert_at, edit, line_of, one_problem, problems
 
-ROOT = Path(__file__).resolve().parents[1]
-SWING_BAR = ROOT / "models" / "swing_bar.yaml"
+SWING_BAR = MODELS / "swing_bar.yaml"
 
 # A revolute arm carrying a ball joint with a bob below it (1 coordinate, 3 speeds).
 BALL = """\

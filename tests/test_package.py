@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import MODELS, ROOT
+from tests.support import MODELS, ROOT
 
 
 @pytest.fixture(scope="module")

@@ -2,125 +2,20 @@
 compiled): which panels each kind of run gets, that every line carries the run's own arrays, the
 stick figures' sticks, plane, shading and ground; that importing andyc.plot leaves the user's
 matplotlib backend alone; and one shipped model (the compass gait) end to end through `andyc plot`.
-
-The synthetic runs here serve tests/test_animate.py too."""
+The synthetic runs are tests/support/runs.py's (test_animate.py draws them too)."""
 
 import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from matplotlib.colors import to_rgb
 from PIL import Image
 
 import andyc
-from andyc import cli
 from andyc.plot import figure_for, plot_run, plot_sticks, snapshot_indices, stick_edges, stick_plane, sticks_figure
-from andyc.runtime.run import Run
-
-# -- synthetic runs -----------------------------------------------------------------------------------
-
-
-def make_run(state_names, nq, nv, state, frames=None, t_end=2.0, **fields) -> Run:
-    """A run of `state` (N, nx) sampled evenly over [0, t_end], energy 1 + 0.01 sin t."""
-    t = np.linspace(0.0, t_end, state.shape[0])
-    return Run(model="synthetic", spec_sha256="0" * 64, method="rk4", dt=t[1] - t[0], nq=nq, nv=nv, rtol=1e-8,
-               atol=1e-10, t_end=t_end, parameters={}, inputs={}, state_names=state_names, time=t, state=state,
-               energy=1.0 + 0.01 * np.sin(t), frames=frames or {}, **fields)
-
-
-def plain_run(n=30) -> Run:
-    """Two coordinates, two speeds; no frames, signals, flows or constraints."""
-    t = np.linspace(0.0, 2.0, n)
-    return make_run(["q1", "q2", "q1_dot", "q2_dot"], 2, 2, np.column_stack([t, -t, np.ones(n), -np.ones(n)]))
-
-
-def planar_run(n=201) -> Run:
-    """A double pendulum swinging in the world x-y plane: upper (at the origin, parent world) -> elbow
-    -> lower (at the elbow: their paths coincide) -> tip, 1 m links, sampled every 0.01 s."""
-    t = np.linspace(0.0, 2.0, n)
-    th1, th2 = 0.8 * np.cos(2 * t), 0.5 * np.sin(3 * t)
-    upper = np.zeros((n, 3))
-    elbow = np.stack([np.sin(th1), -np.cos(th1), 0 * t], axis=1)
-    tip = elbow + np.stack([np.sin(th1 + th2), -np.cos(th1 + th2), 0 * t], axis=1)
-    state = np.column_stack([th1, th2, np.gradient(th1, t), np.gradient(th2, t)])
-    return make_run(["th1", "th2", "th1_dot", "th2_dot"], 2, 2, state,
-                    frames={"upper": upper, "elbow": elbow, "lower": elbow.copy(), "tip": tip},
-                    frame_parents={"upper": "world", "elbow": "upper", "lower": "elbow", "tip": "lower"})
-
-
-def spatial_run(n=101) -> Run:
-    """A spherical double pendulum: arm hung from the world 1 m from the origin (a world link),
-    tip 0.5 m below it, both moving in x, y and z."""
-    t = np.linspace(0.0, 2.0, n)
-    a, b = 0.6 * np.sin(2 * t), 0.4 * np.cos(2 * t)
-    arm = np.stack([np.sin(a) * np.cos(b), np.sin(a) * np.sin(b), -np.cos(a)], axis=1)
-    tip = arm + 0.5 * np.stack([np.sin(b), 0 * t, -np.cos(b)], axis=1)
-    state = np.column_stack([a, b, np.gradient(a, t), np.gradient(b, t)])
-    return make_run(["a", "b", "a_dot", "b_dot"], 2, 2, state, frames={"arm": arm, "tip": tip},
-                    frame_parents={"arm": "world", "tip": "arm"})
-
-
-def quaternion_run(n=50) -> Run:
-    """A free body (no coordinates: speeds and signals only): a unit quaternion, a position, and
-    one other signal; its frame and a marker on it (coincident paths) move in 3-D."""
-    t = np.linspace(0.0, 2.0, n)
-    half = 0.5 * t
-    quaternion = np.stack([np.cos(half), 0.6 * np.sin(half), 0.8 * np.sin(half), 0 * t], axis=1)
-    position = np.stack([np.cos(t), np.sin(t), -0.1 * t**2], axis=1)
-    speeds = np.column_stack([np.sin(t), np.cos(t), t**2, -t, np.ones(n), 2 * t])
-    names = ["wx", "wy", "wz", "vx", "vy", "vz", "body_qw", "body_qx", "body_qy", "body_qz",
-             "body_x", "body_y", "body_z", "spin"]
-    state = np.column_stack([speeds, quaternion, position, 3 * t])
-    return make_run(names, 0, 6, state, frames={"body": position, "marker": position.copy()})
-
-
-def constrained_run(n=50) -> Run:
-    """Two multipliers; one position residual, two velocity residuals (the second exactly zero)."""
-    t = np.linspace(0.0, 2.0, n)
-    return make_run(["q", "q_dot"], 1, 1, np.column_stack([np.sin(t), np.cos(t)]),
-                    multiplier_names=["lam_a", "lam_b"],
-                    multipliers=np.column_stack([np.linspace(-1, 1, n), np.ones(n)]),
-                    residual_position=np.column_stack([-1e-12 * (1 + t)]),
-                    residual_velocity=np.column_stack([1e-13 * np.cos(t), np.zeros(n)]))
-
-
-def inputs_run(n=40, changing=True) -> Run:
-    """Inputs u (a ramp, or constant) and v (constant)."""
-    t = np.linspace(0.0, 2.0, n)
-    u = 0.5 * t if changing else np.full(n, 0.5)
-    return make_run(["q", "q_dot"], 1, 1, np.column_stack([t, np.ones(n)]), input_names=["u", "v"],
-                    input_values=np.column_stack([u, np.full(n, -2.0)]))
-
-
-def hybrid_run(n=201) -> Run:
-    """A planar two-legged stick walker: flows stance1/stance2 swapped by strike2 at t = 0.5 and
-    strike1 at t = 1.2, strike2 again at 1.7; discrete fx (stance foot) and a step count. Frames:
-    hip (parent world), foot1 and foot2 (parent hip; the stance foot on the ground y = 0), marker
-    (parent 'knee', not logged)."""
-    t = np.linspace(0.0, 2.0, n)
-    event_times = np.array([0.5, 1.2, 1.7])
-    flow = np.searchsorted(event_times, t, side="right") % 2
-    steps = np.searchsorted(event_times, t, side="right").astype(float)
-    fx = 0.4 * steps
-    hip = np.stack([0.4 * t, 1.0 - 0.02 * np.sin(np.pi * t) ** 2, 0 * t], axis=1)
-    swing = np.stack([0.8 * t, 0.05 * np.abs(np.sin(2 * np.pi * t)), 0 * t], axis=1)
-    stance = np.stack([fx, 0 * t, 0 * t], axis=1)
-    foot1 = np.where((flow == 0)[:, None], stance, swing)
-    foot2 = np.where((flow == 1)[:, None], stance, swing)
-    state = np.column_stack([hip[:, 0], hip[:, 1], np.gradient(hip[:, 0], t), np.gradient(hip[:, 1], t)])
-    discrete = np.column_stack([fx, steps])
-    k = np.searchsorted(t, event_times)
-    events = {"time": event_times, "jump": np.array([0, 1, 0], np.int32),
-              "from_flow": np.array([0, 1, 0], np.int32), "to_flow": np.array([1, 0, 1], np.int32),
-              "state_before": state[k - 1], "state_after": state[k], "discrete_after": discrete[k]}
-    return make_run(["x", "y", "x_dot", "y_dot"], 2, 2, state,
-                    frames={"hip": hip, "foot1": foot1, "foot2": foot2, "marker": hip + [0.1, -0.5, 0.0]},
-                    flow=flow, flow_names=["stance1", "stance2"], discrete_names=["fx", "steps"], discrete=discrete,
-                    jump_names=["strike2", "strike1"], events=events,
-                    frame_parents={"hip": "world", "foot1": "hip", "foot2": "hip", "marker": "knee"})
+from tests.support.cli import invoke, run_python
+from tests.support.runs import (constrained_run, hybrid_run, inputs_run, make_run, plain_run, planar_run,
+                                quaternion_run, spatial_run)
 
 
 # -- what a figure holds --------------------------------------------------------------------------------
@@ -265,12 +160,17 @@ def test_one_flow_with_jumps_has_a_flow_panel_and_no_discrete_panel_without_disc
     assert "discrete" not in p
 
 
+def assert_png_at_110_dpi(path, fig) -> None:
+    """`path` is a PNG of `fig` at 110 dots per inch."""
+    with Image.open(path) as im:
+        assert im.format == "PNG"
+        assert im.size == tuple(np.round(fig.get_size_inches() * 110).astype(int))
+
+
 def test_plot_run_writes_the_figure_as_a_png_at_110_dpi(tmp_path):
     run = plain_run()
     plot_run(run, tmp_path / "run.png")
-    with Image.open(tmp_path / "run.png") as im:
-        assert im.format == "PNG"
-        assert im.size == tuple(np.round(figure_for(run).get_size_inches() * 110).astype(int))
+    assert_png_at_110_dpi(tmp_path / "run.png", figure_for(run))
 
 
 # -- stick figures ---------------------------------------------------------------------------------------
@@ -336,9 +236,7 @@ def test_sticks_need_a_frame_with_a_logged_parent(tmp_path):
         sticks_figure(run)
     run = hybrid_run()
     plot_sticks(run, tmp_path / "sticks.png")
-    with Image.open(tmp_path / "sticks.png") as im:
-        assert im.format == "PNG"
-        assert im.size == tuple(np.round(sticks_figure(run).get_size_inches() * 110).astype(int))
+    assert_png_at_110_dpi(tmp_path / "sticks.png", sticks_figure(run))
 
 
 # -- matplotlib's state --------------------------------------------------------------------------------
@@ -363,7 +261,7 @@ andyc.plot.animate_run(run, {str(tmp_path / 'run.gif')!r}, max_frames=3)
 print("matplotlib.pyplot" in sys.modules, matplotlib.get_backend())
 """
     env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
+    done = run_python(code, env=env)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["False", "pdf"]
     assert all((tmp_path / name).stat().st_size > 0 for name in ("run.png", "sticks.png", "run.gif"))
@@ -371,24 +269,16 @@ print("matplotlib.pyplot" in sys.modules, matplotlib.get_backend())
 
 # -- andyc plot ------------------------------------------------------------------------------------------
 
-def invoke_plot(*args):
-    try:
-        runner = CliRunner(mix_stderr=False)          # click 8.1
-    except TypeError:
-        runner = CliRunner()                          # click >= 8.2 always keeps stderr apart
-    return runner.invoke(cli.main, ["plot", *map(str, args)])
-
-
 def test_cli_plot_writes_sticks_only_for_runs_with_frame_parents(tmp_path):
     walker = hybrid_run().save(tmp_path / "walker.h5")
-    result = invoke_plot(walker, "-o", tmp_path / "other.png")
+    result = invoke("plot", walker, "-o", tmp_path / "other.png")
     assert result.exit_code == 0, result.output
     assert (tmp_path / "other.png").stat().st_size > 0 and (tmp_path / "other_sticks.png").stat().st_size > 0
     assert "other_sticks.png" in result.output
 
     orphans = planar_run()
     orphans.frame_parents = {}                              # the same frames, their parents unknown
-    result = invoke_plot(orphans.save(tmp_path / "orphans.h5"))
+    result = invoke("plot", orphans.save(tmp_path / "orphans.h5"))
     assert result.exit_code == 0, result.output
     assert (tmp_path / "orphans.png").stat().st_size > 0
     assert not (tmp_path / "orphans_sticks.png").exists() and result.output.count("wrote") == 1
@@ -401,13 +291,13 @@ def test_compass_gait_through_andyc_plot(compiled, tmp_path):
     run = andyc.simulate(model, 2.0, dt=1e-3, method="projection", frames="all", every=10, progress=False)
     assert len(run.events["time"]) >= 2
     path = run.save(tmp_path / "r.h5")
-    result = invoke_plot(path)
+    result = invoke("plot", path)
     assert result.exit_code == 0, result.output
     for name in ("r.png", "r_sticks.png"):
         with Image.open(tmp_path / name) as im:
             assert im.format == "PNG" and min(im.size) > 300
     assert "r_sticks.png" in result.output
-    result = invoke_plot(path, "--animate", "--frames-max", 6)
+    result = invoke("plot", path, "--animate", "--frames-max", 6)
     assert result.exit_code == 0, result.output
     with Image.open(tmp_path / "r.gif") as im:
         assert im.format == "GIF" and im.n_frames == 6

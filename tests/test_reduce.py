@@ -8,16 +8,15 @@ import re
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from andyc.cli import main
 from andyc.codegen.generate import generate
 from andyc.runtime.compiled import load_compiled
 from andyc.spec.load import load
 from andyc.symbolic import derive
 from andyc.symbolic.kinematics import rigid_groups
 from andyc.symbolic.reduce import merge_rigid_bodies
-from tests.test_urdf_errors import ROBOTS_DIR
+from tests.support import ROBOTS_DIR
+from tests.support.cli import invoke
 
 ARM = """
 name: rigid_arm
@@ -82,7 +81,7 @@ def test_check_prints_the_operations_before_and_after_for_a_urdf(tmp_path):
     source = tmp_path / "panda_arm.yaml"
     source.write_text(f"name: panda_arm\nurdf:\n  file: {ROBOTS_DIR / 'panda_description/urdf/panda.urdf'}\n"
                       "  lock: {panda_finger_joint1: 0.02}\n")
-    result = CliRunner().invoke(main, ["check", str(source)])
+    result = invoke("check", str(source))
     assert result.exit_code == 0, result.output
     found = re.search(r"reduced: 8 -> 7 degrees of freedom \(1 joint locked: panda_finger_joint1\); "
                       r"11 bodies merged into (\d+) .*dynamics (\d+) -> (\d+) operations", result.output)

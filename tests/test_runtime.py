@@ -1,8 +1,6 @@
 """Runtime: run files, stops that keep data, scipy methods, rebuild skipping, the bare module."""
 
 import os
-import subprocess
-import sys
 import textwrap
 
 import h5py
@@ -11,7 +9,8 @@ import pytest
 
 import andyc
 from andyc.runtime.run import read_h5
-from tests.conftest import MODELS
+from tests.support import MODELS
+from tests.support.cli import andyc_cli, run_python
 
 
 def test_double_pendulum_matches_closed_form_M_and_G(compiled):
@@ -95,8 +94,7 @@ def test_blow_up_stops_with_when_and_keeps_the_samples(tmp_path, build_dir):
     assert read_h5(tmp_path / "blown.h5").status == run.status
     # The CLI says so, keeps the file and exits 1.
     out = tmp_path / "cli.h5"
-    proc = subprocess.run([sys.executable, "-m", "andyc.cli", "sim", str(path), "--dt", "5e-3", "--t-end", "10",
-                           "--out", str(out), "-o", str(build_dir)], capture_output=True, text=True)
+    proc = andyc_cli("sim", path, "--dt", "5e-3", "--t-end", "10", "--out", out, "-o", build_dir)
     assert proc.returncode == 1
     assert "stopped: the state became non-finite" in proc.stderr and "Traceback" not in proc.stderr
     assert out.exists()
@@ -150,7 +148,7 @@ def test_generated_module_runs_without_andyc_or_numba(compiled):
                         args=(dp.INPUT_DEFAULTS, dp.PARAMETER_DEFAULTS))
         print(*sol.y[:, -1])
         """)
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    proc = run_python(script)
     assert proc.returncode == 0, proc.stderr
     x_end = np.array(proc.stdout.split(), dtype=float)
     reference = andyc.simulate(model, 1.0, dt=1e-4)
@@ -235,7 +233,8 @@ def test_generated_code_does_not_depend_on_the_hash_seed(tmp_path):
         out = tmp_path / seed
         env = {**os.environ, "PYTHONHASHSEED": seed}
         # andyc.build derives and generates (the CLI's build compiles too, which this test does not need).
-        subprocess.run([sys.executable, "-c", "import sys, andyc; andyc.build(sys.argv[1], sys.argv[2])",
-                        str(MODELS / "chain3d.yaml"), str(out)], check=True, capture_output=True, env=env)
+        proc = run_python("import sys, andyc; andyc.build(sys.argv[1], sys.argv[2])", MODELS / "chain3d.yaml", out,
+                          env=env)
+        assert proc.returncode == 0, proc.stderr
         texts.append([(out / "chain3d" / name).read_text() for name in ("chain3d.py", "chain3d_equations.py")])
     assert texts[0] == texts[1]

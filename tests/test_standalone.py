@@ -3,12 +3,11 @@ not importable, after andyc has built and run it, it reuses what andyc compiled,
 model: its input expressions are in it, so scipy's solve_ivp on its rhs follows andyc's run."""
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 
 import andyc
+from tests.support.cli import run_python
 
 CART = """\
 name: forced_cart
@@ -46,7 +45,7 @@ def test_the_module_imports_by_its_name_reuses_the_cache_and_carries_its_input_e
     folder = result.module_path.parent
     cache = folder / "__pycache__"
     before = {p.name: p.stat().st_mtime_ns for p in cache.iterdir()}
-    proc = subprocess.run([sys.executable, "-c", STANDALONE], cwd=folder, capture_output=True, text=True)
+    proc = run_python(STANDALONE, cwd=folder)
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     # The input at x = 0.1, t = 0 is -k x = -0.3 N, so the acceleration is -0.15 m/s^2 (not 0).

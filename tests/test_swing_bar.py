@@ -16,7 +16,7 @@ from scipy.integrate import cumulative_simpson
 from scipy.interpolate import CubicSpline
 
 import andyc
-from tests.conftest import MODELS
+from tests.support import MODELS
 
 FRAMES = ["bar1", "ball", "bar2", "bar3"]
 

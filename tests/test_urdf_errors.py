@@ -4,8 +4,7 @@ one (`urdf:` with overrides)."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
+from functools import partial
 from pathlib import Path
 
 import h5py
@@ -13,11 +12,10 @@ import pytest
 
 import andyc
 from andyc.errors import SpecError
-from andyc.independent.robots import robots_dir
-from tests.test_check_errors import LINE_FORMAT, check, edit, line_of
-
-# The URDFs that ship in example-robot-data (also used by test_urdf_pinocchio and test_reduce).
-ROBOTS_DIR = robots_dir()
+from tests.support import ROBOTS_DIR
+from tests.support import diagnostics
+from tests.support.cli import andyc_cli, check
+from tests.support.diagnostics import LINE_FORMAT, edit, line_of
 
 INERTIAL = '<inertial><mass value="1"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial>'
 
@@ -49,26 +47,8 @@ ARM = f"""<?xml version="1.0"?>
 """
 
 
-def problems(tmp_path, text: str, name: str = "robot.urdf") -> list:
-    """Load `text` as a URDF; return the diagnostics, each checked to be one FILE:LINE: PATH: what; fix line."""
-    file = tmp_path / name
-    file.write_text(text)
-    with pytest.raises(SpecError) as info:
-        andyc.load(file)
-    found = info.value.diagnostics
-    for d in found:
-        assert d.file == str(file)
-        assert d.message and d.hint, f"every problem says what is wrong and what to do: {d}"
-        match = LINE_FORMAT.match(str(d))
-        assert match, f"not FILE:LINE: PATH: what; fix: {d}"
-        assert "\n" not in str(d)
-    return found
-
-
-def one_problem(tmp_path, text: str):
-    found = problems(tmp_path, text)
-    assert len(found) == 1, "expected exactly one problem, got:\n" + "\n".join(map(str, found))
-    return found[0]
+# A URDF's problems, checked as any model's: one FILE:LINE: PATH: what; fix line each.
+one_problem = partial(diagnostics.one_problem, name="robot.urdf")
 
 
 def test_the_base_urdf_is_valid(tmp_path):
@@ -320,11 +300,6 @@ def test_missing_urdf_file(tmp_path):
 
 
 # -- the command line --------------------------------------------------------------------
-
-def andyc_cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "andyc.cli", *map(str, args)], capture_output=True, text=True,
-                          cwd=cwd)
-
 
 def test_cli_check_a_urdf_from_a_package():
     urdf = ROBOTS_DIR / "ur_description/urdf/ur5_robot.urdf"

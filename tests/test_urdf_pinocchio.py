@@ -31,7 +31,7 @@ import pytest
 
 import andyc
 from andyc.spec.urdf import identifier
-from tests.test_urdf_errors import ROBOTS_DIR
+from tests.support import ROBOTS_DIR
 
 pin = pytest.importorskip("pinocchio")
 
