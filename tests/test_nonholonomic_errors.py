@@ -16,7 +16,7 @@ import andyc
 from andyc.spec.expressions import TIME
 from tests.support import MODELS
 from tests.support.cli import andyc_cli
-from tests.support.diagnostics import LINE_FORMAT, assert_at, edit, line_of, one_problem, problems
+from tests.support.diagnostics import LINE_FORMAT, assert_at, edit, line_of, load_text, one_problem, problems
 
 SWING_BAR = MODELS / "swing_bar.yaml"
 
@@ -87,13 +87,19 @@ FLOATING = edit(edit(BALL, "  wz: {}\n", "  wz: {}\n  vx: {}\n  vy: {}\n  vz: {}
 NAMES_IN_SLED_LINK = "names allowed here: c, m, pi, t, th, th_dot, v, w"
 
 
-@pytest.mark.parametrize("text", [BALL, SLED, FLOATING], ids=["ball", "sled", "floating"])
-def test_the_base_models_are_valid(tmp_path, text):
-    file = tmp_path / "model.yaml"
-    file.write_text(text)
-    spec = andyc.load(file)
-    andyc.derive(spec)
-    assert spec.speeds and spec.signals
+@pytest.mark.parametrize("text, speeds, signals, dof", [
+    (BALL, ["wx", "wy", "wz"], ["ball_qw", "ball_qx", "ball_qy", "ball_qz"], 1 + 3),
+    (SLED, ["v", "w"], ["cart_x", "cart_y", "cart_z", "cart_qw", "cart_qx", "cart_qy", "cart_qz"], 1 + 2),
+    (FLOATING, ["wx", "wy", "wz", "vx", "vy", "vz"],
+     ["ball_x", "ball_y", "ball_z", "ball_qw", "ball_qx", "ball_qy", "ball_qz"], 1 + 6),
+], ids=["ball", "sled", "floating"])
+def test_the_base_models_are_valid(tmp_path, text, speeds, signals, dof):
+    """The declared speeds in the joint's order; the signals: the joint's (or link's) position where it has
+    one, then its quaternion; one degree of freedom per coordinate and per speed."""
+    spec = load_text(tmp_path, text)
+    assert spec.warnings == []
+    assert [x.name for x in spec.speeds] == speeds and [x.name for x in spec.signals] == signals
+    assert andyc.derive(spec).dof == dof
 
 
 # -- 1. initial quaternions -------------------------------------------------------

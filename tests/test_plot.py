@@ -281,7 +281,7 @@ def test_cli_plot_writes_sticks_only_for_runs_with_frame_parents(tmp_path):
     result = invoke("plot", orphans.save(tmp_path / "orphans.h5"))
     assert result.exit_code == 0, result.output
     assert (tmp_path / "orphans.png").stat().st_size > 0
-    assert not (tmp_path / "orphans_sticks.png").exists() and result.output.count("wrote") == 1
+    assert not (tmp_path / "orphans_sticks.png").exists() and "orphans_sticks" not in result.output
 
 
 def test_compass_gait_through_andyc_plot(compiled, tmp_path):
