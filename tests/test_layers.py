@@ -1,7 +1,10 @@
 """The pipeline's layers (pyproject.toml's import-linter contract): spec -> symbolic -> codegen -> runtime ->
 analysis | plot -> cli, with the numerics every build carries at the bottom. The contract holds on the tree,
-and it has teeth: one import upward, planted in a copy of the package, breaks it and is named."""
+and it has teeth: one import upward, planted in a copy of the package, breaks it and is named. The tests
+have a layer of their own: a test module imports tests.support, never another test module nor conftest
+(pytest loads conftest itself; what test modules share is in tests/support)."""
 
+import ast
 import shutil
 import subprocess
 import sys
@@ -31,3 +34,33 @@ def test_an_import_upward_breaks_the_contract(tmp_path):
     result = lint(tmp_path)
     assert result.returncode == 1
     assert "BROKEN" in result.stdout and "andyc.spec.model -> andyc.runtime.compiled" in result.stdout
+
+
+def imports_of_tests(folder: Path) -> list[str]:
+    """`FILE: MODULE` for each import, in the test modules and the support package under `folder`, of a
+    module of the tests other than tests.support."""
+    found = []
+    for path in sorted([*folder.glob("*.py"), *folder.glob("support/*.py")]):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module == "tests":
+                names = [f"tests.{alias.name}" for alias in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                names = [node.module or ""]
+            else:
+                continue
+            found += [f"{path.relative_to(folder)}: {name}" for name in names
+                      if name.split(".")[0] == "tests" and name.split(".")[:2] != ["tests", "support"]]
+    return found
+
+
+def test_test_modules_share_only_the_support_package(tmp_path):
+    assert imports_of_tests(ROOT / "tests") == []
+    # and the check has teeth: each way of importing another test module, or conftest, is named
+    (tmp_path / "support").mkdir()
+    (tmp_path / "test_a.py").write_text("from tests.test_b import helper\nimport tests.conftest\n"
+                                        "from tests.support import MODELS\nimport tests.support.cli\n")
+    (tmp_path / "support" / "runs.py").write_text("from tests import test_plot, support\n")
+    assert imports_of_tests(tmp_path) == ["support/runs.py: tests.test_plot", "test_a.py: tests.test_b",
+                                          "test_a.py: tests.conftest"]
