@@ -66,7 +66,7 @@ def test_a_build_missing_its_numerics_fails_to_import_and_leaves_no_half_made_mo
     script = ("import json, sys\nsys.modules['andyc'] = None\ntry:\n    import double_pendulum\n"
               "except Exception as exc:\n    failed = type(exc).__name__\nelse:\n    failed = None\n"
               "print(json.dumps({'failed': failed, 'left': [m for m in sys.modules if 'andyc_numerics' in m]}))\n")
-    out = subprocess.run([sys.executable, "-c", script], cwd=copy, capture_output=True, text=True, timeout=300)
+    out = run_python(script, cwd=copy)
     assert out.returncode == 0, out.stderr
     result = json.loads(out.stdout)
     assert result["failed"] is not None and result["left"] == []
