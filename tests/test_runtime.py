@@ -96,7 +96,7 @@ def test_blow_up_stops_with_when_and_keeps_the_samples(tmp_path, build_dir):
     # The CLI says so, keeps the file and exits 1.
     out = tmp_path / "cli.h5"
     proc = subprocess.run([sys.executable, "-m", "andyc.cli", "sim", str(path), "--dt", "5e-3", "--t-end", "10",
-                           "--out", str(out), "-o", str(build_dir)], capture_output=True, text=True)
+                           "--out", str(out), "--build-dir", str(build_dir)], capture_output=True, text=True)
     assert proc.returncode == 1
     assert "stopped: the state became non-finite" in proc.stderr and "Traceback" not in proc.stderr
     assert out.exists()
