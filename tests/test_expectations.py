@@ -196,6 +196,12 @@ def test_states_against_a_reference_run_file(compiled, tmp_path):
     assert measured == pytest.approx(X0 * W * abs(math.sin(W)), rel=1e-3)
     assert str(o).startswith(f"{path}:{line_of(path, 'states')}: expect[0].states[0]: measured largest error ")
     assert str(o).endswith("expected <= 0.0002 from the run file other.h5")
+    (tmp_path / "junk.h5").write_text("not a run file")            # a model may name any file: no traceback
+    _, found = outcomes(compiled, tmp_path, "stiff_spring",
+                        "  - {t_end: 1, states: [{t: 1, reference: junk.h5, tol: 2.0e-4}]}\n")
+    o = the_check(found, "states")
+    assert not o.ok and "junk.h5 cannot be read (OSError" in str(o)
+    assert str(o).endswith("expected a run file written by andyc sim (.h5)")
 
 
 # -- final ----------------------------------------------------------------------------------------

@@ -181,7 +181,11 @@ def _states(check: Check, run, model, spec) -> tuple:
     else:
         from andyc.runtime.run import read_h5
 
-        reference = read_h5(check.data["reference"])
+        try:
+            reference = read_h5(check.data["reference"])
+        except Exception as exc:            # (not an HDF5 file, or not andyc's layout: h5py's errors vary)
+            return (False, f"the run file {check.data['reference']} cannot be read ({type(exc).__name__}: {exc})",
+                    "a run file written by andyc sim (.h5)")
         if t > reference.time[-1]:
             return False, f"the reference run ends at {reference.time[-1]:.6g} s", f"a reference sample at t = {t:g} s"
         missing = [n for n in run.state_names if n not in reference.state_names]

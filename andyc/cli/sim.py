@@ -114,6 +114,7 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
         click.echo(f"{run.status}; wrote {', '.join(outs)}", err=True)     # (from the watchdog's thread)
 
     interrupts = Interrupts(timeout, abandon)
+    refused = None
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", InputWarning)
@@ -125,14 +126,16 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
                                  events=andyc.Events(tol=event_tol, max_instant_jumps=max_instant_jumps,
                                                      zeno_tol=zeno_tol, stop_after=stops))
     except InitialStateError as exc:        # a problem of the model: exit 1, as andyc check's
-        report.add(exc.located(file))
-        report.results.append({"file": file, "ok": False})
-        report.finish(1)
+        refused = exc.located(file)
     except SimulationError as exc:
         raise Refused(str(exc))
     finally:
         for w in caught:
             report.add(f"warning: {w.message}", "warning")
+    if refused is not None:
+        report.add(refused)
+        report.results.append({"file": file, "ok": False})
+        report.finish(1)
     save(run)
     report.say(f"{run.summary()}; wrote {', '.join(outs)}")
     report.results.append({"file": file, "ok": run.finished, "summary": run.summary(), "outputs": list(outs),
