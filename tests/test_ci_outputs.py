@@ -5,15 +5,18 @@ one meaning of -o (the output; the build folder is --build-dir, the old spelling
 from __future__ import annotations
 
 import json
+import os
 import re
-import subprocess
-import sys
 import xml.etree.ElementTree as ET
 from importlib import resources
 from pathlib import Path
+from types import SimpleNamespace
 
 import jsonschema
 import pytest
+from click.testing import CliRunner
+
+from andyc import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 BALL = (ROOT / "models" / "bouncing_ball.yaml").read_text()
@@ -30,8 +33,15 @@ expect:
 
 
 def andyc(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "andyc.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}, timeout=600)
+    """The command line, in this process (its modules imported once), run in the folder `cwd`: the exit code
+    and the two streams as a user sees them."""
+    here = os.getcwd()
+    os.chdir(cwd)
+    try:
+        result = CliRunner().invoke(cli.main, [str(a) for a in args])
+    finally:
+        os.chdir(here)
+    return SimpleNamespace(returncode=result.exit_code, stdout=result.stdout, stderr=result.stderr)
 
 
 def output_schema() -> dict:

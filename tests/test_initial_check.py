@@ -9,14 +9,16 @@ the velocity-level row 2 x x_dot + 2 y y_dot is 0.
 
 from __future__ import annotations
 
+import os
 import re
-import subprocess
-import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
+from andyc import cli
 from andyc.runtime.run import read_h5
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -51,9 +53,15 @@ def line_of(text: str, needle: str) -> int:
 
 
 def andyc(*args, cwd):
-    """The command line in a subprocess (exit codes and the output as a user sees them)."""
-    return subprocess.run([sys.executable, "-m", "andyc.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}, timeout=600)
+    """The command line, in this process (its modules imported once), run in the folder `cwd`: the exit code
+    and the two streams as a user sees them."""
+    here = os.getcwd()
+    os.chdir(cwd)
+    try:
+        result = CliRunner().invoke(cli.main, [str(a) for a in args])
+    finally:
+        os.chdir(here)
+    return SimpleNamespace(returncode=result.exit_code, stdout=result.stdout, stderr=result.stderr)
 
 
 @pytest.fixture(scope="module")
