@@ -22,12 +22,15 @@ demo: $(STAMP)
 
 # Test files run in parallel, one worker per core (pytest-xdist), a file's tests on one worker so that
 # the models it compiles are compiled once.
+# Then every shipped model's expectations (expect:), on the builds the tests made (build/tests).
 test: $(STAMP)
 	$(VENV)/bin/pytest -q -n auto --dist loadfile
+	$(ANDYC) test models/ --build-dir build/tests
 
 bench: $(STAMP)
 	$(PY) bench/run.py
 	$(PY) bench/latency.py
+	$(PY) bench/ci_latency.py
 
 clean:
 	rm -rf build runs .pytest_cache

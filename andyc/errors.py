@@ -34,6 +34,19 @@ class SimulationError(Exception):
     """A run that cannot start (bad option, inconsistent state)."""
 
 
+class InitialStateError(SimulationError):
+    """A run refused for its model's initial state (off the constraint manifold, dependent rows): a problem
+    of the model, located in its file (`andyc sim` exits 1 with it, as with any model problem)."""
+
+    def __init__(self, source: str, line: int, path: str, message: str):
+        self.line, self.path, self.message = line, path, message
+        super().__init__(f"{source}:{line}: {path}: {message}")
+
+    def located(self, file) -> str:
+        """The message, located in `file` (the model file as the user named it)."""
+        return printable(f"{file}:{self.line}: {self.path}: {self.message}")
+
+
 def printable(text: str) -> str:
     """`text` on one line: every character that is not printable (line breaks, NUL, lone surrogates) as its
     backslash escape, so that text from a model or a user's code cannot start a line of its own."""

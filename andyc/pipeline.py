@@ -113,7 +113,7 @@ def build(path, out_dir="build", force: bool = False) -> BuildResult:
     if not force and other is not None and other != str(Path(spec.file).resolve()):
         raise OutputError(f"{target.parent}: holds the build of '{spec.name}' from {other}, and {spec.file} has "
                           f"the same name; give one of them another `name:`, build it into another folder "
-                          f"(-o DIR), or pass --force to replace that build")
+                          f"(--build-dir DIR), or pass --force to replace that build")
     jumps = jumps_path(out_dir, spec.name) if spec.jumps else None
     if not force and written_constant(equations_path(out_dir, spec.name), "BUILD_KEY") == key and (
             jumps is None or jumps.exists()):

@@ -89,7 +89,7 @@ def test_runtime_data_edits_reuse_the_build_and_an_equation_edit_rebuilds(tmp_pa
     assert written_constant(rebuilt.module_path, "SPEC_FILES") == [str(path.resolve())]
     assert unchanged(path, build).build_key == rebuilt.build_key
     script = ("import sys\nfrom andyc.cli import main\ntry:\n"
-              f"    main(['sim', {str(path)!r}, '-o', {str(build)!r}, '--t-end', '0.1', '--out', 'run.csv'])\n"
+              f"    main(['sim', {str(path)!r}, '--build-dir', {str(build)!r}, '--t-end', '0.1', '--out', 'run.csv'])\n"
               "except SystemExit as exc:\n    assert exc.code in (0, None), exc.code\n"
               "print(sorted(m for m in ('sympy', 'scipy.integrate', 'jinja2', 'jsonschema') if m in sys.modules))")
     proc = run_python(script, cwd=tmp_path)

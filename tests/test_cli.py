@@ -14,18 +14,18 @@ def test_version():
 
 
 def test_build_then_up_to_date(tmp_path):
-    first = andyc_cli("build", MODELS / "double_pendulum.yaml", "-o", tmp_path)
+    first = andyc_cli("build", MODELS / "double_pendulum.yaml", "--build-dir", tmp_path)
     assert first.returncode == 0, first.stderr
     assert "built; derive" in first.stdout and "operations" in first.stdout
     assert (tmp_path / "double_pendulum" / "double_pendulum.py").exists()
-    second = andyc_cli("build", MODELS / "double_pendulum.yaml", "-o", tmp_path)
+    second = andyc_cli("build", MODELS / "double_pendulum.yaml", "--build-dir", tmp_path)
     assert "up to date" in second.stdout
 
 
 def test_sim_writes_h5_and_csv_and_plot_draws_them(tmp_path, shipped_build):
     h5, csv, png = tmp_path / "run.h5", tmp_path / "run.csv", tmp_path / "run.png"
     proc = andyc_cli("sim", MODELS / "double_pendulum.yaml", "--t-end", 2, "--dt", 1e-3, "--every", 10,
-                     "--set", "m2=0.7", "--frames", "tip", "--out", h5, "--out", csv, "-o", shipped_build)
+                     "--set", "m2=0.7", "--frames", "tip", "--out", h5, "--out", csv, "--build-dir", shipped_build)
     assert proc.returncode == 0, proc.stderr
     assert "2000 steps" in proc.stdout and "energy" in proc.stdout
     with h5py.File(h5) as f:
@@ -46,7 +46,7 @@ def test_sim_writes_h5_and_csv_and_plot_draws_them(tmp_path, shipped_build):
     (["--out", "run.txt"], "unknown run file type '.txt'"),
 ])
 def test_sim_usage_errors_exit_2_with_a_message(args, message, shipped_build, tmp_path):
-    proc = andyc_cli("sim", MODELS / "double_pendulum.yaml", "--t-end", 0.01, "-o", shipped_build, *args, cwd=tmp_path)
+    proc = andyc_cli("sim", MODELS / "double_pendulum.yaml", "--t-end", 0.01, "--build-dir", shipped_build, *args, cwd=tmp_path)
     assert proc.returncode == 2
     assert message in proc.stderr and "Traceback" not in proc.stderr
 

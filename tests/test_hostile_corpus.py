@@ -308,7 +308,7 @@ TEXT_CASES = [
          (0,), unchanged=("m.yaml",)),
     Case("file-name-payload-check", ["check", '{d}/evil"""\'#\\ name.yaml'], {'evil"""\'#\\ name.yaml': BALL},
          (0,)),
-    Case("description-and-file-name-build", ["build", '{d}/evil"""\'# name.yaml', "-o", "{d}/build"],
+    Case("description-and-file-name-build", ["build", '{d}/evil"""\'# name.yaml', "--build-dir", "{d}/build"],
          {'evil"""\'# name.yaml': BALL.replace("description: A point mass on a prismatic joint, bouncing.",
                                                f"description: {yaml_text(PAYLOAD)}")}, (0,)),
 ]
@@ -367,7 +367,7 @@ URDF_CASES = [
 
 # -- 6. Command-line values and output paths -------------------------------------------------------------
 
-CART = ["{m}/cart_pole.yaml", "-o", "{b}"]
+CART = ["{m}/cart_pole.yaml", "--build-dir", "{b}"]
 
 
 def sim_option(id, *option, says=""):
@@ -406,15 +406,15 @@ OPTION_CASES = [
     Case("sim-out-unknown-type", ["sim", *CART, "--out", "{d}/r.txt"], {}, (2,)),
     Case("sim-out-is-folder", ["sim", *CART, "--out", "{d}/dir.h5"], {"dir.h5/keep": ""}, (2,), says="folder"),
     Case("sim-out-under-file", ["sim", *CART, "--out", "{d}/file/r.h5"], {"file": "x"}, (2,), says="not a folder"),
-    Case("sim-out-is-model", ["sim", "{d}/m.csv", "--out", "{d}/m.csv", "-o", "{d}/build"],
+    Case("sim-out-is-model", ["sim", "{d}/m.csv", "--out", "{d}/m.csv", "--build-dir", "{d}/build"],
          {"m.csv": (MODELS / "double_pendulum.yaml").read_text()}, (2,), unchanged=("m.csv",), says="overwrite"),
     Case("sim-out-is-table", ["sim", *CART, "--input", "F={d}/push.csv", "--out", "{d}/push.csv"],
          {"push.csv": "t,F\n0,0\n10,1\n"}, (2,), unchanged=("push.csv",), says="overwrite"),
     Case("sim-out-is-controller", ["sim", *CART, "--controller", "{d}/c.csv", "--out", "{d}/c.csv"],
          {"c.csv": "def control(t, x, d, p):\n    return 0.0\n"}, (2,), unchanged=("c.csv",), says="overwrite"),
-    Case("build-over-model", ["build", "{d}/build/ball/ball.py", "-o", "{d}/build"], {"build/ball/ball.py": BALL},
+    Case("build-over-model", ["build", "{d}/build/ball/ball.py", "--build-dir", "{d}/build"], {"build/ball/ball.py": BALL},
          (2,), unchanged=("build/ball/ball.py",), says="overwrite"),
-    Case("build-dir-is-file", ["build", "{d}/m.yaml", "-o", "{d}/m.yaml"], {"m.yaml": BALL}, (2,),
+    Case("build-dir-is-file", ["build", "{d}/m.yaml", "--build-dir", "{d}/m.yaml"], {"m.yaml": BALL}, (2,),
          unchanged=("m.yaml",)),
     Case("eom-over-model", ["eom", "{d}/m.yaml", "-o", "{d}/m.yaml"], {"m.yaml": BALL}, (2,), unchanged=("m.yaml",),
          says="overwrite"),
@@ -520,7 +520,7 @@ INPUT_CASES = [
          says="no such file"),
     Case("controller-and-input", ["sim", *CART, "--controller", "{d}/c.py", "--input", "F=1", "--out", "{d}/r.h5"],
          {"c.py": "def control(t, x, d, p):\n    return 0.0\n"}, (2,), says="drop one"),
-    Case("jumps-file-broken", ["sim", "{d}/m.yaml", "--t-end", "0.01", "-o", "{d}/build"],
+    Case("jumps-file-broken", ["sim", "{d}/m.yaml", "--t-end", "0.01", "--build-dir", "{d}/build"],
          {"m.yaml": BALL, "build/ball/ball_jumps.py": "def bounce(t, x, u, p, d)\n    pass\n"}, (1, 2),
          "ball_jumps.py"),
 ]

@@ -59,7 +59,7 @@ def test_a_signal_stops_the_run_and_keeps_its_samples(tmp_path, shipped_build, s
     flag, out = tmp_path / "started", tmp_path / "run.h5"
     (tmp_path / "started.py").write_text(STARTED.format(flag=str(flag)))
     proc = start(["sim", MODELS / "cart_pole.yaml", "--t-end", 1e5, "--every", 100, "--controller", "started.py",
-                  "--out", out, "--out", tmp_path / "run.csv", "-o", shipped_build], tmp_path)
+                  "--out", out, "--out", tmp_path / "run.csv", "--build-dir", shipped_build], tmp_path)
     wait_for(flag, proc)
     proc.send_signal(sig)
     stdout, stderr = proc.communicate(timeout=HANG)
@@ -76,7 +76,7 @@ def test_a_controller_that_never_returns_is_stopped_by_the_timeout(tmp_path, bui
     out = tmp_path / "run.h5"
     (tmp_path / "endless.py").write_text(ENDLESS)
     proc = start(["sim", MODELS / "cart_pole.yaml", "--t-end", 1, "--controller", "endless.py", "--timeout", 1,
-                  "--out", out, "-o", build_dir], tmp_path)
+                  "--out", out, "--build-dir", build_dir], tmp_path)
     stdout, stderr = proc.communicate(timeout=HANG)
     assert proc.returncode == 1, stderr
     assert "Traceback" not in stderr and "did not stop" in stderr
@@ -89,7 +89,7 @@ def test_sigint_stops_a_run_whose_python_controller_never_returns(tmp_path, buil
     flag, out = tmp_path / "started", tmp_path / "run.h5"
     (tmp_path / "stuck.py").write_text(STUCK.format(flag=str(flag)))
     proc = start(["sim", MODELS / "cart_pole.yaml", "--t-end", 1, "--controller", "stuck.py", "--out", out,
-                  "-o", build_dir], tmp_path)
+                  "--build-dir", build_dir], tmp_path)
     wait_for(flag, proc)
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=HANG)

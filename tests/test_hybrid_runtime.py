@@ -82,7 +82,7 @@ def test_user_jump_file_is_kept_called_and_reported(push, tmp_path):
     assert run.events["state_after"][k][1] == 1.0
     assert run.events["discrete_after"][k][0] == 1.0          # the YAML's reset ran too
     # the CLI says it kept the file
-    out = invoke("build", str(path), "-o", str(build), "--force")
+    out = invoke("build", str(path), "--build-dir", str(build), "--force")
     assert out.exit_code == 0 and "push_jumps.py: kept" in out.output
 
 

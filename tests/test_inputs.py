@@ -132,7 +132,7 @@ def test_lqr_from_andyc_linearize_balances_the_cart_pole(tmp_path):
 
     out = tmp_path / "balanced.h5"
     sim = andyc_cli("sim", MODELS / "cart_pole.yaml", "--controller", controller, "--t-end", 10, "--out", out,
-                    "-o", tmp_path / "build")
+                    "--build-dir", tmp_path / "build")
     assert sim.returncode == 0, sim.stderr
     with h5py.File(out) as f:
         t, names = f["time"][()], list(f["state"].attrs["names"])
@@ -143,7 +143,7 @@ def test_lqr_from_andyc_linearize_balances_the_cart_pole(tmp_path):
     assert force[0] == pytest.approx(-namespace["K"] @ np.array([0, 0.1, 0, 0]))
 
     falls = andyc_cli("sim", MODELS / "cart_pole.yaml", "--t-end", 3, "--out", tmp_path / "falls.h5",
-                      "-o", tmp_path / "build")
+                      "--build-dir", tmp_path / "build")
     assert falls.returncode == 0, falls.stderr
     with h5py.File(tmp_path / "falls.h5") as f:
         assert np.max(np.abs(f["state"][:, 1])) > 1.0
@@ -243,15 +243,15 @@ def test_cli_input_options(tmp_path, cart):
     table.write_text("t,F\n0,0\n1,2\n2,\n3,1\n")
     model = tmp_path / "driven_cart.yaml"
     model.write_text(CART)
-    proc = andyc_cli("sim", model, "--t-end", 1, "--input", f"F={table}", "-o", tmp_path / "build")
+    proc = andyc_cli("sim", model, "--t-end", 1, "--input", f"F={table}", "--build-dir", tmp_path / "build")
     assert proc.returncode == 2 and f"{table}:4: column 'F' is empty" in proc.stderr
     assert "Traceback" not in proc.stderr
     csv = tmp_path / "run.csv"
-    proc = andyc_cli("sim", model, "--t-end", 1, "--input", "F=2 - k*x", "--out", csv, "-o", tmp_path / "build")
+    proc = andyc_cli("sim", model, "--t-end", 1, "--input", "F=2 - k*x", "--out", csv, "--build-dir", tmp_path / "build")
     assert proc.returncode == 0, proc.stderr
     header = next(line for line in csv.read_text().splitlines() if line.startswith("time,"))
     assert header.split(",")[:4] == ["time", "x", "x_dot", "F"]
-    proc = andyc_cli("sim", model, "--input", "F", "-o", tmp_path / "build")
+    proc = andyc_cli("sim", model, "--input", "F", "--build-dir", tmp_path / "build")
     assert proc.returncode == 2 and "'F' is not NAME=VALUE" in proc.stderr
 
 
@@ -262,7 +262,7 @@ def test_a_command_line_expression_is_generated_into_the_build_and_reused(tmp_pa
     model = tmp_path / "driven_cart.yaml"
     model.write_text(CART)
     script = ("import sys\nfrom andyc.cli import main\ntry:\n"
-              f"    main(['sim', {str(model)!r}, '-o', {str(tmp_path / 'build')!r}, '--t-end', '0.1', "
+              f"    main(['sim', {str(model)!r}, '--build-dir', {str(tmp_path / 'build')!r}, '--t-end', '0.1', "
               "'--input', 'F=2 - k*x', '--out', 'run.csv'])\n"
               "except SystemExit as exc:\n    assert exc.code in (0, None), exc.code\n"
               "print('sympy' in sys.modules)")

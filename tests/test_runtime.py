@@ -94,7 +94,7 @@ def test_blow_up_stops_with_when_and_keeps_the_samples(tmp_path, build_dir):
     assert read_h5(tmp_path / "blown.h5").status == run.status
     # The CLI says so, keeps the file and exits 1.
     out = tmp_path / "cli.h5"
-    proc = andyc_cli("sim", path, "--dt", "5e-3", "--t-end", "10", "--out", out, "-o", build_dir)
+    proc = andyc_cli("sim", path, "--dt", "5e-3", "--t-end", "10", "--out", out, "--build-dir", build_dir)
     assert proc.returncode == 1
     assert "stopped: the state became non-finite" in proc.stderr and "Traceback" not in proc.stderr
     assert out.exists()

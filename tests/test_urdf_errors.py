@@ -355,7 +355,7 @@ def test_cli_build_and_sim_a_urdf(tmp_path):
     urdf = ROBOTS_DIR / "double_pendulum_description/urdf/double_pendulum.urdf"
     run = tmp_path / "run.h5"
     proc = andyc_cli("sim", urdf, "--t-end", 0.5, "--dt", 1e-3, "--frames", "link2", "--out", run,
-                     "-o", tmp_path / "build", cwd=tmp_path)
+                     "--build-dir", tmp_path / "build", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert "500 steps" in proc.stdout and "not used by andyc" not in proc.stdout
     with h5py.File(run) as f:

@@ -1,5 +1,7 @@
 """Accuracy against cost, and where methods fail: work-precision sweeps and stability scans; and the
-linearization about a point given by name (linearization.py, `andyc linearize`).
+linearization about a point given by name (linearization.py, `andyc linearize`); a model's initial state
+checked from its equations (initial_state.py, `andyc check`); its expectations run and measured
+(expectations.py, junit.py: `andyc test`).
 
 The sweeps and scans run a compiled model many times through andyc.simulate and compare each
 run with a reference over the same horizon: the model's closed form where it

@@ -6,6 +6,8 @@ command or family of commands, each a click command over the API:
 
     build.py      check (validate, print each model's summary) and build
     sim.py        sim (simulate, write the run files, print the run's summary)
+    test.py       test (run the models' expectations, andyc.analysis.expectations; JUnit XML)
+    formats.py    --format text|json|github: the report of check, build, sim and test
     plot.py       plot (plots, stick figures, animations of a run)
     eom.py        eom (the equations written out for reading)
     linearize.py  linearize (A, B and eigenvalues about a point)
@@ -25,7 +27,7 @@ import sys
 import click
 
 import andyc
-from andyc.cli import analysis, build, eom, linearize, plot, sim
+from andyc.cli import analysis, build, eom, linearize, plot, sim, test
 from andyc.cli.common import Refused
 from andyc.outputs import OutputError
 
@@ -72,6 +74,7 @@ def main():
     andyc check model.yaml      validate, print a summary (also robot.urdf)
     andyc build model.yaml      write build/<name>/<name>.py
     andyc sim model.yaml        build if needed, simulate, write run files
+    andyc test models/          run the models' expectations (expect:); JUnit with --junit
     andyc plot run.h5           plot states and energy
     andyc linearize model.yaml  A, B and eigenvalues about a state
     andyc bench model.yaml      work-precision: error against cost per method
@@ -80,7 +83,7 @@ def main():
     """
 
 
-for _command in (build.check, build.build, sim.sim, plot.plot, linearize.linearize, analysis.bench,
+for _command in (build.check, build.build, sim.sim, test.test, plot.plot, linearize.linearize, analysis.bench,
                  analysis.stability, eom.eom):
     main.add_command(_command)
 

@@ -2,58 +2,75 @@
 
 from __future__ import annotations
 
-import sys
-
 import click
 
 import andyc
-from andyc.cli.common import compiled, report_jumps_file
+from andyc.cli.common import build_dir_option, compiled, report_jumps_file
+from andyc.cli.formats import Report, format_option
 from andyc.errors import SpecError, plural
 from andyc.outputs import check_folder
 
 
 @click.command()
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
-def check(files):
-    """Validate model FILES (YAML or URDF); print every problem as FILE:LINE: PATH: what; fix."""
+@format_option
+def check(files, fmt):
+    """Validate model FILES (YAML or URDF) and their initial states (constraints, guards), without compiling;
+    print every problem as FILE:LINE: PATH: what; fix."""
+    from andyc.analysis.initial_state import initial_problems
+
+    report = Report("check", fmt)
     problems = 0
     for file in files:
         try:
             spec = andyc.load(file)
             model = andyc.derive(spec)
+            # The initial state, checked from the equations (andyc.analysis.initial_state).
+            found = initial_problems(model, spec.simulate.get("init", "check"), spec.simulate.get("init_tol", 1e-6))
         except SpecError as exc:
-            for d in exc.diagnostics:
-                click.echo(str(d), err=True)
-            problems += len(exc.diagnostics)
+            found, spec = exc.diagnostics, None
+        for w in spec.warnings if spec is not None else ():
+            report.add(w, "warning")
+        for d in found:
+            report.add(d)
+        problems += len(found)
+        if found:
+            report.results.append({"file": file, "ok": False})
             continue
-        for w in spec.warnings:
-            click.echo(f"{w} (warning)", err=True)
-        click.echo(model.summary(file, spec))
+        summary = model.summary(file, spec)
         if spec.reduce:
             from andyc.pipeline import reduction_report
 
-            click.echo(reduction_report(file, spec, model))
+            summary += "\n" + reduction_report(file, spec, model)
+        report.say(summary)
+        report.results.append({"file": file, "ok": True, "summary": summary})
     if problems:
-        click.echo(f"{plural(problems, 'problem')} found", err=True)
-    sys.exit(1 if problems else 0)
+        report.say(f"{plural(problems, 'problem')} found", err=True)
+    report.finish(1 if problems else 0)
 
 
 @click.command()
 @click.argument("file", type=click.Path(dir_okay=False))
-@click.option("-o", "--out-dir", default="build", show_default=True, help="Build folder; writes DIR/<name>/<name>.py.")
+@build_dir_option("-o", "--out-dir")
 @click.option("--force", is_flag=True, help="Derive, generate and compile again, even if the equations are "
               "unchanged; replaces the build of another model file of the same name.")
-def build(file, out_dir, force):
-    """Derive the equations of motion of FILE and generate its module."""
-    check_folder(out_dir, [file])
-    model, result = compiled(file, out_dir, force)
+@format_option
+def build(file, build_dir, force, fmt):
+    """Derive the equations of motion of FILE and generate its module, DIR/<name>/<name>.py."""
+    report = Report("build", fmt)
+    check_folder(build_dir, [file])
+    model, result = compiled(file, build_dir, force, report)
     t = result.timings
     compile = (f"compile {t['compile']:.2f} s ({plural(result.compiled, 'function')} compiled)" if result.compiled
                else f"loaded from Numba's cache in {t['compile']:.2f} s")
     if result.skipped:
-        click.echo(f"{result.module_path}: up to date (equations and andyc unchanged); {compile}")
+        summary = f"{result.module_path}: up to date (equations and andyc unchanged); {compile}"
     else:
         ops = sum(result.operations.values())
-        click.echo(f"{result.module_path}: built; derive {t['derive']:.2f} s, generate {t['generate']:.2f} s, "
+        summary = (f"{result.module_path}: built; derive {t['derive']:.2f} s, generate {t['generate']:.2f} s, "
                    f"{compile}; {ops} operations ({', '.join(f'{k} {v}' for k, v in result.operations.items())})")
-    report_jumps_file(result)
+    report.say(summary)
+    if report.text:
+        report_jumps_file(result)
+    report.results.append({"file": file, "ok": True, "summary": summary, "module": str(result.module_path)})
+    report.finish(0)

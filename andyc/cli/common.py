@@ -20,12 +20,50 @@ class Refused(click.ClickException):
         super().__init__(printable(message))
 
 
-def fail_spec(exc: SpecError) -> None:
-    """Print every problem of a model, one a line, then how many, on stderr; exit 1."""
+def fail_spec(exc: SpecError, report=None) -> None:
+    """Print every problem of a model, one a line, then how many, on stderr (or add them to `report`, a
+    andyc.cli.formats.Report); exit 1."""
+    if report is None:
+        for d in exc.diagnostics:
+            click.echo(str(d), err=True)
+        click.echo(f"{plural(len(exc.diagnostics), 'problem')} found", err=True)
+        sys.exit(1)
     for d in exc.diagnostics:
-        click.echo(str(d), err=True)
-    click.echo(f"{plural(len(exc.diagnostics), 'problem')} found", err=True)
-    sys.exit(1)
+        report.add(d)
+    report.say(f"{plural(len(exc.diagnostics), 'problem')} found", err=True)
+    report.finish(1)
+
+
+def _refuse_old_spelling(ctx, param, value):
+    if value is not None:
+        raise click.UsageError(f"{param.opts[0]} is no longer the build folder: give it as --build-dir DIR "
+                               "(-o/--out is the output everywhere: the run file of andyc sim, the plot of andyc "
+                               "plot, the folder of andyc bench)", ctx)
+    return value
+
+
+def build_dir_option(*old):
+    """--build-dir DIR, the build folder; `old`, its former spellings, refused with a hint."""
+    def decorate(f):
+        f = click.option("--build-dir", default="build", show_default=True, metavar="DIR",
+                         help="Build folder; the build is DIR/<name>/<name>.py.")(f)
+        for name in old:
+            f = click.option(name, hidden=True, expose_value=False, default=None, callback=_refuse_old_spelling,
+                             is_eager=True)(f)
+        return f
+    return decorate
+
+
+def model_options(ctx: click.Context, simulate: dict) -> dict:
+    """The command's options, each not given on the command line taken from the model's simulate: section
+    (andyc.spec.simulate) when it gives it: the command line wins, then the model, then the defaults."""
+    from click.core import ParameterSource
+
+    out = dict(ctx.params)
+    for name, value in simulate.items():
+        if name in out and ctx.get_parameter_source(name) in (ParameterSource.DEFAULT, None):
+            out[name] = value
+    return out
 
 
 def derived(file):
@@ -37,8 +75,9 @@ def derived(file):
         fail_spec(exc)
 
 
-def compiled(file, out_dir, force: bool = False):
-    """(CompiledModel, BuildResult) of FILE; a model error is printed as andyc check does (exit 1)."""
+def compiled(file, out_dir, force: bool = False, report=None):
+    """(CompiledModel, BuildResult) of FILE; a model error is printed as andyc check does (exit 1; to
+    `report`, a andyc.cli.formats.Report, when given)."""
     from andyc.codegen.buildfiles import numerics_compiled
 
     if sys.stderr.isatty() and not numerics_compiled():
@@ -47,7 +86,7 @@ def compiled(file, out_dir, force: bool = False):
     try:
         return andyc.compile_model(file, out_dir, force)
     except SpecError as exc:
-        fail_spec(exc)
+        fail_spec(exc, report)
     except SimulationError as exc:
         raise Refused(str(exc))
 

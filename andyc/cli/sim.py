@@ -2,17 +2,17 @@
 
 from __future__ import annotations
 
-import sys
 import warnings
 from pathlib import Path
 
 import click
 
 import andyc
-from andyc.cli.common import Refused, compiled, report_jumps_file
+from andyc.cli.common import Refused, build_dir_option, compiled, model_options, report_jumps_file
+from andyc.cli.formats import Report, format_option
 from andyc.cli.values import (COUNT, NON_NEGATIVE, POSITIVE, TOLERANCE, Number, input_drives, parse_sets, split_sets,
                               stop_counts)
-from andyc.errors import SimulationError, plural
+from andyc.errors import InitialStateError, SimulationError, plural
 from andyc.outputs import check_folder, check_output
 from andyc.runtime.methods import MAX_STEPS, METHODS
 
@@ -30,7 +30,7 @@ from andyc.runtime.methods import MAX_STEPS, METHODS
 @click.option("--controller", type=click.Path(dir_okay=False), default=None, metavar="FILE.py",
               help="A Python file defining control(t, x, d, p), returning the inputs (compiled with Numba when it can "
                    "be); it drives every input.")
-@click.option("--out", "outs", multiple=True, metavar="RUN.h5|RUN.csv",
+@click.option("-o", "--out", "outs", multiple=True, metavar="RUN.h5|RUN.csv",
               help="Run file(s) to write; default runs/<name>.h5.")
 @click.option("--every", default=1, show_default=True, type=COUNT, help="Log one sample every N steps.")
 @click.option("--frames", default=None, metavar="all|F1,F2", help="Log the world positions of these frames.")
@@ -56,11 +56,13 @@ from andyc.runtime.methods import MAX_STEPS, METHODS
 @click.option("--timeout", default=None, type=POSITIVE, metavar="SECONDS",
               help="Stop the run after this much wall time, keeping its samples (also when a controller never "
                    "returns).")
-@click.option("-o", "--out-dir", default="build", show_default=True, help="Build folder.")
+@build_dir_option("--out-dir")
+@format_option
 def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, frames, init, init_tol, energy_correction,
-        energy_tol, event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, timeout, out_dir):
+        energy_tol, event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, timeout, build_dir, fmt):
     """Build FILE if needed, simulate it and write run files.
 
+    The model's simulate: section gives the options not given here (then the defaults shown).
     SIGINT (Ctrl-C) or SIGTERM stop the run and write the samples so far, with the status "interrupted";
     the exit code is then 130 or 143."""
     from andyc.runtime.inputs import InputWarning
@@ -73,22 +75,29 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
     read = [file, controller] + [v for v in inputs.values() if v.lower().endswith(".csv")]
     for out in outs:
         if Path(out).suffix.lower() not in RUN_SUFFIXES:
-            raise click.BadParameter(f"unknown run file type '{Path(out).suffix}'; use .h5 or .csv",
-                                     param_hint="--out")
+            raise click.BadParameter(f"unknown run file type '{Path(out).suffix}'; use .h5 or .csv (-o/--out is "
+                                     f"the run file; the build folder is --build-dir)", param_hint="-o/--out")
         check_output(out, read, "run file")
-    check_folder(out_dir, read)
+    report = Report("sim", fmt)
+    check_folder(build_dir, read)
+    model, result = compiled(file, build_dir, report=report)
+    given = model_options(click.get_current_context(), model.simulate)
+    t_end, dt, method, every, init, init_tol = (given[k] for k in ("t_end", "dt", "method", "every", "init", "init_tol"))
+    energy_correction, energy_tol, event_tol = given["energy_correction"], given["energy_tol"], given["event_tol"]
+    max_instant_jumps, zeno_tol, rtol, atol = (given[k] for k in ("max_instant_jumps", "zeno_tol", "rtol", "atol"))
+    frames = given["frames"]
+    stops = model.simulate.get("stop_after", {}) if not stop_after else stops
     if t_end / dt > MAX_STEPS:
         raise click.BadParameter(f"t_end / dt = {t_end / dt:.3g} steps, past the limit of {MAX_STEPS:.0e}; raise "
                                  f"--dt or shorten --t-end", param_hint="--dt")
-    model, result = compiled(file, out_dir)
-    if not result.skipped:
+    if not result.skipped and report.text:
         report_jumps_file(result)
     outs = outs or (f"runs/{model.name}.h5",)
     read += [model.path, result.jumps_path]
     for out in outs:
         check_output(out, read, "run file")
     if result.compiled:
-        click.echo(f"{model.name}: compiled {plural(result.compiled, 'function')} in {result.timings['compile']:.1f} s "
+        report.say(f"{model.name}: compiled {plural(result.compiled, 'function')} in {result.timings['compile']:.1f} s "
                    f"(once per build: Numba caches them)", err=True)
     params, set_inputs = split_sets(overrides, model.input_names)
     for name, value in set_inputs.items():
@@ -102,9 +111,10 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
 
     def abandon(run) -> None:       # the watchdog's: the run never returned
         save(run)
-        click.echo(f"{run.status}; wrote {', '.join(outs)}", err=True)
+        click.echo(f"{run.status}; wrote {', '.join(outs)}", err=True)     # (from the watchdog's thread)
 
     interrupts = Interrupts(timeout, abandon)
+    refused = None
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", InputWarning)
@@ -115,13 +125,21 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
                                                              energy_tol=energy_tol),
                                  events=andyc.Events(tol=event_tol, max_instant_jumps=max_instant_jumps,
                                                      zeno_tol=zeno_tol, stop_after=stops))
+    except InitialStateError as exc:        # a problem of the model: exit 1, as andyc check's
+        refused = exc.located(file)
     except SimulationError as exc:
         raise Refused(str(exc))
     finally:
         for w in caught:
-            click.echo(f"warning: {w.message}", err=True)
+            report.add(f"warning: {w.message}", "warning")
+    if refused is not None:
+        report.add(refused)
+        report.results.append({"file": file, "ok": False})
+        report.finish(1)
     save(run)
-    click.echo(f"{run.summary()}; wrote {', '.join(outs)}")
+    report.say(f"{run.summary()}; wrote {', '.join(outs)}")
+    report.results.append({"file": file, "ok": run.finished, "summary": run.summary(), "outputs": list(outs),
+                           "status": run.status})
     if not run.finished:
-        click.echo(run.status, err=True)
-        sys.exit(interrupts.exit_code if run.status.startswith("interrupted") else 1)
+        report.add(run.status)
+    report.finish(0 if run.finished else interrupts.exit_code if run.status.startswith("interrupted") else 1)

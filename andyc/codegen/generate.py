@@ -115,7 +115,7 @@ def render_front(spec, key: str) -> str:
         initial={"unpack": _parameter_unpack(parameters, initial), "state": [to_code(e) for e in initial]},
         initial_discrete={"unpack": _parameter_unpack(parameters, discrete), "values": [to_code(e) for e in discrete]},
         closed_form_where=[[spec.source.line(("closed_form", n)), format_path(("closed_form", n))] for n in states]
-        if spec.closed_form else [])
+        if spec.closed_form else [], simulate=spec.simulate)
 
 
 def _gain_parameter(spec, gain) -> str | None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import importlib.util
 import sys
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
 
@@ -57,6 +57,7 @@ class CompiledModel:
     input_expressions: tuple = ()  # (input, expression text) the model drives by default
     closed_form: object = None  # the module's closed_form(t, u, p) -> x, the exact solution it declares, or None
     closed_form_where: tuple = ()  # (line, document path) of each state's closed form in the model file
+    simulate: dict = field(default_factory=dict)  # andyc sim's options the model gives (its simulate: section)
 
     @property
     def nd(self) -> int:
@@ -88,11 +89,6 @@ class CompiledModel:
     def active_rows(self, flow: int) -> list:
         """The constraint rows active in `flow` (indices into the nc rows; holonomic ones first)."""
         return [int(r) for r in self.module.FLOW_ROWS[flow, :self.module.FLOW_NROWS[flow]]]
-
-    def row_location(self, row: int) -> str:
-        """`FILE:LINE: PATH` of a constraint row, for messages."""
-        line, path = self.constraint_where[row]
-        return f"{self.source}:{line}: {path}"
 
     def initial_state(self, p: np.ndarray) -> np.ndarray:
         return self.module.initial_state(p)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from andyc.errors import SimulationError
+from andyc.errors import InitialStateError, SimulationError
 from andyc.numerics.status import MESSAGES, OK
 from andyc.runtime.compiled import CompiledModel, work
 from andyc.runtime.options import Init
@@ -68,8 +68,9 @@ def consistent_initial_state(model: CompiledModel, x, u, p, d, flow, init: Init)
         k = int(np.argmax(values))
         row = rows[k] if k < phi.shape[0] else rows[k - phi.shape[0]]
         level = "position" if k < phi.shape[0] else "velocity"
-        raise SimulationError(
-            f"{model.row_location(row)}: the initial state is off the constraint manifold: largest residual "
+        line, path = model.constraint_where[row]
+        raise InitialStateError(
+            model.source, line, path, f"the initial state is off the constraint manifold: largest residual "
             f"{values[k]:.3g} at the {level} level (constraint '{model.constraint_rows[row]}'; all rows: position "
             f"{out['initial_position_residual']:.3g}, velocity {out['initial_velocity_residual']:.3g}), past the bound "
             f"{init.tol:g}; fix the initial values, or use --init project to move the state onto the manifold "
@@ -99,8 +100,9 @@ def require_independent_rows(model: CompiledModel, method: str, x, u, p, d, flow
         if np.linalg.matrix_rank(A[:k + 1], tol=tol) <= k:
             row = rows[k]
             earlier = sorted({model.constraint_rows[r] for r in rows[:k]})
-            raise SimulationError(
-                f"{model.row_location(row)}: row {row} of the constraints (in '{model.constraint_rows[row]}') is a "
+            line, path = model.constraint_where[row]
+            raise InitialStateError(
+                model.source, line, path, f"row {row} of the constraints (in '{model.constraint_rows[row]}') is a "
                 f"combination of earlier rows (in {', '.join(repr(e) for e in earlier)}) at the initial state: the "
                 f"constraints are redundant or the pose is singular, so the {method} method's multipliers are not "
                 f"unique; remove the redundant constraint, or use --method projection, which allows them")

@@ -6,7 +6,7 @@ same model dictionary by andyc.spec.urdf.
 Every problem is collected with its line and document path; the loader raises
 one SpecError carrying all of them, so `andyc check` can print them at once.
 `build_spec` lists the stages; each section's checks live in their own module
-(scope, frames, elements, constraints, hybrid, closed_form) and each stage
+(scope, frames, elements, constraints, hybrid, closed_form, simulate, expect) and each stage
 hands the next what it needs, the name scope first of all.
 """
 
@@ -22,11 +22,13 @@ from andyc.spec import urdf
 from andyc.spec.closed_form import build_closed_form
 from andyc.spec.constraints import FrameQuantities, build_constraints, check_conservative
 from andyc.spec.elements import build_elements
+from andyc.spec.expect import build_expect
 from andyc.spec.frames import build_frames
 from andyc.spec.hybrid import build_hybrid
 from andyc.spec.meaning import meaning_sha256
 from andyc.spec.model import Spec
 from andyc.spec.schema_errors import schema, schema_problems
+from andyc.spec.simulate import build_simulate
 from andyc.spec.scope import Report, check_names, declare_constants, declare_states, driven_inputs, warn_unused
 from andyc.spec.yamlpos import MAX_YAML_BYTES, SourceMap, load_yaml
 
@@ -101,6 +103,8 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
     constraints = build_constraints(data.get("constraints") or [], scope, quantities)
     flows, jumps, initial_flow = build_hybrid(data.get("hybrid"), constraints, scope, quantities)
     closed_form = build_closed_form(data.get("closed_form"), jumps, scope, input_expressions)
+    simulate = build_simulate(data.get("simulate"), scope, jumps)
+    expect = build_expect(data.get("expect"), scope, constraints, jumps, closed_form)
     conserves = bool(data.get("conserves_energy", False))
     if conserves:
         check_conservative(elements, constraints, frames, data.get("constraints") or [], scope)
@@ -125,4 +129,4 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
                 dampers=elements.dampers, springs=elements.springs, potentials=elements.potentials,
                 constraints=constraints, conserves_energy=conserves, discrete=scope.discrete, flows=flows,
                 jumps=jumps, initial_flow=initial_flow, input_expressions=input_expressions, driven_inputs=driven,
-                closed_form=closed_form, **origin)
+                closed_form=closed_form, simulate=simulate, expect=expect, **origin)

@@ -3,7 +3,7 @@
 A build is reused while this key is unchanged (andyc.pipeline.build). The key
 is a hash of the document as data, so comments, key order, quoting and
 whitespace do not count. Runtime data does not count either: parameter
-defaults, numeric input defaults, initial values (coordinates, speeds,
+defaults, numeric input defaults, how the model is run (simulate:, expect:), initial values (coordinates, speeds,
 discrete states, the signals of ball, floating and nonholonomic links) and
 the description. Those are written into the generated module's front file,
 which is rewritten without touching the compiled equations (see
@@ -28,7 +28,7 @@ def meaning(data: dict) -> dict:
     The order of parameters, inputs, coordinates, speeds and discrete states is their index in the
     generated arrays (p, u, x, d), so those mappings become lists of names, in order: the canonical
     JSON sorts the keys of a mapping, never the items of a list."""
-    out = {k: v for k, v in data.items() if k != "description"}
+    out = {k: v for k, v in data.items() if k not in ("description", "simulate", "expect")}
     if isinstance(data.get("parameters"), dict):
         out["parameters"] = list(data["parameters"])
     if isinstance(data.get("inputs"), dict):       # a number is a default; a text an expression that drives it

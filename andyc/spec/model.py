@@ -249,6 +249,8 @@ class Spec:
     meaning_sha256: str = ""    # what shapes the equations (andyc.spec.meaning): the build key's part
     files: tuple = ()           # the files the model was read from (the model file; a URDF it names)
     closed_form: dict = field(default_factory=dict)  # state name -> x_i(t) of t, parameters and held inputs
+    simulate: dict = field(default_factory=dict)     # andyc sim's options the model gives (andyc.spec.simulate)
+    expect: list = field(default_factory=list)       # of Expectation (andyc.spec.expect), for andyc test
 
     @property
     def speed_symbols(self) -> list:

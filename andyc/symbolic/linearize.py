@@ -147,11 +147,18 @@ def default_point(model: SymbolicModel, parameters: dict | None = None, inputs: 
 
 def _point_values(model: SymbolicModel, x, u, p, d, t: float) -> dict:
     values = {model.t: t}
-    values.update(zip(model.q + model.v, x))
+    values.update(zip(model.q + model.v + model.signals, x))
     values.update(zip(model.parameters, p))
     values.update(zip(model.inputs, u))
     values.update(zip(model.discrete, d))
     return values
+
+
+def values_at(model: SymbolicModel, exprs: list, x, u, p, d=(), t: float = 0.0) -> np.ndarray:
+    """The values of expressions of the model's symbols (intermediates too) at one point, exactly as the
+    linearization evaluates them (x, u, p, d ordered as in linearize)."""
+    point = _Point(model, model.intermediates_of(exprs), _point_values(model, x, u, p, d, t), [])
+    return np.array([point.evaluate(e)[0] for e in exprs])
 
 
 def linearize(model: SymbolicModel, x, u, p, d=(), t: float = 0.0, flow: int | None = None) -> Linearization:

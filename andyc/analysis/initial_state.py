@@ -1,0 +1,68 @@
+"""The initial state checked from the equations, without compiling: what `andyc check` finds before a run.
+
+At the model's initial state (its initial values at the parameter defaults, t = 0, in its initial flow):
+
+- the active constraint rows: holonomic residuals phi(0, q0) and velocity-level residuals
+  c = A v0 + b (ANDY eq. 10-11) past `tol` put the state off the constraint manifold, which a run with
+  init "check" (the default; the model's simulate: section may say otherwise) refuses;
+- the guards of the jumps out of the initial flow whose enabling conditions hold: a guard already past zero
+  (falling: g < 0; rising: g > 0) starts the run on the wrong side of its surface (the runtime would take
+  the jump at once, or never until the guard comes back).
+
+The values are those of the symbolic model, evaluated exactly as its linearization does
+(andyc.symbolic.linearize.values_at): the same numbers the compiled module computes, to round-off.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from andyc.errors import Diagnostic
+from andyc.spec.model import FALLING
+from andyc.symbolic.linearize import default_point, values_at
+from andyc.symbolic.model import SymbolicModel
+
+# A guard within this of zero is on its surface, not past it (the runtime's instant check decides then).
+GUARD_ROUND_OFF = 1e-12
+
+
+def initial_problems(model: SymbolicModel, init: str = "check", tol: float = 1e-6) -> list[Diagnostic]:
+    """The problems of the model's initial state, one Diagnostic each (see the module docstring)."""
+    spec = model.spec
+    flow = model.hybrid.initial
+    x, u, p, d = default_point(model)
+    out = []
+    rows = model.hybrid.flow_rows[flow]
+    C = model.constraints
+    if rows and init == "check":
+        holonomic = [r for r in rows if r < C.nh]
+        values = values_at(model, [C.phi[r] for r in holonomic] + [C.c[r] for r in rows], x, u, p, d)
+        residuals = list(zip(holonomic, ["position"] * len(holonomic), values[:len(holonomic)])) + list(
+            zip(rows, ["velocity"] * len(rows), values[len(holonomic):]))
+        where = [w for c in spec.constraints for w in c.row_where]
+        reported = set()
+        for row, level, value in sorted(residuals, key=lambda r: -abs(r[2])):
+            if not abs(value) > tol or row in reported:
+                continue
+            reported.add(row)
+            out.append(spec.source.diag(
+                where[row], f"the initial state is off the constraint manifold: residual {value:.3g} at the {level} "
+                f"level (constraint '{C.rows[row]}'), past the bound {tol:g} (init_tol)",
+                "fix the initial values, or give the model `simulate: {init: project}` to move the state onto "
+                "the manifold (the smallest change in the mass-matrix metric), or `simulate: {init: as-is}` to "
+                "start from it anyway"))
+    jumps = [(j, s) for j, s in zip(model.hybrid.jumps, spec.jumps) if j.source == flow and j.direction != 0]   # (either: no wrong side)
+    if jumps:
+        values = values_at(model, [e for j, _ in jumps for e in (j.guard, j.enabled)], x, u, p, d)
+        for k, (j, s) in enumerate(jumps):
+            g, enabled = values[2 * k], values[2 * k + 1]
+            past = g < -GUARD_ROUND_OFF if j.direction == FALLING else g > GUARD_ROUND_OFF
+            if past and enabled >= 0 and np.isfinite(g):
+                side = "below" if j.direction == FALLING else "above"
+                out.append(spec.source.diag(
+                    s.where + ("guard",), f"the guard of jump '{j.name}' is already past zero at the start: "
+                    f"{g:.3g}, {side} zero in flow '{model.hybrid.flows[flow]}', where it happens when it "
+                    f"{'falls' if j.direction == FALLING else 'rises'} to zero",
+                    "fix the initial values so that the guard starts on its far side, or start in another "
+                    "flow (hybrid: initial:)"))
+    return out

@@ -1,0 +1,88 @@
+"""`andyc test`: run the expectations of models (their expect: sections) and say which hold."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+import andyc
+from andyc.cli.common import build_dir_option
+from andyc.cli.formats import Report, format_option
+from andyc.errors import SimulationError, SpecError, plural
+from andyc.outputs import check_folder, check_output, write_text
+
+MODEL_SUFFIXES = (".yaml", ".yml")
+
+
+def model_files(paths) -> list:
+    """The files given, and in each folder given its model files (*.yaml, *.yml, sorted)."""
+    out = []
+    for path in paths:
+        p = Path(path)
+        if p.is_dir():
+            found = sorted(f for f in p.iterdir() if f.suffix.lower() in MODEL_SUFFIXES and f.is_file())
+            out += [str(f) for f in found]
+        else:
+            out.append(str(path))
+    return out
+
+
+@click.command()
+@click.argument("paths", nargs=-1, required=True, type=click.Path())
+@build_dir_option()
+@click.option("--junit", "junit", default=None, type=click.Path(dir_okay=False), metavar="FILE.xml",
+              help="Also write the outcomes as JUnit XML.")
+@format_option
+def test(paths, build_dir, junit, fmt):
+    """Run the expectations (expect:) of model FILES, and of the models in DIRS.
+
+    Each expectation is a short run that must finish and its checks. One line per failed one,
+    FILE:LINE: expect[i].<check>: measured ..., expected ...; exit 0 when all hold, 1 otherwise."""
+    from andyc.analysis.expectations import run_expectations
+    from andyc.analysis.junit import junit_xml
+
+    for path in paths:
+        if not Path(path).exists():
+            raise click.BadParameter(f"'{path}' does not exist", param_hint="PATHS")
+    files = model_files(paths)
+    if junit:
+        check_output(junit, files, "JUnit file")
+    check_folder(build_dir, files)
+    report = Report("test", fmt)
+    results, failed, checks = [], 0, 0
+    for file in files:
+        outcomes, problems = [], []
+        try:
+            spec = andyc.load(file)
+            if spec.expect:
+                model, _ = andyc.compile_model(file, build_dir)
+                outcomes = run_expectations(spec, model, file)
+        except SpecError as exc:
+            problems = [str(d) for d in exc.diagnostics]
+            for d in exc.diagnostics:
+                report.add(d)
+        except SimulationError as exc:
+            problems = [str(exc)]
+            report.add(exc)
+        bad = [o for o in outcomes if not o.ok]
+        for o in bad:
+            report.add(o)
+        checks += len(outcomes)
+        failed += len(bad) + (1 if problems else 0)
+        results.append((file, outcomes, problems))
+        report.results.append({"file": file, "ok": not bad and not problems,
+                               "outcomes": [o.as_dict() for o in outcomes]})
+        if problems:
+            report.say(f"{file}: not tested (the model has problems)")
+        elif not outcomes:
+            report.say(f"{file}: no expectations (add an expect: section)")
+        else:
+            runs = sum(o.seconds for o in outcomes)
+            report.say(f"{file}: {plural(len(outcomes), 'check')}, " + (f"{len(bad)} failed" if bad else "all hold")
+                       + f" (runs {runs:.2f} s)")
+    if junit:
+        write_text(junit, junit_xml(results))
+    report.say(f"{plural(checks, 'check')} in {plural(len(files), 'model')}: "
+               + (f"{plural(failed, 'failure')}" if failed else "all hold"))
+    report.finish(1 if failed else 0)
