@@ -13,7 +13,7 @@ from __future__ import annotations
 import importlib.util
 import sys
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
 
@@ -57,6 +57,7 @@ class CompiledModel:
     input_expressions: tuple = ()  # (input, expression text) the model drives by default
     closed_form: object = None  # the module's closed_form(t, u, p) -> x, the exact solution it declares, or None
     closed_form_where: tuple = ()  # (line, document path) of each state's closed form in the model file
+    display: dict = field(default_factory=dict)  # state units, the ground, shapes (andyc.spec.display): for pictures
 
     @property
     def nd(self) -> int:
