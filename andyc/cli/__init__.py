@@ -8,6 +8,7 @@ command or family of commands, each a click command over the API:
     sim.py        sim (simulate, write the run files, print the run's summary)
     plot.py       plot (plots, stick figures, animations of a run)
     graph.py      graph (a model's frame tree and hybrid automaton, drawn)
+    view.py       view (a run as an HTML page that plays it in 3-D)
     eom.py        eom (the equations written out for reading)
     linearize.py  linearize (A, B and eigenvalues about a point)
     analysis.py   bench (work-precision) and stability (stability maps)
@@ -26,7 +27,7 @@ import sys
 import click
 
 import andyc
-from andyc.cli import analysis, build, eom, graph, linearize, plot, sim
+from andyc.cli import analysis, build, eom, graph, linearize, plot, sim, view
 from andyc.cli.common import Refused
 from andyc.outputs import OutputError
 
@@ -75,6 +76,7 @@ def main():
     andyc sim model.yaml        build if needed, simulate, write run files
     andyc plot run.h5           plot states and energy
     andyc graph model.yaml      draw the frame tree and the hybrid automaton
+    andyc view run.h5           a run as an HTML page that plays it in 3-D
     andyc linearize model.yaml  A, B and eigenvalues about a state
     andyc bench model.yaml      work-precision: error against cost per method
     andyc stability model.yaml  stability map: step against method, failures named
@@ -82,8 +84,8 @@ def main():
     """
 
 
-for _command in (build.check, build.build, sim.sim, plot.plot, graph.graph, linearize.linearize, analysis.bench,
-                 analysis.stability, eom.eom):
+for _command in (build.check, build.build, sim.sim, plot.plot, graph.graph, view.view, linearize.linearize,
+                 analysis.bench, analysis.stability, eom.eom):
     main.add_command(_command)
 
 __all__ = ["main", "Refused"]
