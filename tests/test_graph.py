@@ -131,3 +131,23 @@ def test_graph_command_refuses_bad_suffix_and_reports_bad_model(tmp_path):
     result = CliRunner().invoke(cli.main, ["graph", str(bad)])
     assert result.exit_code == 1 and "bad.yaml:3" in result.output and "nowhere" in result.output
     assert not (tmp_path / "bad_graph.svg").exists()
+
+
+def test_a_urdf_robots_tree_is_its_links_and_joints():
+    robots = pytest.importorskip("andyc.independent.robots")
+    try:
+        path = robots.robots_dir() / "panda_description/urdf/panda.urdf"
+    except Exception as exc:        # example-robot-data not installed
+        pytest.skip(f"no example-robot-data: {exc}")
+    if not path.exists():
+        pytest.skip(f"{path} is missing")
+    from xml.etree import ElementTree
+
+    joints = ElementTree.parse(path).getroot().findall("joint")
+    tree = frame_tree(andyc.load(path))
+    assert {(e["parent"], e["child"]) for e in tree["edges"]} >= {
+        (j.find("parent").get("link"), j.find("child").get("link")) for j in joints}
+    kinds = {e["child"]: e["kind"] for e in tree["edges"]}
+    for j in joints:
+        want = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prismatic"}.get(j.get("type"), "fixed")
+        assert kinds[j.find("child").get("link")] == want, j.get("name")

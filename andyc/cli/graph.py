@@ -8,7 +8,7 @@ import click
 
 import andyc
 from andyc.cli.common import Refused, fail_spec
-from andyc.errors import SpecError
+from andyc.errors import SpecError, plural
 from andyc.outputs import check_output
 
 
@@ -35,5 +35,6 @@ def graph(model_file, out):
         fail_spec(exc)
     check_output(out, [model_file, *spec.files], "graph")
     plot_graph(spec, out)
-    click.echo(f"wrote {out} ({len([f for f in spec.frames if not f.internal])} frames, "
-               f"{len(spec.flows)} flows, {len(spec.jumps)} jumps)")
+    frames = len([f for f in spec.frames if not f.internal])
+    click.echo(f"wrote {out} ({plural(frames, 'frame')}, {plural(len(spec.flows), 'flow')}, "
+               f"{plural(len(spec.jumps), 'jump')})")

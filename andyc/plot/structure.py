@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from andyc.spec.expressions import TIME
 from andyc.spec.model import EITHER, FALLING, RISING, Nonholonomic, Rotate, Translate
 
 DIRECTIONS = {FALLING: "falling", RISING: "rising", EITHER: "either"}
@@ -102,7 +103,7 @@ def _link(frame, coordinates: set, names: dict) -> dict:
             base = str(names.get(link.quaternion[0], link.quaternion[0]))[:-3]
             parts.append(f"(quaternion {base}_qw..qz)")
         return {"kind": kind, "label": " ".join(parts)}
-    moving = [s for s in steps if _symbols(s) & (coordinates | {sp.Symbol("t")})]
+    moving = [s for s in steps if _symbols(s) & (coordinates | {TIME})]
     if not moving:
         return {"kind": "fixed", "label": "fixed"}
     text = ", ".join(f"translation {_vector(s.vector)}" if isinstance(s, Translate) else f"rotation {_text(s.angle)}"
