@@ -124,7 +124,8 @@ def _signals_figure(run: Run, names: list) -> Figure:
     fig = Figure(figsize=(10, 0.75 * sum(ratios) + 1.5), layout="constrained")
     _time_axes(fig, fig.add_gridspec(len(panels), 1, height_ratios=ratios), panels, run)
     span = f"t = {run.time[0]:g} .. {run.time[-1]:g} s"
-    fig.suptitle(f"{run.model}: {', '.join(names)} ({span}; {run.method}, dt = {run.dt:g} s)")
+    shown = ", ".join(names) if len(names) <= 6 else f"{len(names)} signals"
+    fig.suptitle(f"{run.model}: {shown} ({span}; {run.method}, dt = {run.dt:g} s)")
     FigureCanvasAgg(fig)
     return fig
 
