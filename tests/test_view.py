@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from PIL import Image
 
 import andyc
 from andyc import cli
@@ -116,7 +117,6 @@ def screenshots(browser, page_file: Path, times, out_dir: Path):
         page.wait_for_timeout(250)           # a few animation frames: the status line follows
         png = out_dir / f"{page_file.stem}_{i}.png"
         page.locator("canvas").first.screenshot(path=str(png))
-        from PIL import Image
         with Image.open(png) as im:
             shots.append((np.asarray(im.convert("RGB")).astype(int), page.inner_text("#status")))
     context.close()
