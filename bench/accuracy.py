@@ -188,6 +188,14 @@ def animate(name: str, build: Path, out: Path) -> Path:
     run = andyc.simulate(model, options.pop("t_end"), frames="all", progress=False, **options)
     path = out / f"{name}.gif"
     animate_run(run, path, fps=25, max_frames=250)
+    try:            # and the same run as a page for the browser (andyc view; needs meshcat)
+        from andyc.plot.view import write_view
+
+        info = write_view(run, out / f"{name}.html")
+        print(f"  {name}: andyc view of the {run.time[-1]:.1f} s run: {info['seconds']:.2f} s, "
+              f"{info['bytes'] / 1e6:.2f} MB ({info['samples']} samples of {len(run.time)})", flush=True)
+    except ImportError as exc:
+        print(f"  {name}: andyc view skipped ({exc})", flush=True)
     return path
 
 

@@ -54,12 +54,16 @@ ENERGY = ["energy", "energy_change"]
     (constrained_run, ["coordinates", "speeds", "multipliers", "residuals"] + ENERGY),
     (inputs_run, ["coordinates", "speeds", "inputs"] + ENERGY),
     (lambda: inputs_run(changing=False), ["coordinates", "speeds"] + ENERGY),
-    (hybrid_run, ["trajectories", "flow", "discrete", "frame_x", "frame_y", "coordinates", "speeds"] + ENERGY),
+    (hybrid_run, ["trajectories", "flow", "discrete", "frame_x", "frame_y", "coordinates", "coordinates#2", "speeds",
+                  "speeds#2"] + ENERGY),
 ], ids=["plain", "planar", "spatial", "quaternion", "constrained", "inputs", "constant-inputs", "hybrid"])
 def test_each_run_gets_the_panels_that_apply_in_order(make, expected):
-    fig = figure_for(make())
+    run = make()
+    fig = figure_for(run)
     assert [ax.get_gid() for ax in fig.axes] == expected
-    assert all(ax.name == ("3d" if ax.get_gid() == "trajectories" else "rectilinear") for ax in fig.axes)
+    planar = run.frames and all(np.all(xyz[:, 2] == 0) for xyz in run.frames.values())   # drawn in their plane
+    assert all(ax.name == ("3d" if ax.get_gid() == "trajectories" and not planar else "rectilinear")
+               for ax in fig.axes)
 
 
 def test_states_signals_and_energy_panels_carry_the_runs_columns():
@@ -81,11 +85,11 @@ def test_states_signals_and_energy_panels_carry_the_runs_columns():
 def test_time_series_share_one_time_axis_labelled_only_at_the_bottom_of_each_column():
     for run in (plain_run(), hybrid_run()):
         fig = figure_for(run)
-        series = [ax for ax in fig.axes if ax.name != "3d"]
+        series = [ax for ax in fig.axes if ax.get_gid() != "trajectories"]
         assert all(series[0].get_shared_x_axes().joined(series[0], ax) for ax in series)
         labelled = [ax.get_gid() for ax in series if ax.get_xlabel()]
         # one column: the last panel; with frames, the bottom of each column
-        assert labelled == (["energy_change"] if not run.frames else ["speeds", "energy_change"])
+        assert labelled == (["energy_change"] if not run.frames else ["speeds#2", "energy_change"])
 
 
 def test_frame_paths_in_3d_and_along_each_axis_carry_the_frames_and_coincident_frames_share_a_line():

@@ -9,6 +9,8 @@ command or family of commands, each a click command over the API:
     test.py       test (run the models' expectations, andyc.analysis.expectations; JUnit XML)
     formats.py    --format text|json|github: the report of check, build, sim and test
     plot.py       plot (plots, stick figures, animations of a run)
+    graph.py      graph (a model's frame tree and hybrid automaton, drawn)
+    view.py       view (a run as an HTML page that plays it in 3-D)
     eom.py        eom (the equations written out for reading)
     linearize.py  linearize (A, B and eigenvalues about a point)
     analysis.py   bench (work-precision) and stability (stability maps)
@@ -27,7 +29,7 @@ import sys
 import click
 
 import andyc
-from andyc.cli import analysis, build, eom, linearize, plot, sim, test
+from andyc.cli import analysis, build, eom, graph, linearize, plot, sim, test, view
 from andyc.cli.common import Refused
 from andyc.outputs import OutputError
 
@@ -76,6 +78,8 @@ def main():
     andyc sim model.yaml        build if needed, simulate, write run files
     andyc test models/          run the models' expectations (expect:); JUnit with --junit
     andyc plot run.h5           plot states and energy
+    andyc graph model.yaml      draw the frame tree and the hybrid automaton
+    andyc view run.h5           a run as an HTML page that plays it in 3-D
     andyc linearize model.yaml  A, B and eigenvalues about a state
     andyc bench model.yaml      work-precision: error against cost per method
     andyc stability model.yaml  stability map: step against method, failures named
@@ -83,8 +87,8 @@ def main():
     """
 
 
-for _command in (build.check, build.build, sim.sim, test.test, plot.plot, linearize.linearize, analysis.bench,
-                 analysis.stability, eom.eom):
+for _command in (build.check, build.build, sim.sim, test.test, plot.plot, graph.graph, view.view, linearize.linearize,
+                 analysis.bench, analysis.stability, eom.eom):
     main.add_command(_command)
 
 __all__ = ["main", "Refused"]

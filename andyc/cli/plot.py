@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import math
+
 import click
 
 from andyc.outputs import check_output
@@ -21,11 +23,20 @@ from andyc.outputs import check_output
 @click.option("--frames-max", default=None, type=click.IntRange(min=1), metavar="N",
               help="With --animate: at most N frames, evenly spread in time (default 300); a run longer than "
                    "N / fps seconds plays faster than real time.")
-def plot(run_file, out, animate, fps, frames_max):
+@click.option("--signals", "signals", multiple=True, metavar="NAMES",
+              help="Plot only these signals (states, discrete states, inputs, multipliers, energy), by name or "
+                   "shell glob, comma-separated or repeated: --signals 'q*,energy'; one axis per kind of "
+                   "quantity and scale.")
+@click.option("--window", default=None, metavar="T0:T1",
+              help="Only the samples with T0 <= t <= T1 (either end may be left out: 2:, :5); also for --animate.")
+def plot(run_file, out, animate, fps, frames_max, signals, window):
     """Plot the states and the energy of a run against time (and, for a hybrid run, its flows,
     jumps and discrete states); when the run logged frames with their parents, also draw them as
     stick figures, into RUN_sticks.png (or OUT_sticks.png beside OUT). With --animate, write an
-    animation of the logged frames instead."""
+    animation of the logged frames instead. Quantities of different kinds (angles, lengths, speeds,
+    ...) or scales get axes of their own."""
+    from andyc.plot.select import select_signals
+    from andyc.plot.select import window as time_window
     from andyc.runtime.run import read_h5
 
     if Path(run_file).suffix.lower() not in (".h5", ".hdf5"):
@@ -35,19 +46,49 @@ def plot(run_file, out, animate, fps, frames_max):
         given = [name for name, value in (("--fps", fps), ("--frames-max", frames_max)) if value is not None]
         if given:
             raise click.BadParameter("only with --animate", param_hint=" and ".join(given))
+    elif signals:
+        raise click.BadParameter("not with --animate (an animation shows the frames)", param_hint="--signals")
+    t0, t1 = parse_window(window) if window is not None else (None, None)
+    patterns = [p.strip() for text in signals for p in text.split(",") if p.strip()]
+    if signals and not patterns:
+        raise click.BadParameter("give at least one signal name or glob", param_hint="--signals")
     out = out or str(Path(run_file).with_suffix(".gif" if animate else ".png"))
     check_output(out, [run_file], "plot")
-    if not animate:
+    if not animate and not patterns:
         check_output(sticks_path(out), [run_file], "plot")
     try:
         run = read_h5(run_file)
     except (OSError, KeyError, ValueError) as exc:
         raise click.BadParameter(f"{run_file}: not a run file that andyc sim wrote ({exc})",
                                  param_hint="RUN_FILE") from None
+    try:
+        if window is not None:
+            run = time_window(run, t0, t1)
+        chosen = select_signals(run, patterns) if patterns else None
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="--window" if window is not None and not patterns
+                                 else "--signals") from None
     if animate:
         animate_file(run, run_file, out, fps or 30, frames_max or 300)
     else:
-        plot_file(run, out)
+        plot_file(run, out, chosen)
+
+
+def parse_window(text: str) -> tuple:
+    """(t0, t1) of `--window T0:T1`, either None where left out; click.BadParameter otherwise."""
+    parts = text.split(":")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        t0, t1 = (float(p) if p.strip() else None for p in parts)
+    except ValueError:
+        raise click.BadParameter(f"'{text}' is not T0:T1 (seconds; e.g. 2:5, 2: or :5)", param_hint="--window") from None
+    for t in (t0, t1):
+        if t is not None and not math.isfinite(t):
+            raise click.BadParameter(f"'{text}': the times must be finite", param_hint="--window")
+    if t0 is not None and t1 is not None and t0 > t1:
+        raise click.BadParameter(f"'{text}': T0 is after T1", param_hint="--window")
+    return t0, t1
 
 
 def sticks_path(out) -> Path:
@@ -55,13 +96,14 @@ def sticks_path(out) -> Path:
     return Path(out).with_name(Path(out).stem + "_sticks.png")
 
 
-def plot_file(run, out) -> None:
-    """The plots of `run` into `out`, and its stick figures beside it when it logged frames with parents."""
+def plot_file(run, out, signals=None) -> None:
+    """The plots of `run` (only `signals`, if given) into `out`, and, without `signals`, its stick figures
+    beside it when it logged frames with parents."""
     from andyc.plot import plot_run, plot_sticks, stick_edges
 
-    plot_run(run, out)
-    click.echo(f"wrote {out}")
-    if stick_edges(run):
+    plot_run(run, out, signals)
+    click.echo(f"wrote {out}" + (f" ({', '.join(signals)})" if signals else ""))
+    if signals is None and stick_edges(run):
         plot_sticks(run, sticks_path(out))
         click.echo(f"wrote {sticks_path(out)} (stick figures of the frames)")
 

@@ -28,6 +28,7 @@ from andyc.codegen.buildfiles import (PACKAGE, BuildResult, build_key, equations
                                      module_path, numerics_package, write_numerics)
 from andyc.codegen.leaves import leaves, state_names
 from andyc.codegen.printer import to_code
+from andyc.spec.display import display
 from andyc.symbolic.model import SymbolicModel
 
 TEMPLATES = PACKAGE / "templates"
@@ -114,6 +115,7 @@ def render_front(spec, key: str) -> str:
         constraint_where=[[spec.source.line(w), format_path(w)] for c in spec.constraints for w in c.row_where],
         initial={"unpack": _parameter_unpack(parameters, initial), "state": [to_code(e) for e in initial]},
         initial_discrete={"unpack": _parameter_unpack(parameters, discrete), "values": [to_code(e) for e in discrete]},
+        display=display(spec),
         closed_form_where=[[spec.source.line(("closed_form", n)), format_path(("closed_form", n))] for n in states]
         if spec.closed_form else [], simulate=spec.simulate)
 

@@ -8,6 +8,9 @@ this package leaves the user's matplotlib backend alone).
   times, in one static picture.
 - `animate`: `animate_run(run, out)`: the animated 3-D stick figure of a run, as a GIF (or an MP4
   with ffmpeg).
+- `structure`: `frame_tree(spec)`, `automaton(spec)`: a model's frame tree and hybrid automaton as
+  plain data; `graph`: `graph_figure(spec)`, `plot_graph(spec, out)` draw them (`andyc graph`; needs
+  networkx, imported only there).
 - `scene`: what those share: which frames are joined by sticks, the plane a model moves in, the
   animation's view, colours, whether to draw the ground.
 """

@@ -187,6 +187,7 @@ def animation_figure(run: Run, samples, dpi: int = 100) -> tuple:
     if view["ground"] and view["planar"]:   # the line where the ground meets the plane of motion
         line = np.zeros((2, 3))
         line[:, 1 - view["up"]] = view["limits"][1 - view["up"]]
+        line[:, view["up"]] = view["ground_height"]
         still += ax.plot(*line.T, color="saddlebrown", lw=1.5, gid="ground")
     # the background: the 3-D axes take most of the time of drawing a frame, and do not change
     title.set_visible(False)
@@ -200,7 +201,7 @@ def animation_figure(run: Run, samples, dpi: int = 100) -> tuple:
 
     traces = {name: ax.plot([], [], [], color=colour, lw=1.5, alpha=0.6, gid=f"trace:{name}")[0]
               for name, colour in leaf_colours(run).items()}
-    floor = 0.0 if view["ground"] else view["limits"][2][0]     # 3-D: shadows on the floor show the depth
+    floor = view["ground_height"] if view["ground"] else view["limits"][2][0]     # 3-D: shadows on the floor show the depth
     shadows = [] if view["planar"] else [ax.plot([], [], [], color="0.6", lw=2, alpha=0.5, gid=f"shadow:{p}>{c}")[0]
                                          for p, c in edges]
     sticks = [ax.plot([], [], [], color=colour, lw=2.5, solid_capstyle="round", gid=f"{parent}>{child}")[0]

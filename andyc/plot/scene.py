@@ -1,6 +1,6 @@
 """What the plots of a run share about its frames and flows: which logged frames are joined by a stick
 (`stick_edges`, `world_links`, `animation_edges`, `leaf_frames`), the world plane the frames spread in
-(`stick_plane`), the fixed view of the animation (`animation_view`: limits, whether the model is
+(`stick_plane`), the plane of a planar model (`frame_plane`), the fixed view of the animation (`animation_view`: limits, whether the model is
 planar, the camera), the colours of the sticks and traces (`leaf_colours`, `branch_colours`), whether
 to draw the ground (`has_ground`), and whether a run is hybrid (`is_hybrid`).
 
@@ -65,18 +65,36 @@ def stick_plane(run: Run) -> tuple:
     return int(i), int(j)
 
 
-def has_ground(up: np.ndarray, extent: float) -> bool:
-    """Whether to draw the ground (vertical coordinate 0): some frame rests on it (a stance foot)
-    and none goes far below it (a foot may scuff through it a little); `up` holds the vertical
-    coordinates of the frames, `extent` the size of the figure."""
-    return bool(np.any(np.abs(up) <= 1e-3 * extent) and np.nanmin(up) >= -0.05 * extent)
+def frame_plane(run: Run) -> tuple | None:
+    """(i, j), the world axes of the plane every logged frame moves in, when all keep one world
+    coordinate at one value over the whole run (a planar model: z for the shipped ones); else None."""
+    if not run.frames:
+        return None
+    xyz = np.concatenate(list(run.frames.values()))
+    extent = max(float(np.nanmax(np.nanmax(xyz, axis=0) - np.nanmin(xyz, axis=0))), 1e-3)
+    for k in (2, 1, 0):
+        if np.nanmax(xyz[:, k]) - np.nanmin(xyz[:, k]) <= 1e-9 * extent:
+            return tuple(a for a in range(3) if a != k)
+    return None
+
+
+def has_ground(run: Run, up: int) -> float | None:
+    """The height of the ground along world axis `up` (the one drawn upwards), where the run's model
+    has a ground there (`Run.display['ground']`, from andyc.spec.display: a constraint or a guard
+    holding a frame at a height, against gravity); None where it has none, or the run file does not
+    say (it predates andyc's display data), so nothing is shaded that the model does not define."""
+    g = (run.display or {}).get("ground")
+    if not isinstance(g, dict) or g.get("axis") != up:
+        return None
+    return float(g.get("height", 0.0))
 
 
 def animation_view(run: Run) -> dict:
     """The fixed scene: limits around all frames over the whole run and the world origin, with
     one scale along all axes (box aspect = spans), the vertical axis ('y' for a model whose frames
     all lie in the world x-y plane, as the planar models have gravity along -y, else 'z'), the
-    camera, and whether to draw the ground (vertical coordinate 0)."""
+    camera, and whether to draw the ground ('ground', at 'ground_height' along the vertical axis:
+    `has_ground`)."""
     xyz = np.concatenate([np.zeros((1, 3))] + [p for p in run.frames.values()])
     lo, hi = np.nanmin(xyz, axis=0), np.nanmax(xyz, axis=0)
     extent = max(float(np.max(hi - lo)), 1e-3)
@@ -88,8 +106,9 @@ def animation_view(run: Run) -> dict:
     # planar: look at the x-y plane almost square on (from +z, a little from above and from the
     # right); 3-D: z up, matplotlib's usual oblique view
     camera = dict(vertical_axis="y", elev=12, azim=-10) if planar else dict(vertical_axis="z", elev=20, azim=-60)
+    height = has_ground(run, up)
     return {"limits": limits, "span": span, "up": up, "planar": planar, "camera": camera,
-            "ground": has_ground(xyz[1:, up], extent)}
+            "ground": height is not None, "ground_height": height}
 
 
 # -- colours ---------------------------------------------------------------------------------------

@@ -35,8 +35,8 @@ def snapshot_indices(run: Run, count: int = 10) -> np.ndarray:
 def sticks_figure(run: Run, count: int = 10) -> Figure:
     """Stick figures of the logged frames at snapshot times (see `snapshot_indices`), in the world
     plane of `stick_plane` with equal aspect: each frame joined to its logged parent by a line,
-    earlier snapshots lighter, a dot on every frame, the ground (vertical coordinate 0) drawn when
-    some frame touches it and none goes far below it (a foot may scuff through it a little). Each
+    earlier snapshots lighter, a dot on every frame, the ground drawn and shaded below where the
+    model has one along the vertical axis (`has_ground`). Each
     stick line has gid 'parent>child@sample'. On an Agg canvas of its own (no pyplot)."""
     edges = stick_edges(run)
     if not edges:
@@ -47,7 +47,7 @@ def sticks_figure(run: Run, count: int = 10) -> Figure:
     xyz = np.stack([run.frames[name] for name in names])          # (frames, N, 3)
     lo, hi = np.nanmin(xyz[..., [i, j]], axis=(0, 1)), np.nanmax(xyz[..., [i, j]], axis=(0, 1))
     extent = max(float(np.max(hi - lo)), 1e-3)
-    ground = has_ground(xyz[..., j], extent)
+    ground = has_ground(run, j)
     span = hi - lo + 0.1 * extent                                  # the axes limits below
     width = 12.0                    # the axes get about width - 2 inches (labels, colour bar), height + 1.4
     height = float(np.clip((width - 2.0) * span[1] / span[0] + 1.4, 3.5, 11.0))
@@ -71,9 +71,9 @@ def sticks_figure(run: Run, count: int = 10) -> Figure:
         ax.scatter(xyz[:, k, i], xyz[:, k, j], color=colour, s=10, zorder=3)
 
     pad = 0.05 * extent
-    if ground:
-        ax.axhline(0.0, color="saddlebrown", lw=1.2, gid="ground", zorder=1)
-        ax.axhspan(lo[1] - 10 * extent, 0.0, color="saddlebrown", alpha=0.12, lw=0, zorder=0)
+    if ground is not None:
+        ax.axhline(ground, color="saddlebrown", lw=1.2, gid="ground", zorder=1)
+        ax.axhspan(lo[1] - 10 * extent, ground, color="saddlebrown", alpha=0.12, lw=0, zorder=0)
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
     ax.set_ylim(lo[1] - pad, hi[1] + pad)
     ax.set_autoscale_on(True)       # no new artists follow: the limits stay, and may widen ...

@@ -20,30 +20,39 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from andyc.outputs import write_atomic
-from andyc.plot.scene import is_hybrid
+from andyc.plot.scene import frame_plane, is_hybrid
+from andyc.plot.select import axis_label, group_signals, signal_values
 from andyc.runtime.run import Run
 
 QUATERNION = ("_qw", "_qx", "_qy", "_qz")
 POSITION = ("_x", "_y", "_z")
 
 
-def plot_run(run: Run, out) -> None:
-    """Write the figure of `run` to `out` (PNG)."""
+def plot_run(run: Run, out, signals=None) -> None:
+    """Write the figure of `run` to `out` (PNG): `figure_for(run, signals)`."""
     with write_atomic(out) as tmp:
-        figure_for(run).savefig(tmp, dpi=110)
+        figure_for(run, signals).savefig(tmp, dpi=110)
 
 
-def figure_for(run: Run) -> Figure:
-    """3-D frame trajectories on the left (energy below them), time series on the right;
-    without frames, one column of time series. On an Agg canvas of its own (no pyplot)."""
+def figure_for(run: Run, signals=None) -> Figure:
+    """Frame trajectories on the left (in 3-D; in their plane for a planar model), energy below them,
+    time series on the right; without frames, one column of time series. With `signals` (names of
+    andyc.plot.select.signal_names), only those, one axis per group (`group_signals`; gid
+    'signals:KIND', 'signals:KIND#2' for a second scale), below the flow panel of a hybrid run. On an
+    Agg canvas of its own (no pyplot)."""
+    if signals is not None:
+        return _signals_figure(run, list(signals))
     series = _series_panels(run)
     energy = [("energy", _energy), ("energy_change", _energy_change)]
     if run.frames:
         fig = Figure(figsize=(16, max(10, 1.8 * len(series))), layout="constrained")
         grid = fig.add_gridspec(1, 2, width_ratios=[1, 1.1])
         left = grid[0].subgridspec(3, 1, height_ratios=[5, 1.5, 1.5])
-        ax = fig.add_subplot(left[0], projection="3d", gid="trajectories")
-        _trajectories(ax, run)
+        plane = frame_plane(run)
+        if plane:
+            _plane_trajectories(fig.add_subplot(left[0], gid="trajectories"), run, plane)
+        else:
+            _trajectories(fig.add_subplot(left[0], projection="3d", gid="trajectories"), run)
         right = grid[1].subgridspec(len(series), 1, height_ratios=[_height(gid, run) for gid, _ in series])
         axes = _time_axes(fig, right, series, run)
         _time_axes(fig, [left[1], left[2]], energy, run, sharex=axes[0])
@@ -66,8 +75,8 @@ def _series_panels(run: Run) -> list:
         panels.append(("discrete", _discrete))
     panels += [(f"frame_{'xyz'[k]}", partial(_frame_axis, k=k)) for k in range(3) if _moves(run.frames, k)]
     if run.nq:          # a free body has speeds and signals only
-        panels.append(("coordinates", partial(_states, cols=range(run.nq), ylabel="coordinates q, rad | m")))
-    panels.append(("speeds", partial(_states, cols=range(run.nq, run.nq + run.nv), ylabel="speeds v, rad/s | m/s")))
+        panels += _grouped("coordinates", run, run.state_names[:run.nq], "coordinates q, rad | m")
+    panels += _grouped("speeds", run, run.state_names[run.nq:run.nq + run.nv], "speeds v, rad/s | m/s")
     quaternions, positions, others = _signal_groups(run.signal_names)
     if quaternions:
         panels.append(("quaternions", partial(_quaternions, bases=quaternions)))
@@ -80,6 +89,45 @@ def _series_panels(run: Run) -> list:
     if run.multiplier_names:
         panels += [("multipliers", _multipliers), ("residuals", _residuals)]
     return panels
+
+
+def _grouped(gid: str, run: Run, names: list, ylabel: str) -> list:
+    """[(gid, draw)]: the panel of `names` (gid, `ylabel`), or, where they fall into several groups
+    (`group_signals`: angles apart from lengths, a spin apart from a lean), a panel per group, gid
+    'GID:KIND' ('GID:KIND#2' for a kind's second scale; 'GID#2' where the run does not say the kind)."""
+    groups = group_signals(run, names)
+    if len(groups) == 1:
+        return [(gid, partial(_named, names=names, ylabel=ylabel))]
+    generic = ("coordinates", "coordinate_speeds")
+    return [(gid + ("" if kind in generic else f":{kind}") + (f"#{n}" if n > 1 else ""),
+             partial(_named, names=members, ylabel=ylabel if kind in generic else axis_label(kind)))
+            for kind, members, n in _numbered(groups)]
+
+
+def _numbered(groups: list) -> list:
+    """[(kind, members, n)]: n counts the groups of one kind (1, 2, ...)."""
+    seen = {}
+    out = []
+    for kind, members in groups:
+        seen[kind] = seen.get(kind, 0) + 1
+        out.append((kind, members, seen[kind]))
+    return out
+
+
+def _signals_figure(run: Run, names: list) -> Figure:
+    """The figure of chosen signals: a hybrid run's flow panel, then one axis per group."""
+    panels = [("flow", _flows)] if is_hybrid(run) else []
+    for kind, members, n in _numbered(group_signals(run, names)):
+        draw = partial(_named, names=members, ylabel=axis_label(kind), steps=kind == "discrete")
+        panels.append((f"signals:{kind}" + (f"#{n}" if n > 1 else ""), draw))
+    ratios = [3 * _height(gid, run) for gid, _ in panels]
+    fig = Figure(figsize=(10, 0.75 * sum(ratios) + 1.5), layout="constrained")
+    _time_axes(fig, fig.add_gridspec(len(panels), 1, height_ratios=ratios), panels, run)
+    span = f"t = {run.time[0]:g} .. {run.time[-1]:g} s"
+    shown = ", ".join(names) if len(names) <= 6 else f"{len(names)} signals"
+    fig.suptitle(f"{run.model}: {shown} ({span}; {run.method}, dt = {run.dt:g} s)")
+    FigureCanvasAgg(fig)
+    return fig
 
 
 def _height(gid: str, run: Run) -> float:
@@ -156,6 +204,21 @@ def _trajectories(ax, run: Run) -> None:
     ax.legend(loc="upper left", fontsize="small")
 
 
+def _plane_trajectories(ax, run: Run, plane: tuple) -> None:
+    """A planar model's frame paths in their plane (world axes i, j), start and end marked, equal axes."""
+    i, j = plane
+    for c, (name, xyz) in enumerate(_frame_paths(run.frames)):
+        ax.plot(xyz[:, i], xyz[:, j], color=f"C{c}", lw=0.8, label=name)
+        ax.scatter(xyz[0, i], xyz[0, j], color=f"C{c}", marker="o", s=30)
+        ax.scatter(xyz[-1, i], xyz[-1, j], color=f"C{c}", marker="s", s=30)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"world {'xyz'[i]}, m")
+    ax.set_ylabel(f"world {'xyz'[j]}, m")
+    ax.grid(alpha=0.3)
+    ax.set_title(f"frame trajectories in the world {'xyz'[i]}-{'xyz'[j]} plane (● start, ■ end)")
+    ax.legend(loc="upper left", fontsize="small")
+
+
 def _frame_axis(ax, run: Run, k: int) -> None:
     for i, (name, xyz) in enumerate(_frame_paths(run.frames)):
         ax.plot(run.time, xyz[:, k], color=f"C{i}", lw=1, label=name)
@@ -167,6 +230,14 @@ def _lines(ax, run: Run, values, names, ylabel: str) -> None:
     """One line per column of values (samples x names) against time, labelled by name."""
     for j, name in enumerate(names):
         ax.plot(run.time, values[:, j], lw=1, label=name)
+    ax.set_ylabel(ylabel)
+    _legend(ax)
+
+
+def _named(ax, run: Run, names: list, ylabel: str, steps: bool = False) -> None:
+    """One line per signal (andyc.plot.select.signal_values) against time; steps for discrete states."""
+    for name in names:
+        ax.plot(run.time, signal_values(run, name), lw=1, label=name, drawstyle="steps-post" if steps else "default")
     ax.set_ylabel(ylabel)
     _legend(ax)
 

@@ -58,6 +58,7 @@ class CompiledModel:
     closed_form: object = None  # the module's closed_form(t, u, p) -> x, the exact solution it declares, or None
     closed_form_where: tuple = ()  # (line, document path) of each state's closed form in the model file
     simulate: dict = field(default_factory=dict)  # andyc sim's options the model gives (its simulate: section)
+    display: dict = field(default_factory=dict)  # state units, the ground, shapes (andyc.spec.display): for pictures
 
     @property
     def nd(self) -> int:

@@ -48,6 +48,7 @@ class Run:
     input_names: list = field(default_factory=list)
     input_values: np.ndarray | None = None           # (N, nu) the inputs at each sample
     andyc_version: str = andyc.__version__
+    display: dict = field(default_factory=dict)      # state units, the ground, shapes: for pictures (andyc.spec.display)
 
     def __post_init__(self):
         n = self.time.shape[0]
@@ -122,7 +123,8 @@ class Run:
                 "parameters": json.dumps(self.parameters), "inputs": json.dumps(self.inputs),
                 "t_end": self.t_end, "status": self.status, "stats": json.dumps(self.stats),
                 "energy_correction": self.energy_correction, "flow_names": json.dumps(self.flow_names),
-                "jump_names": json.dumps(self.jump_names), "frame_parents": json.dumps(self.frame_parents)}
+                "jump_names": json.dumps(self.jump_names), "frame_parents": json.dumps(self.frame_parents),
+                "display": json.dumps(self.display)}
 
     def save(self, path) -> Path:
         """Write the run to path (.h5 or .csv; a CSV of a hybrid model also writes its events beside it,
@@ -209,7 +211,7 @@ def read_h5(path) -> Run:
                    discrete=f["discrete"][()] if "discrete" in f else None, events=events, jump_names=jump_names,
                    input_names=[str(s) for s in f["inputs"].attrs["names"]] if "inputs" in f else [],
                    input_values=f["inputs"][()] if "inputs" in f else None,
-                   frame_parents=json.loads(a.get("frame_parents", "{}")))
+                   frame_parents=json.loads(a.get("frame_parents", "{}")), display=json.loads(a.get("display", "{}")))
 
 
 def write_csv(run: Run, path: Path) -> None:

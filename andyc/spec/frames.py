@@ -95,7 +95,7 @@ def _frame(i: int, f: dict, scope: Scope, signals: list) -> Frame:
     for kind in ("ball", "floating", "nonholonomic"):
         if kind in f and len(joints) == 1:
             steps.append(_nonholonomic_link(f["name"], kind, f[kind], where + (kind,), scope, signals))
-    return Frame(f["name"], f["parent"], tuple(steps), where)
+    return Frame(f["name"], f["parent"], tuple(steps), where, joint=joints[0] if len(joints) == 1 else "fixed")
 
 
 def _rotation(r: dict, where, scope: Scope) -> list:

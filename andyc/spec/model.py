@@ -90,6 +90,7 @@ class Frame:
     transforms: tuple           # of Translate / Rotate
     where: tuple
     internal: bool = False      # made by andyc (a COM or point offset), not by the user
+    joint: str = "fixed"        # the link's joint as written: fixed, dh, revolute, prismatic, ball, floating, nonholonomic
 
 
 @dataclass(frozen=True)

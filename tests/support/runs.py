@@ -104,4 +104,5 @@ def hybrid_run(n=201) -> Run:
                     frames={"hip": hip, "foot1": foot1, "foot2": foot2, "marker": hip + [0.1, -0.5, 0.0]},
                     flow=flow, flow_names=["stance1", "stance2"], discrete_names=["fx", "steps"], discrete=discrete,
                     jump_names=["strike2", "strike1"], events=events,
-                    frame_parents={"hip": "world", "foot1": "hip", "foot2": "hip", "marker": "knee"})
+                    frame_parents={"hip": "world", "foot1": "hip", "foot2": "hip", "marker": "knee"},
+                    display={"ground": {"axis": 1, "height": 0.0}})

@@ -1,0 +1,156 @@
+"""`andyc view`: the page's data against the run (decimation, positions, sticks, events, ground, plane), the
+page self-contained (no script or style from elsewhere), and the page in a real headless browser (Debian's
+chromium driven by Playwright, with the network off): the canvas is drawn, the shapes' pixels move between
+two playback times, the status line names the time and the active flow, and no request leaves the file.
+The browser tests skip, saying why, where chromium or Playwright is missing (.ci/run installs chromium
+when apt can)."""
+
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+import andyc
+from andyc import cli
+
+pytest.importorskip("meshcat")
+from andyc.plot.view import view_data, view_html  # noqa: E402
+from andyc.runtime.run import Run  # noqa: E402
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+def walker_run(n=601, ground={"axis": 1, "height": 0.0}) -> Run:
+    """A planar two-legged stick walker over 3 s: hip (parent world) and two feet (parent hip) in the
+    x-y plane, flows stance1/stance2 swapped at t = 1 and 2 by jumps strike2, strike1."""
+    t = np.linspace(0.0, 3.0, n)
+    hip = np.column_stack([0.4 * t, 1.0 + 0.03 * np.sin(6 * t), 0 * t])
+    foot1 = np.column_stack([0.4 * t + 0.3 * np.sin(2 * t), 0.05 * np.abs(np.sin(3 * t)), 0 * t])
+    foot2 = np.column_stack([0.4 * t - 0.3 * np.sin(2 * t), 0 * t, 0 * t])
+    flow = (t >= 1.0).astype(int) - (t >= 2.0).astype(int)
+    state = np.column_stack([hip[:, 0], hip[:, 1], np.full(n, 0.4), 0.18 * np.cos(6 * t)])
+    k = np.searchsorted(t, [1.0, 2.0])
+    events = {"time": np.array([1.0, 2.0]), "jump": np.array([0, 1], np.int32),
+              "from_flow": np.array([0, 1], np.int32), "to_flow": np.array([1, 0], np.int32),
+              "state_before": state[k - 1], "state_after": state[k], "discrete_after": np.zeros((2, 0))}
+    return Run(model="walker", spec_sha256="0" * 64, method="rk4", dt=t[1] - t[0], nq=2, nv=2, rtol=0, atol=0,
+               t_end=3.0, parameters={}, inputs={}, state_names=["x", "y", "x_dot", "y_dot"], time=t, state=state,
+               energy=np.ones(n), frames={"hip": hip, "foot1": foot1, "foot2": foot2},
+               frame_parents={"hip": "world", "foot1": "hip", "foot2": "hip"}, flow=flow,
+               flow_names=["stance1", "stance2"], jump_names=["strike2", "strike1"], events=events,
+               display={"ground": ground})
+
+
+# -- the data ------------------------------------------------------------------------------------------
+
+def test_the_data_holds_the_runs_frames_at_the_samples_kept_and_decimates_a_long_run():
+    run = walker_run()
+    data = view_data(run, fps=30)
+    assert len(data["time"]) == 91                                # 3 s at 30 per second, both ends
+    kept = np.searchsorted(run.time, np.array(data["time"]) + run.time[0] - 1e-12)
+    for name in run.frames:
+        assert np.allclose(data["frames"][name], run.frames[name][kept], rtol=1e-4, atol=1e-9)
+    assert data["edges"] == [["hip", "foot1"], ["hip", "foot2"]]
+    assert data["flow"] == [int(f) for f in run.flow[kept]] and data["flow_names"] == ["stance1", "stance2"]
+    assert data["events"] == [[1.0, "strike2"], [2.0, "strike1"]]
+    assert data["planar"] and data["up"] == 1 and data["ground"] == 0.0 and data["hybrid"]
+    assert set(data["paths"]) == {"foot1", "foot2"}
+    short = view_data(run, fps=30, max_samples=20)
+    assert len(short["time"]) == 20 and short["time"][-1] == pytest.approx(3.0)
+    assert view_data(walker_run(ground=None))["ground"] is None       # no ground in the model: no grid
+
+
+def test_the_page_is_one_file_with_nothing_from_elsewhere():
+    page = view_html(view_data(walker_run()))
+    tags = re.findall(r"<(script|link|img|iframe)\b[^>]*>", page)
+    assert tags.count("script") == 3                      # the viewer, the data, the page's script
+    assert not re.search(r"<script[^>]*\bsrc=", page) and not re.search(r"<link\b", page)
+    data = page.split('id="andyc-data">', 1)[1].split("</script>", 1)[0]
+    assert "</" not in data
+
+
+def test_view_command_writes_the_page_and_refuses_what_it_cannot_show(tmp_path):
+    path = walker_run().save(tmp_path / "walker.h5")
+    result = CliRunner().invoke(cli.main, ["view", str(path)])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "walker.html").stat().st_size > 100_000 and "91 samples of 601" in result.output
+    result = CliRunner().invoke(cli.main, ["view", str(path), "-o", str(tmp_path / "w.png")])
+    assert result.exit_code == 2 and ".html" in result.output
+    bare = walker_run()
+    bare.frames, bare.frame_parents = {}, {}
+    result = CliRunner().invoke(cli.main, ["view", str(bare.save(tmp_path / "bare.h5"))])
+    assert result.exit_code == 2 and "--frames all" in result.output
+
+
+# -- in a browser ----------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def browser():
+    if CHROMIUM is None:
+        pytest.skip("chromium is not installed (apt-get install chromium; .ci/run does it where apt can)")
+    playwright = pytest.importorskip("playwright.sync_api", reason="Playwright is not installed (andyc[test])")
+    with playwright.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=["--headless", "--no-sandbox", "--disable-gpu",
+                                                              "--disable-background-networking"])
+        yield b
+        b.close()
+
+
+def screenshots(browser, page_file: Path, times, out_dir: Path):
+    """[(pixels, status text)] at each playback time, in a context with the network off; the requests
+    the page made."""
+    context = browser.new_context(offline=True, viewport={"width": 800, "height": 600})
+    requests = []
+    context.on("request", lambda r: requests.append(r.url))
+    page = context.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(page_file.resolve().as_uri())
+    page.wait_for_function("window.andycView && window.andycView.ready", timeout=60_000)
+    shots = []
+    for i, t in enumerate(times):
+        page.evaluate(f"window.andycView.seek({t})")
+        page.wait_for_timeout(250)           # a few animation frames: the status line follows
+        png = out_dir / f"{page_file.stem}_{i}.png"
+        page.locator("canvas").first.screenshot(path=str(png))
+        with Image.open(png) as im:
+            shots.append((np.asarray(im.convert("RGB")).astype(int), page.inner_text("#status")))
+    context.close()
+    assert errors == []
+    return shots, requests
+
+
+def moved(a, b) -> int:
+    """Pixels that differ between two screenshots by more than a little in any channel."""
+    return int(np.count_nonzero(np.abs(a - b).max(axis=2) > 24))
+
+
+def check_shots(shots, requests):
+    (a, _), (b, _) = shots
+    for pixels, _ in shots:
+        assert len(np.unique(pixels.reshape(-1, 3), axis=0)) > 50   # drawn: not one colour
+        assert pixels.std() > 10
+    assert moved(a, b) > 100                                         # the sticks and joints moved
+    assert all(url.startswith("file:") for url in requests), requests
+
+
+def test_a_hybrid_walker_plays_offline_with_its_flow_named(browser, tmp_path):
+    out = tmp_path / "walker.html"
+    CliRunner().invoke(cli.main, ["view", str(walker_run().save(tmp_path / "walker.h5")), "-o", str(out)])
+    shots, requests = screenshots(browser, out, [0.5, 1.5], tmp_path)
+    check_shots(shots, requests)
+    assert "t = 0.50 s" in shots[0][1] and "flow stance1" in shots[0][1]
+    assert "t = 1.50 s" in shots[1][1] and "flow stance2" in shots[1][1]
+
+
+def test_a_swing_bar_run_plays_offline(browser, compiled, tmp_path):
+    run = andyc.simulate(compiled("swing_bar"), t_end=2.0, dt=1e-3, frames="all")
+    out = tmp_path / "swing_bar.html"
+    CliRunner().invoke(cli.main, ["view", str(run.save(tmp_path / "swing_bar.h5")), "-o", str(out)])
+    shots, requests = screenshots(browser, out, [0.3, 1.2], tmp_path)
+    check_shots(shots, requests)
+    assert "t = 0.30 s" in shots[0][1] and "flow" not in shots[0][1]
