@@ -10,7 +10,7 @@ from andyc.outputs import check_output
 
 
 @click.command()
-@click.argument("run_file", type=click.Path(exists=True, dir_okay=False))
+@click.argument("run_file", type=click.Path(exists=True))
 @click.option("-o", "--out", default=None, help="PNG file; default RUN.png beside the run. With --animate: the "
               "animation, OUT.gif or OUT.mp4 (needs ffmpeg); default RUN.gif beside the run.")
 @click.option("--animate", is_flag=True, help="Instead of the plots, write a 3-D stick animation of the frames the "
@@ -21,13 +21,22 @@ from andyc.outputs import check_output
 @click.option("--frames-max", default=None, type=click.IntRange(min=1), metavar="N",
               help="With --animate: at most N frames, evenly spread in time (default 300); a run longer than "
                    "N / fps seconds plays faster than real time.")
-def plot(run_file, out, animate, fps, frames_max):
+@click.option("--metric", default=None, metavar="NAME",
+              help="With a sweep's STORE.zarr: the variable to map (default: its first metric, else the outcome).")
+def plot(run_file, out, animate, fps, frames_max, metric):
     """Plot the states and the energy of a run against time (and, for a hybrid run, its flows,
     jumps and discrete states); when the run logged frames with their parents, also draw them as
     stick figures, into RUN_sticks.png (or OUT_sticks.png beside OUT). With --animate, write an
-    animation of the logged frames instead."""
+    animation of the logged frames instead. Given a sweep's result store (STORE.zarr, andyc sweep): a heat
+    map of a metric over its two swept names, or a line over one."""
     from andyc.runtime.run import read_h5
 
+    if Path(run_file).is_dir():             # a sweep's result store (andyc sweep)
+        from andyc.cli.sweep import plot_store
+
+        return plot_store(run_file, out, metric)
+    if metric is not None:
+        raise click.BadParameter("only with a sweep's result store (STORE.zarr)", param_hint="--metric")
     if Path(run_file).suffix.lower() not in (".h5", ".hdf5"):
         raise click.BadParameter(f"{run_file}: andyc plot reads the HDF5 run file (.h5) that andyc sim writes; "
                                  f"write one with --out RUN.h5", param_hint="RUN_FILE")
