@@ -69,7 +69,7 @@ def sweep(file, grids, samples, dists, seed, points_file, metrics, out, t_end, d
     point records its outcome (finished, stopped, blew up, Zeno, failed), final state, jumps, metrics and,
     with --trajectory, a decimated trajectory; a failed point is recorded and the sweep goes on."""
     from andyc.analysis.sweeps.metrics import MetricError, metric_items
-    from andyc.analysis.sweeps.points import PointsError, check_names, sweepable
+    from andyc.analysis.sweeps.points import PointsError, sweepable
     from andyc.analysis.sweeps.worker import Settings
 
     if trajectory == 1:
@@ -87,7 +87,10 @@ def sweep(file, grids, samples, dists, seed, points_file, metrics, out, t_end, d
     if not out.is_dir():
         check_output(out, read, "result store")
     try:
-        check_names(points.names, model)
+        settings = Settings.of(model, points.names, t_end, dt=dt, method=method, rtol=rtol, atol=atol,
+                               fixed=tuple(fixed.items()), stop_after=tuple(stops.items()), init=init,
+                               timeout=timeout, metrics=tuple(metric_list), max_events=max_events,
+                               trajectory=trajectory)
     except PointsError as exc:
         raise Refused(str(exc)) from None
     known = sweepable(model)
@@ -99,9 +102,6 @@ def sweep(file, grids, samples, dists, seed, points_file, metrics, out, t_end, d
         if name not in model.jump_names:
             raise Refused(f"--stop-after {name}: {model.name} has no jump '{name}'; jumps: "
                           f"{', '.join(model.jump_names) or 'none'}")
-    settings = Settings(str(model.path), result.build_key, points.names, tuple(known[n] for n in points.names),
-                        t_end, dt, method, rtol, atol, tuple(fixed.items()), tuple(stops.items()), init, timeout,
-                        tuple(metric_list), max_events, trajectory)
     _run(model, points, settings, out, scheduler, workers, batch, read)
 
 

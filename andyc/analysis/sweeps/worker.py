@@ -44,6 +44,17 @@ class Settings:
     max_events: int = 20        # jump times kept per point
     trajectory: int = 0         # samples of the decimated trajectory kept per point (0: none)
 
+    @classmethod
+    def of(cls, model, names, t_end: float, **options) -> "Settings":
+        """The settings of a sweep of `names` on a CompiledModel (its build as loaded here), with the run
+        options of Settings' fields (dt, method, metrics, ...). PointsError for a name it cannot sweep."""
+        from andyc.analysis.sweeps.points import check_names, sweepable
+
+        check_names(names, model)
+        known = sweepable(model)
+        return cls(str(model.path), model.module.BUILD_KEY, tuple(names), tuple(known[n] for n in names), t_end,
+                   **options)
+
     def options(self) -> dict:
         """What the store records of the runs, to refuse resuming with other options."""
         return {"t_end": self.t_end, "dt": self.dt, "method": self.method, "rtol": self.rtol, "atol": self.atol,
@@ -52,14 +63,14 @@ class Settings:
                 "max_events": self.max_events, "trajectory": self.trajectory}
 
 
-_LOADED: dict = {}          # (build path, build key) -> (CompiledModel, metrics): once per worker process
+_LOADED: dict = {}          # (build path, build key) -> CompiledModel: once per worker process
+_METRICS: dict = {}         # (build path, build key, metrics) -> [Metric]
 
 
 def loaded(settings: Settings):
-    """(CompiledModel, [Metric]) of the settings' build, imported once per process."""
+    """(CompiledModel, [Metric]) of the settings' build and metrics, imported and parsed once per process."""
     key = (settings.build, settings.build_key)
     if key not in _LOADED:
-        from andyc.analysis.sweeps.metrics import compile_metric
         from andyc.runtime.compiled import load_compiled
 
         if not os.path.exists(settings.build):
@@ -69,8 +80,13 @@ def loaded(settings: Settings):
         if model.module.BUILD_KEY != settings.build_key:
             raise SimulationError(f"{settings.build}: holds another build of {model.name} than the sweep's; "
                                   f"rebuild, then rerun the sweep")
-        _LOADED[key] = (model, [compile_metric(n, t, model) for n, t in settings.metrics])
-    return _LOADED[key]
+        _LOADED[key] = model
+    model = _LOADED[key]
+    if key + (settings.metrics,) not in _METRICS:
+        from andyc.analysis.sweeps.metrics import compile_metric
+
+        _METRICS[key + (settings.metrics,)] = [compile_metric(n, t, model) for n, t in settings.metrics]
+    return model, _METRICS[key + (settings.metrics,)]
 
 
 def run_batch(settings: Settings, indices: np.ndarray, values: np.ndarray) -> dict:
