@@ -28,6 +28,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(PY) bench/run.py
 	$(PY) bench/latency.py
+	$(PY) bench/sweep.py
 
 clean:
 	rm -rf build runs .pytest_cache

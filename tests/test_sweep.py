@@ -172,6 +172,42 @@ def test_grid_sweep_equals_serial_runs_bit_for_bit_and_resumes_with_nothing_new(
     assert (again.computed, again.already, again.batches) == (0, 9, 0)
 
 
+def test_tasks_carry_the_build_path_and_each_worker_loads_the_model_once(client, pendulum, tmp_path):
+    import pickle
+
+    pts = P.grid(["q1=0:1:8"])
+    settings = Settings.of(pendulum, pts.names, 0.05)
+    payload = pickle.dumps(settings)
+    assert len(payload) < 2000 and b"numba" not in payload and b"CompiledModel" not in payload
+
+    def count_loads():              # (local functions: sent by value to the workers)
+        from andyc.analysis.sweeps import worker
+        from andyc.runtime import compiled
+
+        worker._LOADED.clear()
+        original, calls = compiled.load_compiled, []
+
+        def load(path):
+            calls.append(path)
+            return original(path)
+
+        compiled.load_compiled = load
+        worker.calls, worker.original_load = calls, original
+
+    def loads():
+        from andyc.analysis.sweeps import worker
+        from andyc.runtime import compiled
+
+        compiled.load_compiled = worker.original_load
+        return len(worker.calls)
+
+    client.run(count_loads)
+    summary = run_sweep(pendulum, pts, settings, tmp_path / "once.zarr", client=client, batch=1)
+    counts = client.run(loads)
+    assert summary.batches == 8 and summary.computed == 8
+    assert sorted(counts.values()) == sorted([1] * len(summary.pids) + [0] * (len(counts) - len(summary.pids)))
+
+
 def test_a_worker_killed_mid_sweep_loses_no_point(client, pendulum, tmp_path):
     """One worker process ends itself (os._exit) in the middle of its second batch; the scheduler reruns
     that batch elsewhere; every point is in the store once, each equal to its serial run."""
@@ -302,7 +338,7 @@ def test_cli_sweep_on_a_scheduler_then_plot(client, shipped_build, tmp_path):
     assert result.exit_code == 0, result.output
     assert "6 points (6 computed now" in result.output and "finished 6" in result.output
     again = CliRunner().invoke(main, args)
-    assert again.exit_code == 0 and "(0 computed now" in again.output and "6 already in the store" in again.output
+    assert again.exit_code == 0 and "6 points, all in the store already (nothing to compute)" in again.output
     ds = xr.open_zarr(store)
     assert ds.top.attrs["expression"] == "max(q1)" and ds.top.dims == ("m1", "q1")
     plot = CliRunner().invoke(main, ["plot", str(store), "-o", str(tmp_path / "map.png")])

@@ -16,15 +16,17 @@ OUTCOME_COLOURS = {0: "#ffffff", 1: "#2a9d8f", 2: "#e9c46a", 3: "#e76f51", 4: "#
 
 
 def plot_sweep(grid: bool, axes: list, values: np.ndarray, name: str, expression: str, out, title: str = "",
-               outcomes: dict | None = None) -> None:
+               outcomes: dict | None = None, colours: dict | None = None) -> None:
     """Write the map of `values` to `out` (PNG). axes: [(swept name, its values)] -- a grid's axes (values of
     shape (len(x),) or (len(x), len(y))) or the points' values of each name (values of shape (n,));
-    outcomes: {code: name} when the values are outcome codes."""
+    outcomes: {code: name} when the values are codes (the outcomes, or classes such as walks / falls), drawn
+    in `colours` {code: colour} (default OUTCOME_COLOURS)."""
     with write_atomic(out) as tmp:
-        sweep_figure(grid, axes, values, name, expression, title, outcomes).savefig(tmp, dpi=110)
+        sweep_figure(grid, axes, values, name, expression, title, outcomes, colours).savefig(tmp, dpi=110)
 
 
-def sweep_figure(grid, axes, values, name, expression="", title="", outcomes=None) -> Figure:
+def sweep_figure(grid, axes, values, name, expression="", title="", outcomes=None, colours=None) -> Figure:
+    palette = colours or OUTCOME_COLOURS
     fig = Figure(figsize=(7, 5.2))
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
@@ -32,7 +34,7 @@ def sweep_figure(grid, axes, values, name, expression="", title="", outcomes=Non
     values = np.asarray(values, dtype=float)
     if outcomes:
         codes = sorted(outcomes)
-        cmap = ListedColormap([OUTCOME_COLOURS.get(c, "#000000") for c in codes])
+        cmap = ListedColormap([palette.get(c, "#000000") for c in codes])
         norm = BoundaryNorm(np.arange(len(codes) + 1) - 0.5, len(codes))
         colour = dict(cmap=cmap, norm=norm)
     else:
@@ -59,7 +61,7 @@ def sweep_figure(grid, axes, values, name, expression="", title="", outcomes=Non
         ax.set_ylabel(label)
     if outcomes:
         present = [c for c in sorted(outcomes) if np.any(values == c)]
-        ax.legend(handles=[Patch(color=OUTCOME_COLOURS.get(c, "#000000"), label=outcomes[c]) for c in present],
+        ax.legend(handles=[Patch(color=palette.get(c, "#000000"), label=outcomes[c]) for c in present],
                   loc="best", fontsize=8, framealpha=0.8)
     elif mesh is not None:
         fig.colorbar(mesh, ax=ax, label=label)

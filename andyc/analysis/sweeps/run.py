@@ -49,6 +49,8 @@ class Summary:
 
     def text(self) -> str:
         counts = ", ".join(f"{k} {v}" for k, v in self.outcomes.items() if v)
+        if not self.computed:
+            return f"{self.store}: {self.points} points, all in the store already (nothing to compute): {counts}"
         return (f"{self.store}: {self.points} points ({self.computed} computed now in {self.batches} batches on "
                 f"{self.workers} workers, {self.already} already in the store): {counts}")
 
@@ -140,13 +142,25 @@ class _cluster:
                                  f"runs there") from None
             self.made.append(client)
             return client
+        logger = logging.getLogger("distributed")     # its INFO lines, as workers start and stop: quiet
+        self.made.append(_Level(logger, logger.level))
+        logger.setLevel(logging.ERROR)
         cluster = LocalCluster(n_workers=self.workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
-        self.made.append(cluster)
+                               dashboard_address=":0", silence_logs=logging.ERROR)
+        self.made.insert(0, cluster)
         client = Client(cluster, set_as_default=False)
         self.made.insert(0, client)
         return client
 
     def __exit__(self, *exc):
-        for thing in self.made:
+        for thing in self.made:         # the client, the cluster, then the logger's level as it was
             thing.close()
+
+
+@dataclass
+class _Level:
+    logger: logging.Logger
+    level: int
+
+    def close(self) -> None:
+        self.logger.setLevel(self.level)
