@@ -320,6 +320,8 @@ MODEL = str(Path(__file__).resolve().parents[1] / "models" / "double_pendulum.ya
     (["--grid", "m1=0:1:2", "--samples", "3"], "choose the points one way"),
     (["--grid", "m1=0:1:2", "--metric", "e=max(energy"], "--metric e: cannot parse"),
     (["--grid", "m1=0:1:2", "--set", "nope=1"], "--set nope: double_pendulum has no parameter or input 'nope'"),
+    (["--grid", "m1=0:1:2", "--scheduler", "tcp://127.0.0.1:9", "--workers", "2"], "give one of them"),
+    (["--points", "missing.csv"], "missing.csv: no such file (--points)"),
 ])
 def test_cli_bad_input_is_one_line_exit_2(shipped_build, tmp_path, args, message):
     result = CliRunner().invoke(main, ["sweep", MODEL, "--build-dir", str(shipped_build), "-o",

@@ -74,6 +74,9 @@ def sweep(file, grids, samples, dists, seed, points_file, metrics, out, t_end, d
 
     if trajectory == 1:
         raise Refused("--trajectory 1: give 0 (none) or at least 2 samples")
+    if scheduler is not None and workers is not None:
+        raise Refused("--workers sets the local cluster's size; with --scheduler, the cluster's own workers run "
+                      "the sweep: give one of them")
     try:
         points = _points(grids, samples, dists, seed, points_file)
         metric_list = metric_items(metrics)

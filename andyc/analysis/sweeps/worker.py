@@ -103,15 +103,15 @@ def run_batch(settings: Settings, indices: np.ndarray, values: np.ndarray) -> di
 
 def empty_results(model, settings: Settings, n: int) -> dict:
     """The results of n points, not run: NaN, -1 and empty text."""
-    nan = np.full
-    return {"outcome": np.zeros(n, np.int8), "message": np.full(n, "", dtype=f"<U{MESSAGE_CHARS}"),
-            "t_final": nan(n, math.nan), "final": nan((n, model.nx), math.nan),
-            "final_discrete": nan((n, model.nd), math.nan), "final_flow": nan(n, -1, dtype=np.int16),
-            "jump_count": np.zeros((n, model.nj), np.int32), "event_time": nan((n, settings.max_events), math.nan),
-            "event_jump": nan((n, settings.max_events), -1, dtype=np.int16),
-            "metrics": nan((n, len(settings.metrics)), math.nan), "wall": nan(n, math.nan),
-            "trajectory": nan((n, settings.trajectory, model.nx), math.nan),
-            "trajectory_time": nan((n, settings.trajectory), math.nan)}
+    full, nan = np.full, math.nan
+    return {"outcome": np.zeros(n, np.int8), "message": full(n, "", dtype=f"<U{MESSAGE_CHARS}"),
+            "t_final": full(n, nan), "final": full((n, model.nx), nan), "final_discrete": full((n, model.nd), nan),
+            "final_flow": full(n, -1, dtype=np.int16), "jump_count": np.zeros((n, model.nj), np.int32),
+            "event_time": full((n, settings.max_events), nan),
+            "event_jump": full((n, settings.max_events), -1, dtype=np.int16),
+            "metrics": full((n, len(settings.metrics)), nan), "wall": full(n, nan),
+            "trajectory": full((n, settings.trajectory, model.nx), nan),
+            "trajectory_time": full((n, settings.trajectory), nan)}
 
 
 def simulate_point(model, settings: Settings, point, frames=()):
