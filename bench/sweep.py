@@ -56,8 +56,9 @@ def cluster(n: int):
     return made, Client(made, set_as_default=False)
 
 
-def timed_sweep(model, points, settings, client, scratch) -> tuple:
-    """(the sweep's wall time, the sum of its points' wall times on the workers), into a new store."""
+def timed_sweep(model, points, settings, client, scratch, cpu: list | None = None) -> tuple:
+    """(the sweep's wall time, the sum of its points' wall times on the workers), into a new store; the
+    mean CPU time of a point appended to `cpu`."""
     import xarray as xr
 
     store = Path(tempfile.mkdtemp(dir=scratch)) / "s.zarr"
@@ -65,7 +66,10 @@ def timed_sweep(model, points, settings, client, scratch) -> tuple:
     summary = run_sweep(model, points, settings, store, client=client, progress=False)
     wall = time.perf_counter() - start
     assert summary.computed == points.n, summary.text()
-    points_wall = float(xr.open_zarr(store).wall.sum())
+    ds = xr.open_zarr(store)
+    points_wall = float(ds.wall.sum())
+    if cpu is not None:
+        cpu.append(float(ds.cpu.mean()))
     shutil.rmtree(store.parent)
     return wall, points_wall
 
@@ -114,17 +118,19 @@ def main() -> None:
 
         # 2. speed-up, A/B alternated; beside it, how many points ran at once (the points' own wall times
         # over the sweep's: 2 when both workers are busy all along, whatever share of the cores they get)
-        walls, busy = {1: [], 2: []}, {1: [], 2: []}
+        walls, busy, cpu = {1: [], 2: []}, {1: [], 2: []}, {1: [], 2: []}
         for _ in range(args.rounds):
             for n in (1, 2):
-                wall, points_wall = timed_sweep(gait, grid, gait_settings, clusters[n][1], scratch)
+                wall, points_wall = timed_sweep(gait, grid, gait_settings, clusters[n][1], scratch, cpu[n])
                 walls[n].append(wall)
                 busy[n].append(points_wall / wall)
         ratios = [a / b for a, b in zip(walls[1], walls[2])]
         print(f"speed-up, 2 workers vs 1 on the 400-point grid ({args.rounds} A/B rounds): "
               f"{min(walls[1]) / min(walls[2]):.2f} (best times {min(walls[1]):.2f} s / {min(walls[2]):.2f} s); "
               f"per round {min(ratios):.2f} .. {max(ratios):.2f}; target >= 1.7. Points running at once: "
-              f"{min(busy[2]):.2f} .. {max(busy[2]):.2f} on 2 workers, {min(busy[1]):.2f} .. {max(busy[1]):.2f} on 1")
+              f"{min(busy[2]):.2f} .. {max(busy[2]):.2f} on 2 workers, {min(busy[1]):.2f} .. {max(busy[1]):.2f} on 1; "
+              f"CPU time a point {min(cpu[2]) * 1e3:.1f} .. {max(cpu[2]) * 1e3:.1f} ms on 2 workers, "
+              f"{min(cpu[1]) * 1e3:.1f} .. {max(cpu[1]) * 1e3:.1f} ms on 1")
 
         # 3. per-point overhead of a 1 ms run, over 1000 points on one worker: the sweep's wall time per point
         # less the time each point took on the worker (andyc.simulate and its metrics, measured there), in

@@ -168,6 +168,12 @@ def test_grid_sweep_equals_serial_runs_bit_for_bit_and_resumes_with_nothing_new(
         assert np.array_equal(final, serial_final(pendulum, settings, point)), point
         assert ds.emax.values[i, j] == ds.emax.sel(m1=point[0], q1=point[1]).values
     assert (ds.outcome.values == 1).all() and np.isfinite(ds.trajectory.values).all()
+    assert np.array_equal(ds.trajectory.values[..., -1, :], ds.final.values)      # at t_end: the final state
+    assert np.array_equal(ds.trajectory_time.values[0, 0], np.linspace(0, 0.3, 4))
+    x0 = pendulum.initial_state(pendulum.parameters({"m1": 0.5})).copy()
+    x0[0] = 0.2
+    assert np.array_equal(ds.trajectory.values[0, 0, 0], x0)                     # at t = 0: the point's start
+    assert (ds.cpu.values > 0).all() and (ds.cpu.values <= ds.wall.values + 1e-3).all()   # one thread's time
     again = run_sweep(pendulum, pts, settings, store, client=client, batch=2)
     assert (again.computed, again.already, again.batches) == (0, 9, 0)
 

@@ -12,7 +12,7 @@ first jumps of a run) and `sample` (decimated trajectories). Variables, per poin
     final            the final state (state), final_discrete (discrete), final_flow (the flow's index)
     jump_count       how many times each jump happened (jump)
     event_time       the times of the first jumps (event; NaN past the last), event_jump their jump's index
-    wall             seconds the point took on its worker
+    wall, cpu        seconds the point took on its worker: wall-clock time, and the CPU time of its thread
     <metric>         each --metric, by its name
     trajectory       the state at `sample` evenly spaced times (trajectory_time), with --trajectory N
 
@@ -41,7 +41,7 @@ CHUNK_VALUES = 1 << 18          # at most this many values in a chunk (2 MB of f
 CHUNK_POINTS = 4096             # at most this many points in a chunk
 # Names of the store's own variables and dimensions, which a metric or a swept name must not take.
 RESERVED = ("outcome", "message", "t_final", "final", "final_discrete", "final_flow", "jump_count", "event_time",
-            "event_jump", "wall", "trajectory", "trajectory_time", "point", "state", "discrete", "jump", "event",
+            "event_jump", "wall", "cpu", "trajectory", "trajectory_time", "point", "state", "discrete", "jump", "event",
             "sample")
 
 
@@ -123,7 +123,7 @@ def write_batch(path, points: Points, settings: Settings, results: dict) -> None
 
 
 def _variables(settings: Settings, results: dict) -> dict:
-    out = {k: results[k] for k in ("message", "t_final", "final", "final_flow", "wall")}
+    out = {k: results[k] for k in ("message", "t_final", "final", "final_flow", "wall", "cpu")}
     if results["final_discrete"].shape[1]:
         out["final_discrete"] = results["final_discrete"]
     if results["jump_count"].shape[1]:         # (a model without jumps has no jump to count or time)

@@ -109,7 +109,7 @@ def empty_results(model, settings: Settings, n: int) -> dict:
             "final_flow": full(n, -1, dtype=np.int16), "jump_count": np.zeros((n, model.nj), np.int32),
             "event_time": full((n, settings.max_events), nan),
             "event_jump": full((n, settings.max_events), -1, dtype=np.int16),
-            "metrics": full((n, len(settings.metrics)), nan), "wall": full(n, nan),
+            "metrics": full((n, len(settings.metrics)), nan), "wall": full(n, nan), "cpu": full(n, nan),
             "trajectory": full((n, settings.trajectory, model.nx), nan),
             "trajectory_time": full((n, settings.trajectory), nan)}
 
@@ -141,16 +141,16 @@ def record(out: dict, row: int, model, metrics: list, settings: Settings, point)
     from andyc.runtime.status import FAILED, outcome
 
     frames = tuple(dict.fromkeys(f for m in metrics for f in m.frames))
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.thread_time()
     try:
         run = simulate_point(model, settings, point, frames)
     except Exception as exc:            # a point's failure is its record, not the sweep's end
         text = str(exc) if isinstance(exc, SimulationError) else f"{type(exc).__name__}: {exc}"
         out["outcome"][row], out["message"][row] = FAILED, printable(text)[:MESSAGE_CHARS]
-        out["wall"][row] = time.perf_counter() - start
+        out["wall"][row], out["cpu"][row] = time.perf_counter() - start, time.thread_time() - cpu
         return
     out["outcome"][row], out["message"][row] = outcome(run.status), printable(run.status)[:MESSAGE_CHARS]
-    out["wall"][row] = time.perf_counter() - start
+    out["wall"][row], out["cpu"][row] = time.perf_counter() - start, time.thread_time() - cpu
     if len(run.time):
         out["t_final"][row], out["final"][row] = run.time[-1], run.state[-1]
         out["final_discrete"][row], out["final_flow"][row] = run.discrete[-1], run.flow[-1]
