@@ -31,6 +31,7 @@ bench: $(STAMP)
 	$(PY) bench/run.py
 	$(PY) bench/latency.py
 	$(PY) bench/ci_latency.py
+	$(PY) bench/sweep.py
 
 clean:
 	rm -rf build runs .pytest_cache

@@ -13,6 +13,7 @@ none exists (`create_once`), even when two builds race.
 from __future__ import annotations
 
 import os
+import shutil
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -96,6 +97,28 @@ def write_atomic(path):
             os.replace(tmp, path)
         except OSError as exc:
             raise OutputError(f"{path}: cannot write it ({exc.strerror}); choose another place") from None
+
+
+@contextmanager
+def new_folder_atomic(path):
+    """`with new_folder_atomic(path) as tmp:` fill the new folder tmp (beside path); on leaving the block
+    without an error it is renamed to path in one step (a result store is made whole or not at all: its
+    later updates are the chunk files its library writes, each atomically). OutputError when path exists
+    by then or cannot be written."""
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp"))
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write it ({exc.strerror}); choose another place") from None
+    try:
+        yield tmp
+        os.rename(tmp, path)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write it ({exc.strerror}); choose another place") from None
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
 
 
 def write_text(path, text: str) -> Path:

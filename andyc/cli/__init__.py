@@ -14,6 +14,7 @@ command or family of commands, each a click command over the API:
     eom.py        eom (the equations written out for reading)
     linearize.py  linearize (A, B and eigenvalues about a point)
     analysis.py   bench (work-precision) and stability (stability maps)
+    sweep.py      sweep (grids, Monte Carlo and CSV points on Dask, into a Zarr store), and plot STORE's maps
     common.py     what the commands share: a refused request, a model's problems, a model derived or compiled
     values.py     the options' values, checked; --set's split into parameters and inputs
 
@@ -29,7 +30,7 @@ import sys
 import click
 
 import andyc
-from andyc.cli import analysis, build, eom, graph, linearize, plot, sim, test, view
+from andyc.cli import analysis, build, eom, graph, linearize, plot, sim, sweep, test, view
 from andyc.cli.common import Refused
 from andyc.outputs import OutputError
 
@@ -84,11 +85,12 @@ def main():
     andyc bench model.yaml      work-precision: error against cost per method
     andyc stability model.yaml  stability map: step against method, failures named
     andyc eom model.yaml        M, G, constraint Jacobian, per element (LaTeX)
+    andyc sweep model.yaml      run a grid or Monte Carlo sweep on Dask into a Zarr store
     """
 
 
-for _command in (build.check, build.build, sim.sim, test.test, plot.plot, graph.graph, view.view, linearize.linearize,
-                 analysis.bench, analysis.stability, eom.eom):
+for _command in (build.check, build.build, sim.sim, test.test, sweep.sweep, plot.plot, graph.graph, view.view,
+                 linearize.linearize, analysis.bench, analysis.stability, eom.eom):
     main.add_command(_command)
 
 __all__ = ["main", "Refused"]

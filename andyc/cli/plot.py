@@ -12,7 +12,7 @@ from andyc.outputs import check_output
 
 
 @click.command()
-@click.argument("run_file", type=click.Path(exists=True, dir_okay=False))
+@click.argument("run_file", type=click.Path(exists=True))
 @click.option("-o", "--out", default=None, help="PNG file; default RUN.png beside the run. With --animate: the "
               "animation, OUT.gif or OUT.mp4 (needs ffmpeg); default RUN.gif beside the run.")
 @click.option("--animate", is_flag=True, help="Instead of the plots, write a 3-D stick animation of the frames the "
@@ -29,16 +29,29 @@ from andyc.outputs import check_output
                    "quantity and scale.")
 @click.option("--window", default=None, metavar="T0:T1",
               help="Only the samples with T0 <= t <= T1 (either end may be left out: 2:, :5); also for --animate.")
-def plot(run_file, out, animate, fps, frames_max, signals, window):
+@click.option("--metric", default=None, metavar="NAME",
+              help="With a sweep's STORE.zarr: the variable to map (default: its first metric, else the outcome).")
+def plot(run_file, out, animate, fps, frames_max, signals, window, metric):
     """Plot the states and the energy of a run against time (and, for a hybrid run, its flows,
     jumps and discrete states); when the run logged frames with their parents, also draw them as
     stick figures, into RUN_sticks.png (or OUT_sticks.png beside OUT). With --animate, write an
     animation of the logged frames instead. Quantities of different kinds (angles, lengths, speeds,
-    ...) or scales get axes of their own."""
+    ...) or scales get axes of their own. Given a sweep's result store (STORE.zarr, andyc sweep): a heat
+    map of a metric over its two swept names, or a line over one."""
     from andyc.plot.select import select_signals
     from andyc.plot.select import window as time_window
     from andyc.runtime.run import read_h5
 
+    if Path(run_file).is_dir():             # a sweep's result store (andyc sweep)
+        from andyc.cli.sweep import plot_store
+
+        given = [name for name, value in (("--signals", signals), ("--window", window), ("--animate", animate))
+                 if value]
+        if given:
+            raise click.BadParameter("only with a run file (RUN.h5), not a sweep's store", param_hint=given[0])
+        return plot_store(run_file, out, metric)
+    if metric is not None:
+        raise click.BadParameter("only with a sweep's result store (STORE.zarr)", param_hint="--metric")
     if Path(run_file).suffix.lower() not in (".h5", ".hdf5"):
         raise click.BadParameter(f"{run_file}: andyc plot reads the HDF5 run file (.h5) that andyc sim writes; "
                                  f"write one with --out RUN.h5", param_hint="RUN_FILE")

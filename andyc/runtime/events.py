@@ -16,7 +16,7 @@ from andyc.errors import SimulationError
 from andyc.numerics.status import OK
 from andyc.runtime.inputs import USER_ERRORS, InputSource, raised
 from andyc.runtime.options import Events
-from andyc.runtime.status import at, in_jump
+from andyc.runtime.status import ZENO, at, in_jump
 
 
 class EventLog:
@@ -67,7 +67,7 @@ class EventLog:
         zeno = self.zeno()
         if zeno is not None:
             t_inf, ratio = zeno
-            return (f"stopped: Zeno behaviour: the times of jump '{jumps[k]}' accumulate at t = {t_inf:.12g} s "
+            return (f"{ZENO}: the times of jump '{jumps[k]}' accumulate at t = {t_inf:.12g} s "
                     f"(intervals shrinking by a factor {ratio:.6g} per jump over the last {self.ZENO_WINDOW}; "
                     f"{len(self.times)} jumps, the last at t = {t:.12g} s, {t_inf - t:.3g} s before the "
                     f"accumulation point)")

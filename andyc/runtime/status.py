@@ -11,15 +11,33 @@ from __future__ import annotations
 
 import numpy as np
 
-from andyc.numerics.status import INPUT_FAILED, MESSAGES, NONFINITE
+from andyc.numerics.status import DIVERGED, INPUT_FAILED, MESSAGES, NONFINITE
 
 FINISHED = "finished"
 INTERRUPTED = "interrupted"     # a partial run's status, built by the watchdog (andyc.runtime.interrupts)
+ZENO = "stopped: Zeno behaviour"  # how the status of a run that EventLog stopped at a Zeno point begins
+
+# What a run's status says, in short (a sweep records one per point: andyc.analysis.sweeps): its code and
+# name. 0 is a point not run yet; "failed" a run that could not start or raised (the message says why).
+OUTCOMES = {0: "not run", 1: "finished", 2: "stopped", 3: "blew up", 4: "Zeno", 5: "failed"}
+NOT_RUN, FINISHED_CODE, STOPPED, BLEW_UP, ZENO_CODE, FAILED = range(6)
 
 
 def at(t: float) -> str:
     """" at t = ... s": where a run stopped."""
     return f" at t = {t:.9g} s"
+
+
+def outcome(status: str) -> int:
+    """The OUTCOMES code of a run's status: finished; blew up (its state became non-finite, or diverged);
+    Zeno; any other stop (or interruption): stopped."""
+    if status == FINISHED:
+        return FINISHED_CODE
+    if status.startswith(ZENO):
+        return ZENO_CODE
+    if MESSAGES[NONFINITE] in status or MESSAGES[DIVERGED] in status:
+        return BLEW_UP
+    return STOPPED
 
 
 def failure(model, source, status: int, t: float, d, p) -> str:

@@ -102,6 +102,12 @@ def number(value) -> sp.Expr:
     return sp.Rational(repr(float(value)))
 
 
+def syntax_tree(text) -> ast.expr:
+    """The checked syntax tree of an expression or comparison, for a caller that reads its structure before
+    handing parts of it back to parse() (andyc.analysis.sweeps.metrics); ExpressionError past the bounds."""
+    return _tree(text)
+
+
 def _tree(text) -> ast.expr:
     """The checked syntax tree of an expression or comparison (see the module docstring for the bounds)."""
     if not isinstance(text, str):

@@ -1,0 +1,180 @@
+"""The points of a sweep: a full grid, Monte Carlo samples or the rows of a CSV file, each point a value of
+every swept name.
+
+A swept name is a parameter, an input (its held value) or the initial value of a state (a coordinate, a
+speed `<coordinate>_dot` or a declared speed, a signal), as `andyc linearize --at` names them. A grid
+keeps its shape (one axis per name, the first name slowest, as numpy's C order); samples and CSV rows are a
+flat list of points. Monte Carlo draws from numpy's Generator (PCG64) seeded with the sweep's seed, the
+names in the order given, so that the same seed gives the same samples.
+
+Bad input raises PointsError with one line that says what and how to fix it.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+MAX_POINTS = 10_000_000
+DISTRIBUTIONS = ("normal(MU,SIGMA)", "uniform(A,B)")
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_DIST = re.compile(r"^\s*(normal|uniform)\s*\(\s*([^,()]+?)\s*,\s*([^,()]+?)\s*\)\s*$")
+
+
+class PointsError(ValueError):
+    """A sweep's points that cannot be made: an unknown name, an empty range, a bad distribution, a bad CSV."""
+
+
+@dataclass(frozen=True)
+class Points:
+    """names: the swept names; values: (n, len(names)), point i's value of each name; shape: the grid's shape
+    (one axis per name) or (n,); kind: "grid", "samples" or "points"; axes: each grid axis's values."""
+    kind: str
+    names: tuple
+    values: np.ndarray
+    shape: tuple
+    axes: tuple = ()
+    seed: int | None = None
+
+    @property
+    def n(self) -> int:
+        return self.values.shape[0]
+
+    def digest(self) -> str:
+        """SHA-256 of the points (names, kind, shape and the values' bytes): a store holds one sweep."""
+        h = hashlib.sha256(repr((self.kind, self.names, self.shape)).encode())
+        h.update(np.ascontiguousarray(self.values, dtype="<f8").tobytes())
+        return h.hexdigest()
+
+    def index(self, flat: np.ndarray) -> tuple:
+        """The grid indices (one array per axis) of flat point numbers; for samples and rows, the numbers."""
+        return np.unravel_index(np.asarray(flat), self.shape)
+
+
+def sweepable(model) -> dict:
+    """{name: (kind, index)} of every name a sweep may set in a CompiledModel: "parameter", "input" or
+    "state" (an initial value)."""
+    names = {n: ("state", i) for i, n in enumerate(model.state_names)}
+    names.update({n: ("input", i) for i, n in enumerate(model.input_names)})
+    names.update({n: ("parameter", i) for i, n in enumerate(model.parameter_names)})
+    return names
+
+
+def check_names(names, model) -> None:
+    """PointsError for a name that is no parameter, input or state of `model`, or a name given twice."""
+    known = sweepable(model)
+    seen = set()
+    for name in names:
+        if name not in known:
+            raise PointsError(f"unknown name '{name}': {model.name} has no parameter, input or state of that name; "
+                              f"sweepable: {', '.join(known)}")
+        if name in seen:
+            raise PointsError(f"'{name}' is swept twice; give each name once")
+        seen.add(name)
+
+
+def grid(specs) -> Points:
+    """The full grid of ('NAME=A:B:N', ...): N values from A to B (both included) per name."""
+    names, axes = [], []
+    for text in specs:
+        name, sep, rest = text.partition("=")
+        parts = rest.split(":")
+        if not sep or len(parts) != 3 or not _NAME.fullmatch(name.strip()):
+            raise PointsError(f"--grid '{text}': not NAME=FROM:TO:COUNT (e.g. slope=0:0.1:20)")
+        low, high = _number(parts[0], text, "--grid"), _number(parts[1], text, "--grid")
+        count = parts[2].strip()
+        if not count.lstrip("-").isdigit():
+            raise PointsError(f"--grid '{text}': the count '{count}' is not a whole number")
+        if int(count) < 1:
+            raise PointsError(f"--grid '{text}': an empty range ({count} values); give a count of at least 1")
+        if int(count) > 1 and low == high:
+            raise PointsError(f"--grid '{text}': an empty range (from {low:g} to {high:g}); give two different "
+                              f"ends, or a count of 1")
+        names.append(name.strip())
+        axes.append(np.linspace(low, high, int(count)))
+    shape = tuple(len(a) for a in axes)
+    _check_count(math.prod(shape))
+    mesh = np.meshgrid(*axes, indexing="ij")
+    values = np.stack([m.ravel() for m in mesh], axis=1) if axes else np.zeros((0, 0))
+    return Points("grid", tuple(names), values, shape, tuple(axes))
+
+
+def samples(n: int, specs, seed: int) -> Points:
+    """n Monte Carlo samples of ('NAME=normal(MU,SIGMA)' | 'NAME=uniform(A,B)', ...), drawn in that order from
+    numpy.random.default_rng(seed)."""
+    if n < 1:
+        raise PointsError(f"--samples {n}: give at least 1 sample")
+    _check_count(n)
+    if not specs:
+        raise PointsError("--samples needs at least one --dist NAME=normal(MU,SIGMA) or NAME=uniform(A,B)")
+    rng = np.random.default_rng(seed)
+    names, columns = [], []
+    for text in specs:
+        name, sep, rest = text.partition("=")
+        found = _DIST.match(rest)
+        if not sep or not _NAME.fullmatch(name.strip()) or found is None:
+            raise PointsError(f"--dist '{text}': a bad distribution; write NAME={' or NAME='.join(DISTRIBUTIONS)}")
+        kind, a, b = found.group(1), _number(found.group(2), text, "--dist"), _number(found.group(3), text, "--dist")
+        if kind == "normal" and not b > 0:
+            raise PointsError(f"--dist '{text}': a bad distribution: the standard deviation {b:g} must be above 0")
+        if kind == "uniform" and not b > a:
+            raise PointsError(f"--dist '{text}': a bad distribution: uniform(A,B) needs A < B, got {a:g}, {b:g}")
+        names.append(name.strip())
+        columns.append(rng.normal(a, b, n) if kind == "normal" else rng.uniform(a, b, n))
+    return Points("samples", tuple(names), np.stack(columns, axis=1), (n,), seed=seed)
+
+
+def from_csv(path) -> Points:
+    """The rows of a CSV file: a header of names, then one point a row, every value a finite number."""
+    path = Path(path)
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            rows = [(k, row) for k, row in enumerate(csv.reader(fh), start=1)
+                    if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
+    except FileNotFoundError:
+        raise PointsError(f"{path}: no such file (--points)") from None
+    except (UnicodeDecodeError, csv.Error, OSError) as exc:
+        raise PointsError(f"{path}:1: cannot read it as a CSV text file ({exc})") from None
+    if not rows:
+        raise PointsError(f"{path}:1: empty; write a header of names, then one point a row")
+    line, header = rows[0]
+    names = [h.strip() for h in header]
+    bad = next((h for h in names if not _NAME.fullmatch(h)), None)
+    if bad is not None:
+        raise PointsError(f"{path}:{line}: the header's '{bad}' is not a name; write the swept names, e.g. m,g")
+    if len(rows) == 1:
+        raise PointsError(f"{path}:{line}: a header and no points; add one point a row")
+    _check_count(len(rows) - 1)
+    values = np.empty((len(rows) - 1, len(names)))
+    for r, (k, row) in enumerate(rows[1:]):
+        if len(row) != len(names):
+            raise PointsError(f"{path}:{k}: {len(row)} values for {len(names)} names; give one value per name")
+        for c, cell in enumerate(row):
+            try:
+                values[r, c] = float(cell)
+            except ValueError:
+                values[r, c] = math.nan
+            if not math.isfinite(values[r, c]):
+                raise PointsError(f"{path}:{k}: {names[c]} is {cell.strip()!r}, not a finite number")
+    return Points("points", tuple(names), values, (len(values),))
+
+
+def _number(text: str, item: str, option: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise PointsError(f"{option} '{item}': '{text.strip()}' is not a number") from None
+    if not math.isfinite(value):
+        raise PointsError(f"{option} '{item}': '{text.strip()}' is not a finite number")
+    return value
+
+
+def _check_count(n: int) -> None:
+    if n > MAX_POINTS:
+        raise PointsError(f"{n} points, past the limit of {MAX_POINTS:.0e}; sweep fewer")

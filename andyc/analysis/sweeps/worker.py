@@ -1,0 +1,172 @@
+"""What a worker does: run a batch of points of a sweep on the compiled model, loaded once per process.
+
+A task carries no compiled code: only the build's path and key (Settings) and the batch's values. The
+worker imports the generated module from the build folder the first time (Numba loads its functions from
+the cache beside it, andyc.runtime.compiled.load_compiled) and keeps it, with the parsed metrics, for every
+later batch of the process. A point that fails -- a run refused (an initial state off the constraints), an
+exception -- is recorded as failed with its message; it never fails the batch.
+
+Each point is andyc.simulate with the point's parameters, inputs and initial state, the same call a serial
+run makes, so its final state is the serial run's bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from andyc.errors import SimulationError, printable
+
+MESSAGE_CHARS = 200         # a status message is kept to this many characters in the store
+
+
+@dataclass(frozen=True)
+class Settings:
+    """One sweep's runs, as plain data (what a task sends): the build, the swept names and the run options."""
+    build: str                  # the generated module's path, as the workers see it
+    build_key: str
+    names: tuple                # swept names
+    kinds: tuple                # ("parameter" | "input" | "state", index) of each
+    t_end: float
+    dt: float = 1e-3
+    method: str = "rk4"
+    rtol: float = 1e-8
+    atol: float = 1e-10
+    fixed: tuple = ()           # (name, value): --set values every point shares
+    stop_after: tuple = ()      # (jump, n)
+    init: str = "check"
+    timeout: float | None = None  # wall-clock seconds a point may take
+    metrics: tuple = ()         # (name, text)
+    max_events: int = 20        # jump times kept per point
+    trajectory: int = 0         # samples of the decimated trajectory kept per point (0: none)
+
+    @classmethod
+    def of(cls, model, names, t_end: float, **options) -> "Settings":
+        """The settings of a sweep of `names` on a CompiledModel (its build as loaded here), with the run
+        options of Settings' fields (dt, method, metrics, ...). PointsError for a name it cannot sweep."""
+        from andyc.analysis.sweeps.points import check_names, sweepable
+
+        check_names(names, model)
+        known = sweepable(model)
+        return cls(str(model.path), model.module.BUILD_KEY, tuple(names), tuple(known[n] for n in names), t_end,
+                   **options)
+
+    def options(self) -> dict:
+        """What the store records of the runs, to refuse resuming with other options."""
+        return {"t_end": self.t_end, "dt": self.dt, "method": self.method, "rtol": self.rtol, "atol": self.atol,
+                "fixed": [list(f) for f in self.fixed], "stop_after": [list(s) for s in self.stop_after],
+                "init": self.init, "timeout": self.timeout, "metrics": [list(m) for m in self.metrics],
+                "max_events": self.max_events, "trajectory": self.trajectory}
+
+
+_LOADED: dict = {}          # (build path, build key) -> CompiledModel: once per worker process
+_METRICS: dict = {}         # (build path, build key, metrics) -> [Metric]
+
+
+def loaded(settings: Settings):
+    """(CompiledModel, [Metric]) of the settings' build and metrics, imported and parsed once per process."""
+    key = (settings.build, settings.build_key)
+    if key not in _LOADED:
+        from andyc.runtime.compiled import load_compiled
+
+        if not os.path.exists(settings.build):
+            raise SimulationError(f"{settings.build}: no such file on this worker; a cluster's workers need the "
+                                  f"build folder at the same path (a shared file system)")
+        model = load_compiled(settings.build)
+        if model.module.BUILD_KEY != settings.build_key:
+            raise SimulationError(f"{settings.build}: holds another build of {model.name} than the sweep's; "
+                                  f"rebuild, then rerun the sweep")
+        _LOADED[key] = model
+    model = _LOADED[key]
+    if key + (settings.metrics,) not in _METRICS:
+        from andyc.analysis.sweeps.metrics import compile_metric
+
+        _METRICS[key + (settings.metrics,)] = [compile_metric(n, t, model) for n, t in settings.metrics]
+    return model, _METRICS[key + (settings.metrics,)]
+
+
+def run_batch(settings: Settings, indices: np.ndarray, values: np.ndarray) -> dict:
+    """Run the points `indices` (their values: one row each) and return their results, stacked (see
+    empty_results for the fields); also the process's id (the tests kill workers by it)."""
+    model, metrics = loaded(settings)
+    out = empty_results(model, settings, len(indices))
+    out["index"] = np.asarray(indices, dtype=np.int64)
+    for row, point in enumerate(values):
+        record(out, row, model, metrics, settings, point)
+    out["pid"] = os.getpid()
+    return out
+
+
+def empty_results(model, settings: Settings, n: int) -> dict:
+    """The results of n points, not run: NaN, -1 and empty text."""
+    full, nan = np.full, math.nan
+    return {"outcome": np.zeros(n, np.int8), "message": full(n, "", dtype=f"<U{MESSAGE_CHARS}"),
+            "t_final": full(n, nan), "final": full((n, model.nx), nan), "final_discrete": full((n, model.nd), nan),
+            "final_flow": full(n, -1, dtype=np.int16), "jump_count": np.zeros((n, model.nj), np.int32),
+            "event_time": full((n, settings.max_events), nan),
+            "event_jump": full((n, settings.max_events), -1, dtype=np.int16),
+            "metrics": full((n, len(settings.metrics)), nan), "wall": full(n, nan), "cpu": full(n, nan),
+            "trajectory": full((n, settings.trajectory, model.nx), nan),
+            "trajectory_time": full((n, settings.trajectory), nan)}
+
+
+def simulate_point(model, settings: Settings, point, frames=()):
+    """The Run of one point: andyc.simulate with the point's values over the settings' fixed ones."""
+    import andyc
+    from andyc.runtime.interrupts import Interrupts
+
+    parameters, inputs, states = {}, {}, {}
+    for (name, value) in settings.fixed:
+        (inputs if name in model.input_names else parameters)[name] = value
+    for (kind, i), name, value in zip(settings.kinds, settings.names, point):
+        {"parameter": parameters, "input": inputs, "state": states}[kind][name] = float(value)
+    x0 = None
+    if states:
+        x0 = np.array(model.initial_state(model.parameters(parameters)), dtype=np.float64)
+        for name, value in states.items():
+            x0[model.state_names.index(name)] = value
+    return andyc.simulate(model, settings.t_end, dt=settings.dt, method=settings.method, parameters=parameters,
+                          inputs=inputs, x0=x0, rtol=settings.rtol, atol=settings.atol, frames=list(frames),
+                          progress=False, interrupts=Interrupts(settings.timeout), init=andyc.Init(settings.init),
+                          events=andyc.Events(stop_after=dict(settings.stop_after) or None))
+
+
+def record(out: dict, row: int, model, metrics: list, settings: Settings, point) -> None:
+    """Run one point into row `row` of the results; a failure is recorded, never raised."""
+    from andyc.analysis.sweeps.metrics import evaluate
+    from andyc.runtime.status import FAILED, outcome
+
+    frames = tuple(dict.fromkeys(f for m in metrics for f in m.frames))
+    start, cpu = time.perf_counter(), time.thread_time()
+    try:
+        run = simulate_point(model, settings, point, frames)
+    except Exception as exc:            # a point's failure is its record, not the sweep's end
+        text = str(exc) if isinstance(exc, SimulationError) else f"{type(exc).__name__}: {exc}"
+        out["outcome"][row], out["message"][row] = FAILED, printable(text)[:MESSAGE_CHARS]
+        out["wall"][row], out["cpu"][row] = time.perf_counter() - start, time.thread_time() - cpu
+        return
+    out["outcome"][row], out["message"][row] = outcome(run.status), printable(run.status)[:MESSAGE_CHARS]
+    out["wall"][row], out["cpu"][row] = time.perf_counter() - start, time.thread_time() - cpu
+    if len(run.time):
+        out["t_final"][row], out["final"][row] = run.time[-1], run.state[-1]
+        out["final_discrete"][row], out["final_flow"][row] = run.discrete[-1], run.flow[-1]
+    jumps = run.events["jump"]
+    out["jump_count"][row] = np.bincount(jumps, minlength=model.nj)[:model.nj] if model.nj else []
+    k = min(len(jumps), settings.max_events)
+    out["event_time"][row, :k], out["event_jump"][row, :k] = run.events["time"][:k], jumps[:k]
+    for j, metric in enumerate(metrics):
+        try:
+            out["metrics"][row, j] = evaluate(metric, run)
+        except (ValueError, ArithmeticError, TypeError):
+            out["metrics"][row, j] = math.nan
+    if settings.trajectory and len(run.time):
+        times = np.linspace(0.0, settings.t_end, settings.trajectory)
+        # the last sample at or before each time (a jump is not smeared); NaN past the run's end
+        at = np.clip(np.searchsorted(run.time, times, side="right") - 1, 0, len(run.time) - 1)
+        reached = times <= run.time[-1] * (1 + 1e-12)
+        out["trajectory_time"][row] = np.where(reached, times, math.nan)
+        out["trajectory"][row] = np.where(reached[:, None], run.state[at], math.nan)
