@@ -57,6 +57,9 @@ class CompiledModel:
     input_expressions: tuple = ()  # (input, expression text) the model drives by default
     closed_form: object = None  # the module's closed_form(t, u, p) -> x, the exact solution it declares, or None
     closed_form_where: tuple = ()  # (line, document path) of each state's closed form in the model file
+    contact_names: tuple = ()   # unilateral contacts (andyc.spec.contacts); flow index = bitmask of the closed ones
+    contact_rows: tuple = ()    # the constraint row of each contact's gap
+    jump_contact: tuple = ()    # per jump: the contact whose impact it is (andyc.runtime.contacts resolves it), or -1
 
     @property
     def nd(self) -> int:

@@ -179,7 +179,8 @@ class _Assembly:
                    residual_velocity=c, energy_correction=bool(self.energy_correction),
                    flow=f_log, flow_names=list(model.flow_names), discrete_names=list(model.discrete_names),
                    discrete=d_log, events=self.jumps.table(), jump_names=list(model.jump_names),
-                   frame_parents={name: model.frame_parents[model.frame_names.index(name)] for name in frame_names})
+                   frame_parents={name: model.frame_parents[model.frame_names.index(name)] for name in frame_names},
+                   contact_names=list(model.contact_names), contact_rows=list(model.contact_rows))
 
 
 def _check_size(model: CompiledModel, t_end: float, dt: float, every: int) -> None:
