@@ -41,9 +41,12 @@ constraints:
 hybrid:
   flows:
     - {name: rest, constraints: [ground]}
+    - {name: held, constraints: [ground]}
     - {name: air}
   jumps:
-    - {name: liftoff, from: rest, to: air, guard: fn, direction: falling}
+    - {name: liftoff, from: held, to: air, guard: fn, direction: falling}
+    - {name: light, from: rest, to: held, guard: t - 1, direction: rising, enabled: fn < 15}
+    - {name: heavy, from: rest, to: held, guard: t - 2, direction: rising, enabled: fn < 12}
 """
 
 
@@ -73,9 +76,11 @@ def test_liftoff_where_the_normal_force_reaches_zero(lifted_block, method):
     t_star = m * G / c                                  # m g - c t = 0
     run = andyc.simulate(lifted_block, 8.0, dt=1e-2, method=method, rtol=1e-12, atol=1e-12, progress=False)
     assert run.finished
-    assert run.event_names() == ["liftoff"]
-    assert abs(run.events["time"][0] - t_star) < 1e-11
-    resting = run.flow == 0
+    # enabling conditions read the multipliers too: fn = 15.62 at t = 1 (not < 15), 11.62 at t = 2 (< 12)
+    assert run.event_names() == ["heavy", "liftoff"]
+    assert abs(run.events["time"][0] - 2.0) < 1e-11
+    assert abs(run.events["time"][1] - t_star) < 1e-11
+    resting = run.flow != 2
     assert np.allclose(run.multipliers[resting, 0], m * G - c * run.time[resting], rtol=0, atol=1e-12)
     assert np.all(run.multipliers[resting, 0] >= 0)      # the ground pushes: the sign of the README
     # then y'' = c (t - t*) / m: a cubic, which RK4 integrates exactly
@@ -85,8 +90,8 @@ def test_liftoff_where_the_normal_force_reaches_zero(lifted_block, method):
 
 
 def test_a_multiplier_of_a_constraint_not_active_in_the_source_flow(tmp_path):
-    text = LIFTED_BLOCK.replace("{name: liftoff, from: rest, to: air, guard: fn",
-                                "{name: liftoff, from: air, to: rest, guard: fn")
+    text = LIFTED_BLOCK.replace("{name: liftoff, from: held, to: air, guard: fn",
+                                "{name: liftoff, from: air, to: held, guard: fn")
     [d] = problems(tmp_path, text)
     assert (d.line, d.path) == (text.splitlines().index(next(line for line in text.splitlines()
                                                               if "guard: fn" in line)) + 1, "hybrid.jumps[0].guard")
@@ -139,6 +144,17 @@ def test_bouncing_ball_comes_to_rest(compiled, method, tmp_path):
     assert back.contact_names == ["ground"] and np.array_equal(back.normal_forces, run.normal_forces)
     header = next(line for line in (tmp_path / "ball.csv").read_text().splitlines() if line.startswith("time,"))
     assert header.endswith("closed_ground,normal_force_ground")
+
+
+def test_a_ball_starting_on_the_ground_stays_there(compiled):
+    model = compiled("bouncing_ball_contact")
+    run = andyc.simulate(model, 10.0, dt=1e-3, parameters={"h0": 0.0}, progress=False)
+    assert run.finished and len(run.events["time"]) == 0 and np.all(run.flow == 1)
+    assert np.max(np.abs(run.column("y"))) == 0.0
+    assert np.max(np.abs(run.normal_forces[:, 0] - G)) < 1e-10
+    # held above it, it falls
+    run = andyc.simulate(model, 1.0, dt=1e-3, parameters={"h0": 1e-6}, progress=False)
+    assert run.flow[0] == 0 and run.events["time"][0] == pytest.approx(math.sqrt(2e-6 / G), abs=1e-12)
 
 
 # -- simultaneous impacts ------------------------------------------------------------------

@@ -23,6 +23,8 @@ Modes after the impact: a touching contact whose normal speed after is at most R
 rebound too slow to matter); the others are open. When the jump times accumulate (Zeno: the EventLog's
 test, the same that stops a hand-written bouncing ball), the impact is solved plastic (e = 0 for every
 contact), so the contacts close and the run goes on from the accumulation point: the ball comes to rest.
+
+initial_mode picks the mode a run starts in: the contacts touching at rest, less those that would pull.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ import numpy as np
 from andyc.numerics.status import REST_SPEED
 
 SIMULTANEOUS = 1e-9     # s: an open contact takes part when its gap closes within this time at its speed
+TOUCHING = 1e-12        # a contact whose gap is at most this at the start, at rest, starts closed
 
 
 def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool) -> int:
@@ -80,4 +83,21 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool) -> int:
     for i in touching:
         if after[rows[i]] <= REST_SPEED:
             mask |= 1 << i
+    return mask
+
+
+def initial_mode(model, t, x, u, p, d) -> int:
+    """The flow a run starts in (the bitmask of the closed contacts): the contacts touching (|gap| <= TOUCHING)
+    at rest (|normal speed| <= REST_SPEED), less those whose normal force in that mode is negative, the most
+    negative first, one at a time (dropping one changes the others' forces)."""
+    phi, c = np.empty(model.nh), np.empty(model.nc)
+    model.module.constraints(t, x, u, p, d, phi, c, np.empty((model.nc, model.nv)), np.empty(model.nc))
+    rows = model.contact_rows
+    mask = sum(1 << i for i, r in enumerate(rows) if abs(phi[r]) <= TOUCHING and abs(c[r]) <= REST_SPEED)
+    while mask:
+        lam = model.module.multipliers(t, x, u, p, d, mask)
+        force, worst = min((lam[r], i) for i, r in enumerate(rows) if mask >> i & 1)
+        if force >= 0.0:
+            break
+        mask &= ~(1 << worst)
     return mask
