@@ -194,6 +194,29 @@ def test_rod_falling_flat_strikes_both_supports_together(compiled, e):
         assert len(run.events["time"]) == 1 and run.events["to_flow"][0] == 3
 
 
+@pytest.mark.parametrize("e", [0.0, 0.5])
+def test_a_tilted_rod_lands_on_one_end_then_the_other_and_no_support_pulls(compiled, e):
+    model = compiled("rod_drop")
+    x0 = np.array([0.5 + 0.5 * math.sin(0.2), 0.2, 0.0, 0.0])          # tilted 0.2 rad, the left end lower
+    run = andyc.simulate(model, 4.0, dt=1e-3, parameters={"e": e}, x0=x0, progress=False)
+    assert run.finished
+    assert run.event_names()[:2] == ["left_impact_0", "right_impact_" + ("1" if e == 0 else "0")]
+    p = model.parameters({"e": e})
+    u, d = model.input_defaults, model.initial_discrete(p)
+    for t, before, after in zip(run.events["time"], run.events["state_before"], run.events["state_after"]):
+        # the impulses, from M (v+ - v-) = A^T Lam, and the normal speeds after, of the supports touched
+        M = model.module.mass_matrix(t, before, u, p, d)
+        phi, c, A, kappa = np.empty(2), np.empty(2), np.empty((2, 2)), np.empty(2)
+        model.module.constraints(t, before, u, p, d, phi, c, A, kappa)
+        impulse = np.linalg.lstsq(A.T, M @ (after[2:] - before[2:]), rcond=None)[0]
+        assert np.all(impulse >= -1e-12)
+        touching = np.abs(phi) < 1e-9
+        assert np.all((A @ after[2:])[touching] >= -1e-12)
+    # it ends at rest on both, level, each carrying half its weight
+    assert run.flow[-1] == 3 and abs(run.column("th")[-1]) < 1e-9
+    assert np.allclose(run.normal_forces[-1], [G / 2, G / 2], rtol=0, atol=1e-9)
+
+
 # -- hopper -----------------------------------------------------------------------------
 
 def stance_time(M=1.0, mf=0.1, k=1000.0, l0=1.0, h=0.5):
