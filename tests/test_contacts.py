@@ -277,6 +277,13 @@ def test_contact_mistakes(tmp_path, entry, path, message, hint):
     assert str(d).startswith(f"{tmp_path / 'model.yaml'}:{d.line}: {path}: {message}; ")
 
 
+def test_a_contact_named_open(tmp_path):
+    text = BALL.replace("{name: ground, gap: ball.y", "{name: open, gap: ball.y")
+    [d] = problems(tmp_path, text)
+    assert (d.line, d.path) == (line_number(text, "{name: open"), "contacts[0].name")
+    assert d.message.startswith("a contact cannot be named 'open'")
+
+
 def test_contacts_with_a_hybrid_section(tmp_path):
     text = BALL + "hybrid:\n  flows:\n    - {name: flight}\n"
     [d] = problems(tmp_path, text)

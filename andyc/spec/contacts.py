@@ -66,6 +66,9 @@ def build_contacts(written: list, constraints: list, has_hybrid: bool, scope: Sc
     by_name = {c.name: c for c in constraints}
     for i, c in enumerate(written):
         where = ("contacts", i)
+        if c["name"] == "open":
+            scope.report.error(where + ("name",), "a contact cannot be named 'open': that names the mode in which no "
+                               "contact is closed", "choose another name")
         e = restitution(c.get("restitution", 0), where + ("restitution",), scope)
         row = by_name[c["name"]]
         contacts.append(Contact(c["name"], c["name"], row.multipliers[0], e, where))
