@@ -57,6 +57,10 @@ def _hybrid_context(model: SymbolicModel) -> dict:
                    "priority": j.priority} for j in h.jumps],
         "impact_rows": _padded([j.impact_rows for j in h.jumps], nc),
         "impact_nrows": [len(j.impact_rows) for j in h.jumps],
+        "jump_multipliers": [j.uses_multipliers for j in h.jumps],
+        "jump_contact": [j.contact for j in h.jumps],
+        "contacts": [c.name for c in model.spec.contacts],
+        "contact_rows": [model.constraints.rows.index(c.constraint) for c in model.spec.contacts],
     }
 
 

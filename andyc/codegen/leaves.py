@@ -29,9 +29,10 @@ DOCS = {
     "constraint_gains": "Soft-constraint gains K_s and K_d of each row (ANDY eq. 13-15), for the baumgarte method, "
                         "into S.",
     "restitution": "Coefficient of restitution of each jump's impact, into S.",
-    "guard": "The guard of jump k: it happens where this crosses zero in JUMP_DIRECTION[k].",
+    "guard": "The guard of jump k: it happens where this crosses zero in JUMP_DIRECTION[k]; lam: the multipliers of "
+             "its source flow (read when JUMP_MULTIPLIERS[k]).",
     "guard_rate": "d/dt of the guard of jump k, given xdot.",
-    "enabled": "Enabling condition of jump k: >= 0 where it may happen.",
+    "enabled": "Enabling condition of jump k: >= 0 where it may happen; lam as in guard.",
     "reset": "Resets of jump k, into x and d, all from the values before the jump.",
     "flow_inputs": "Input values a flow sets, into U (NF, NU); other entries are left as they are.",
     "closed_form": "x(t), the exact solution the model declares (closed_form:), at held inputs u and parameters p.",
@@ -52,6 +53,7 @@ def _unpack(model: SymbolicModel, used: set) -> list[str]:
         lines += [f"{s} = {array}[{i}]" for i, s in enumerate(symbols) if s in used]
     nq = len(model.q)
     lines += [f"{s} = xdot[{nq + i}]" for i, s in enumerate(model.hybrid.vdot) if s in used]
+    lines += [f"{s} = lam[{i}]" for i, s in enumerate(model.hybrid.multipliers) if s in used]
     return lines
 
 
@@ -135,9 +137,9 @@ def _hybrid(out: Leaves, model: SymbolicModel, at: dict) -> None:
     index = {**{c.name: f"x[{i}]" for i, c in enumerate(spec.coordinates)},
              **{name: f"x[{nq + i}]" for i, name in enumerate(spec.speed_names)},
              **{x.name: f"d[{i}]" for i, x in enumerate(spec.discrete)}}
-    out.add_per_jump("guard", STATE, [([("g", j.guard)], "g") for j in h.jumps], "0.0")
+    out.add_per_jump("guard", f"{STATE}, lam", [([("g", j.guard)], "g") for j in h.jumps], "0.0")
     out.add_per_jump("guard_rate", f"{STATE}, xdot", [([("g", j.guard_rate)], "g") for j in h.jumps], "0.0")
-    out.add_per_jump("enabled", STATE, [([("e", j.enabled)], "e") for j in h.jumps], "1.0")
+    out.add_per_jump("enabled", f"{STATE}, lam", [([("e", j.enabled)], "e") for j in h.jumps], "1.0")
     out.add_per_jump("reset", STATE, [([(index[s], e) for s, e in j.resets], None) for j in h.jumps], "None")
     out.add("restitution", "p, S", [(f"S[{at['e']}, {k}]", j.restitution) for k, j in enumerate(h.jumps)])
 

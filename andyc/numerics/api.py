@@ -13,7 +13,7 @@ called from several threads at once.
 import numpy as np
 
 from .compiler import jit
-from .dynamics import multipliers, rhs_mode_into
+from .dynamics import enabled_value, guard_value, multipliers, rhs_mode_into
 from .inputs import callbacks
 from .integrator import crosses, update_inputs  # noqa: F401  (crosses: for the module's users)
 from .model import Work, call
@@ -58,13 +58,20 @@ def _signal_rates(model, t, x, u, p, d, xdot):
 
 
 @jit
-def _guard(model, k, t, x, u, p, d):
-    return call(model.guard, (k, t, x, u, p, d))
+def _guard(model, w, k, t, x, u, p, d):
+    return guard_value(model, w, k, t, x, u, p, d)
 
 
 @jit
-def _enabled(model, k, t, x, u, p, d):
-    return call(model.enabled, (k, t, x, u, p, d))
+def _enabled(model, w, k, t, x, u, p, d):
+    return enabled_value(model, w, k, t, x, u, p, d)
+
+
+@jit
+def _restitutions(model, p, S, out):
+    call(model.restitution, (p, S))
+    for k in range(model.nj):
+        out[k] = S[model.s_e, k]
 
 
 @jit
@@ -173,14 +180,22 @@ class Functions:
         _signal_rates(self.model, float(t), _vector(x), _vector(u), _vector(p), _vector(d), xdot)
 
     def guard(self, k, t, x, u=None, p=None, d=None):
-        """The guard of jump k: it happens where this crosses zero in JUMP_DIRECTION[k]."""
+        """The guard of jump k: it happens where this crosses zero in JUMP_DIRECTION[k] (with the multipliers of
+        its source flow at (t, x), when it reads them)."""
         p, u, d, _ = self._args(u, p, d, None)
-        return _guard(self.model, int(k), float(t), _vector(x), u, p, d)
+        return _guard(self.model, self.work.ref, int(k), float(t), _vector(x), u, p, d)
 
     def enabled(self, k, t, x, u=None, p=None, d=None):
         """>= 0 where jump k may happen (its enabling conditions)."""
         p, u, d, _ = self._args(u, p, d, None)
-        return _enabled(self.model, int(k), float(t), _vector(x), u, p, d)
+        return _enabled(self.model, self.work.ref, int(k), float(t), _vector(x), u, p, d)
+
+    def restitutions(self, p=None):
+        """The coefficient of restitution of each jump's impact (NJ,), at parameters p."""
+        p, _, _, _ = self._args(None, p, None, None)
+        out = np.zeros(self.sizes["nj"])
+        _restitutions(self.model, p, self.work.S, out)
+        return out
 
     def flow_inputs(self, p, U):
         """Input values a flow sets, into U (flows, inputs); other entries are left as they are."""

@@ -116,6 +116,24 @@ def multipliers(model, w, t, x, u, p, d, flow, lam):
     return OK
 
 
+@jit(inline="always")
+def guard_value(model, w, k, t, x, u, p, d):
+    """The guard of jump k at (t, x). A guard that reads multipliers (JUMP_MULTIPLIERS[k]: a normal force reaching
+    zero) gets them in w.lam, the ideal multipliers of its source flow at (t, x) (see `multipliers`; this uses
+    w's M, G and S); the others pay one table look-up."""
+    if k < model.nj and model.jump_multipliers[k]:     # (a model without jumps is called with k = 0: a stub)
+        multipliers(model, w, t, x, u, p, d, model.jump_source[k], w.lam)
+    return call(model.guard, (k, t, x, u, p, d, w.lam))
+
+
+@jit(inline="always")
+def enabled_value(model, w, k, t, x, u, p, d):
+    """The enabling condition of jump k at (t, x) (>= 0: it may happen), with the multipliers as in guard_value."""
+    if k < model.nj and model.jump_multipliers[k]:
+        multipliers(model, w, t, x, u, p, d, model.jump_source[k], w.lam)
+    return call(model.enabled, (k, t, x, u, p, d, w.lam))
+
+
 @jit
 def normalize(model, x):
     """Put each quaternion signal back on the unit sphere (after an integration step)."""

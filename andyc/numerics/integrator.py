@@ -28,9 +28,9 @@ import math
 from collections import namedtuple
 
 from .compiler import jit
-from .dynamics import jump, multipliers, project, rhs_mode_into
+from .dynamics import enabled_value, guard_value, jump, multipliers, project, rhs_mode_into
 from .model import borrowed, call
-from .status import DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, RISING
+from .status import DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, REST_SPEED, RISING
 
 Options = namedtuple("Options", "mode project constrain e0 energy_tol event_tol")
 Options.__doc__ = """How a run integrates: mode (IDEAL, LAGRANGE or BAUMGARTE: how constraint forces are found),
@@ -157,7 +157,7 @@ def locate(model, w, opts, inputs, data, jump_index, tol, t, h, x, u, p, d, flow
             status = update_inputs(inputs, t + c, xc, p, d, flow, u, data)
         if status != OK:
             return c, status
-        gc = call(model.guard, (jump_index, t + c, xc, u, p, d))
+        gc = guard_value(model, w, jump_index, t + c, xc, u, p, d)
         a, ga, b, gb, side = illinois_bracket(s, a, ga, b, gb, side, c, gc)
         if side == -1:
             xb[:] = xc
@@ -189,7 +189,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
         return i, row, INPUT_FAILED, t, flow, -1
     for n in range(model.nj):
         if source[n] == flow:
-            g0[n] = call(model.guard, (n, t, x, u, p, d))
+            g0[n] = guard_value(model, w, n, t, x, u, p, d)
     while i < i_end:
         t_next = t0 + (i + 1) * dt
         h = t_next - t
@@ -205,7 +205,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
                     continue
                 if update_inputs(inputs, t_next, x1, p, d, flow, u, data) != OK:
                     return i, row, INPUT_FAILED, t, flow, -1
-                g1 = call(model.guard, (n, t_next, x1, u, p, d))
+                g1 = guard_value(model, w, n, t_next, x1, u, p, d)
                 if crosses(direction[n], g0[n], g1):
                     tau, status = locate(model, w, opts, inputs, data, n, tol, t, h, x, u, p, d, flow, g0[n], g1, scale)
                     if status == OK:
@@ -214,7 +214,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
                         return i, row, status, t, flow, -1
                     earlier = tau < best_tau - tol or (best >= 0 and tau <= best_tau + tol
                                                         and priority[n] < priority[best])
-                    if (best < 0 or earlier) and call(model.enabled, (n, t + tau, xb, u, p, d)) >= 0.0:
+                    if (best < 0 or earlier) and enabled_value(model, w, n, t + tau, xb, u, p, d) >= 0.0:
                         best, best_tau = n, tau
                         x_event[:] = xb
                 g0[n] = g1
@@ -249,8 +249,10 @@ def instant(model, w, mode, inputs, data, t, x, p, d, flow):
 
     A guard already past zero happens at once when it is moving further (falling: g < 0 and
     dg/dt <= 0, or g = 0 and dg/dt < 0; rising mirrored; either: g = 0 and dg/dt != 0) and its
-    enabling condition holds. A guard past zero but moving back, such as a bouncing ball's height
-    just after the bounce, does not. w.u is left at the inputs at (t, x); -2 when they fail.
+    enabling condition holds. A guard past zero but moving back, such as a bouncing ball's height just
+    after the bounce, does not. A contact's impact (JUMP_CONTACT) needs dg/dt < -REST_SPEED: a gap a
+    rounding below zero, at rest to a rounding, right after its liftoff, is not closing. w.u is left at the
+    inputs at (t, x); -2 when they fail.
     """
     u, xdot = w.u, w.xdot
     x, p, d = borrowed(x), borrowed(p), borrowed(d)
@@ -262,7 +264,7 @@ def instant(model, w, mode, inputs, data, t, x, p, d, flow):
         if model.jump_source[k] != flow:
             continue
         direction = model.jump_direction[k]
-        g = call(model.guard, (k, t, x, u, p, d))
+        g = guard_value(model, w, k, t, x, u, p, d)
         if g != 0.0 and (direction == EITHER or (g > 0.0) != (direction == RISING)):
             continue
         if not have_rate:
@@ -275,9 +277,11 @@ def instant(model, w, mode, inputs, data, t, x, p, d, flow):
             moving = rate != 0.0
         elif direction == FALLING:
             moving = rate < 0.0 or (g < 0.0 and rate == 0.0)
+            if model.jump_contact[k] >= 0:      # a gap a rounding below zero at rest, after its liftoff
+                moving = rate < -REST_SPEED
         else:
             moving = rate > 0.0 or (g > 0.0 and rate == 0.0)
-        if moving and call(model.enabled, (k, t, x, u, p, d)) >= 0.0:
+        if moving and enabled_value(model, w, k, t, x, u, p, d) >= 0.0:
             return k
     return -1
 

@@ -26,7 +26,10 @@ marked STATE; k is a jump's index; S is the scratch of layout.py:
     frame_positions(STATE, out)               origins of the frames in world, out (frames, 3)
     constraint_gains(p, S)                    Baumgarte gains K_s, K_d of each row (ANDY eq. 13-15), into S
     restitution(p, S)                         restitution of each jump's impact, into S
-    guard(k, STATE) -> g, enabled(k, STATE) -> e   jump k happens where g crosses zero while e >= 0
+    guard(k, STATE, lam) -> g, enabled(k, STATE, lam) -> e   jump k happens where g crosses zero while e >= 0;
+                                              lam (NC,): the multipliers of its source flow, which the
+                                              caller computes first when JUMP_MULTIPLIERS[k] (see
+                                              dynamics.guard_value)
     guard_rate(k, STATE, xdot) -> dg/dt
     reset(k, STATE)                           jump k's resets, into x and d
     flow_inputs(p, U)                         input values each flow sets, into U (NF, NU)
@@ -48,14 +51,15 @@ ROWS = ("s_a", "s_c", "s_w") + tuple(f"s_{name}" for name in VECTORS)  # the fir
 TABLES = ("quaternions",                            # index in x of each quaternion signal's w
           "flow_rows", "flow_nrows", "flow_nhrows",  # active rows of each flow (holonomic first), then -1
           "impact_rows", "impact_nrows",             # rows taking each jump's impact
-          "jump_source", "jump_target", "jump_direction", "jump_priority", "jump_order")
+          "jump_source", "jump_target", "jump_direction", "jump_priority", "jump_order", "jump_multipliers",
+          "jump_contact")                            # the contact whose impact jump k is, or -1
 LEAF_NAMES = ("dynamics", "dynamics_constraints", "constraints_into", "signal_rates", "energy", "power",
               "frame_positions", "constraint_gains", "restitution", "guard", "guard_rate", "enabled", "reset",
               "flow_inputs", "closed_form")
 WORK = {    # the arrays of Work: name -> shape, from the sizes and the scratch layout
     "M": ("nv", "nv"), "G": ("nv",), "S": ("rows", "width"),
     "k": (4, "nx"), "xt": ("nx",), "x1": ("nx",), "xb": ("nx",), "xc": ("nx",), "x_event": ("nx",),
-    "xdot": ("nx",), "g0": ("nj",), "u": ("nu",),
+    "xdot": ("nx",), "g0": ("nj",), "u": ("nu",), "lam": ("nc",),
 }
 
 if NUMBA:
@@ -76,9 +80,9 @@ if NUMBA:
         "frame_positions": types.void(*_STATE, _MAT),
         "constraint_gains": types.void(_V, _MAT),
         "restitution": types.void(_V, _MAT),
-        "guard": _f8(_i8, *_STATE),
+        "guard": _f8(_i8, *_STATE, _V),
         "guard_rate": _f8(_i8, *_STATE, _V),
-        "enabled": _f8(_i8, *_STATE),
+        "enabled": _f8(_i8, *_STATE, _V),
         "reset": types.void(_i8, *_STATE),
         "flow_inputs": types.void(_V, _MAT),
         "closed_form": types.void(_f8, _V, _V, _V),
@@ -187,7 +191,7 @@ else:
 
 @jit
 def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, impact_rows, impact_nrows, jump_source,
-           jump_target, jump_direction, jump_priority, jump_order, leaves):
+           jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact, leaves):
     (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_positions,
      constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form) = leaves
     return Model(sizes[0], sizes[1], sizes[2], sizes[3], sizes[4], sizes[5], sizes[6], sizes[7], sizes[8], sizes[9],
@@ -195,11 +199,12 @@ def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, impact_
                  rows[11], rows[12],
                  borrowed(quaternions), borrowed(flow_rows), borrowed(flow_nrows), borrowed(flow_nhrows),
                  borrowed(impact_rows), borrowed(impact_nrows), borrowed(jump_source), borrowed(jump_target),
-                 borrowed(jump_direction), borrowed(jump_priority), borrowed(jump_order),
+                 borrowed(jump_direction), borrowed(jump_priority), borrowed(jump_order), borrowed(jump_multipliers),
+                 borrowed(jump_contact),
                  dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_positions,
                  constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form,
                  (quaternions, flow_rows, flow_nrows, flow_nhrows, impact_rows, impact_nrows, jump_source, jump_target,
-                  jump_direction, jump_priority, jump_order))
+                  jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact))
 
 
 def sizes_of(equations) -> dict:
@@ -223,10 +228,10 @@ def new_model(equations, stubs) -> Model:
 
 
 @jit
-def _work(M, G, S, k, xt, x1, xb, xc, x_event, xdot, g0, u, counts):
+def _work(M, G, S, k, xt, x1, xb, xc, x_event, xdot, g0, u, lam, counts):
     return WorkRef(borrowed(M), borrowed(G), borrowed(S), borrowed(k), borrowed(xt), borrowed(x1), borrowed(xb),
-                   borrowed(xc), borrowed(x_event), borrowed(xdot), borrowed(g0), borrowed(u), borrowed(counts),
-                   (M, G, S, k, xt, x1, xb, xc, x_event, xdot, g0, u, counts))
+                   borrowed(xc), borrowed(x_event), borrowed(xdot), borrowed(g0), borrowed(u), borrowed(lam),
+                   borrowed(counts), (M, G, S, k, xt, x1, xb, xc, x_event, xdot, g0, u, lam, counts))
 
 
 class Work:

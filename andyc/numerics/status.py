@@ -25,3 +25,4 @@ RAISED, WRONG_SHAPE = 1.0, 2.0
 
 GROWTH_LIMIT = 1e3  # a step that grows the state past this factor of its largest so far: DIVERGED
 RANK_TOL = 1e-8     # singular values below RANK_TOL * the largest count as zero (redundant rows, singular poses)
+REST_SPEED = 1e-9   # a contact approaching slower than this takes no impact; one this slow after an impact closes

@@ -30,7 +30,7 @@ def restitution(p, S):
 
 
 @leaf("guard")
-def guard(k, t, x, u, p, d):
+def guard(k, t, x, u, p, d, lam):
     return 0.0
 
 
@@ -40,7 +40,7 @@ def guard_rate(k, t, x, u, p, d, xdot):
 
 
 @leaf("enabled")
-def enabled(k, t, x, u, p, d):
+def enabled(k, t, x, u, p, d, lam):
     return 1.0
 
 

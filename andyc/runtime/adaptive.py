@@ -105,9 +105,7 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
                     continue
                 k, t, x_before = hit
                 x = x_before.copy()
-                message = apply_jump(model, k, t, x, inputs(t, x_before), p, d, w)
-                flow = int(module.JUMP_TARGET[k])
-                message = message or jumps.record(t, k, x_before, x, d)
+                flow, message = apply_jump(model, k, t, x, inputs(t, x_before), p, d, w, jumps)
                 if message is None:
                     flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, jumps, w, IDEAL)
                 break

@@ -59,6 +59,9 @@ class CompiledModel:
     closed_form_where: tuple = ()  # (line, document path) of each state's closed form in the model file
     simulate: dict = field(default_factory=dict)  # andyc sim's options the model gives (its simulate: section)
     display: dict = field(default_factory=dict)  # state units, the ground, shapes (andyc.spec.display): for pictures
+    contact_names: tuple = ()   # unilateral contacts (andyc.spec.contacts); flow index = bitmask of the closed ones
+    contact_rows: tuple = ()    # the constraint row of each contact's gap
+    jump_contact: tuple = ()    # per jump: the contact whose impact it is (andyc.runtime.contacts resolves it), or -1
 
     @property
     def nd(self) -> int:

@@ -1,7 +1,8 @@
 """The jumps of a run as they happen, and when they must stop it (jump loops, Zeno, stop_after).
 
-EventLog records them; apply_jump and user_jump apply one from Python (resets and impact in the compiled
-numerics, then the user's function in <name>_jumps.py), follow_instant_jumps the jumps that happen at once
+EventLog records them; apply_jump applies one from Python (resets and impact in the compiled numerics, then
+finish_jump), finish_jump completes one the compiled loop applied (a contact's impact, andyc.runtime.contacts;
+the user's function in <name>_jumps.py; the record), follow_instant_jumps the jumps that happen at once
 after it. Both drivers use them (andyc.runtime.fixed_step, andyc.runtime.adaptive).
 """
 
@@ -14,6 +15,7 @@ import numpy as np
 
 from andyc.errors import SimulationError
 from andyc.numerics.status import OK
+from andyc.runtime.contacts import resolve_impact
 from andyc.runtime.inputs import USER_ERRORS, InputSource, raised
 from andyc.runtime.options import Events
 from andyc.runtime.status import ZENO, at, in_jump
@@ -47,14 +49,16 @@ class EventLog:
         self.instant = 0
         self.finished = False           # stopped by stop_after, not by a failure
 
-    def record(self, t, k, x_before, x_after, d_after) -> str | None:
+    def record(self, t, k, x_before, x_after, d_after, target: int | None = None) -> str | None:
+        """Log jump k at t (into flow `target`, default its JUMP_TARGET); why the run must stop, or None. A
+        contact's impact never stops it as Zeno: its contacts closed instead (finish_jump)."""
         jumps = self.model.jump_names
         same = bool(self.times) and t - self.times[-1] <= self.event_tol * max(1.0, abs(t))
         self.instant = self.instant + 1 if same else 1
         self.times.append(float(t))
         self.jumps.append(int(k))
         self.sources.append(int(self.model.module.JUMP_SOURCE[k]))
-        self.targets.append(int(self.model.module.JUMP_TARGET[k]))
+        self.targets.append(int(self.model.module.JUMP_TARGET[k] if target is None else target))
         self.before.append(np.array(x_before))
         self.after.append(np.array(x_after))
         self.discrete.append(np.array(d_after))
@@ -64,7 +68,7 @@ class EventLog:
             return (f"stopped: {self.instant} jumps at t = {t:.12g} s without time advancing (last: {loop}), past "
                     f"the limit of {self.max_instant}: the guards of these jumps hold again right after each other; "
                     f"check their directions, enabling conditions and resets")
-        zeno = self.zeno()
+        zeno = self.zeno() if self.model.jump_contact[k] < 0 else None
         if zeno is not None:
             t_inf, ratio = zeno
             return (f"{ZENO}: the times of jump '{jumps[k]}' accumulate at t = {t_inf:.12g} s "
@@ -76,17 +80,19 @@ class EventLog:
             return "finished"
         return None
 
-    def zeno(self):
-        """(accumulation time, ratio) when the last jump intervals shrink towards a point within zeno_tol."""
+    def zeno(self, t_next: float | None = None):
+        """(accumulation time, ratio) when the last jump intervals shrink towards a point within zeno_tol (with
+        a jump at t_next added, when given)."""
         n = self.ZENO_WINDOW
-        if len(self.times) < n + 2:
+        times = self.times if t_next is None else self.times + [float(t_next)]
+        if len(times) < n + 2:
             return None
-        dts = np.diff(self.times[-(n + 2):])
+        dts = np.diff(times[-(n + 2):])
         if not np.all(dts > 0) or not np.all(dts[1:] < dts[:-1]):
             return None
         ratio = dts[-1] / dts[-2]
-        t_inf = self.times[-1] + dts[-1] * ratio / (1.0 - ratio)
-        return (t_inf, ratio) if t_inf - self.times[-1] < self.zeno_tol else None
+        t_inf = times[-1] + dts[-1] * ratio / (1.0 - ratio)
+        return (t_inf, ratio) if t_inf - times[-1] < self.zeno_tol else None
 
     def table(self) -> dict:
         n, nx, nd = len(self.times), self.model.nx, self.model.nd
@@ -112,12 +118,28 @@ def user_jump(model, k, t, x, u, p, d) -> str | None:
     return None
 
 
-def apply_jump(model, k, t, x, u, p, d, w) -> str | None:
-    """Jump k at t (x, d in place; u the inputs just before it): resets and impact, then the user's function."""
+def finish_jump(model, k, t, x_before, x, u, p, d, flow: int, jumps: EventLog) -> tuple[int, str | None]:
+    """After jump k's resets and impact map (compiled) at t, into `flow` (x, d in place; u the inputs just before
+    it): a contact's impact (andyc.runtime.contacts, plastic once the impact times accumulate), the user's
+    function, the record. Returns (the flow it lands in, a stop message or None)."""
+    if model.jump_contact and model.jump_contact[k] >= 0:
+        try:
+            flow = resolve_impact(model, t, x, u, p, d, flow, jumps.zeno(t) is not None)
+        except (FloatingPointError, np.linalg.LinAlgError) as exc:
+            return flow, f"stopped: contact impact in jump '{model.jump_names[k]}': {exc}" + at(t)
+    message = user_jump(model, k, t, x, u, p, d) or jumps.record(t, k, x_before, x, d, flow)
+    return flow, message
+
+
+def apply_jump(model, k, t, x, u, p, d, w, jumps: EventLog) -> tuple[int, str | None]:
+    """Jump k at t (x, d in place; u the inputs just before it): resets and impact, then finish_jump. Returns (the
+    flow it lands in, a stop message or None)."""
+    before = x.copy()
+    target = int(model.module.JUMP_TARGET[k])
     status = model.numerics.dynamics.jump(model.ref, w.ref, k, t, x, u, p, d)
     if status != OK:
-        return in_jump(model, status, k, t)
-    return user_jump(model, k, t, x, u, p, d)
+        return target, in_jump(model, status, k, t)
+    return finish_jump(model, k, t, before, x, u, p, d, target, jumps)
 
 
 def follow_instant_jumps(model, t, x, source: InputSource, p, d, flow, jumps: EventLog, w, mode):
@@ -130,10 +152,7 @@ def follow_instant_jumps(model, t, x, source: InputSource, p, d, flow, jumps: Ev
             return flow, f"stopped: {source.failure(model, d, p)}"
         if k < 0:
             break
-        before = x.copy()
-        stop = apply_jump(model, k, t, x, w.u, p, d, w)
-        flow = int(model.module.JUMP_TARGET[k])
-        stop = stop or jumps.record(t, k, before, x, d)
+        flow, stop = apply_jump(model, k, t, x, w.u, p, d, w, jumps)
         if stop is not None:
             return flow, stop
     return flow, None

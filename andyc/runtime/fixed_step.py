@@ -16,7 +16,7 @@ import numpy as np
 from andyc.errors import SimulationError
 from andyc.numerics.status import BAUMGARTE, DIVERGED, IDEAL, INPUT_FAILED, LAGRANGE, OK
 from andyc.runtime.compiled import work
-from andyc.runtime.events import follow_instant_jumps, user_jump
+from andyc.runtime.events import finish_jump, follow_instant_jumps
 from andyc.runtime.inputs import inputs_at
 from andyc.runtime.options import Projection
 from andyc.runtime.status import INTERRUPTED, at, diverging_constraints, ending, failure, in_jump
@@ -73,7 +73,7 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
             if status != OK:
                 message = in_jump(model, status, k, t)
                 break
-            message = user_jump(model, k, t, x, w.u, p, d) or jumps.record(t, k, w.x_event, x, d)
+            flow, message = finish_jump(model, k, t, w.x_event, x, w.u, p, d, flow, jumps)
             if message is None:
                 flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, jumps, w, mode)
             if message is None and source.into(model, t, x, p, d, flow, w.u) != OK:

@@ -47,6 +47,8 @@ class Run:
     frame_parents: dict = field(default_factory=dict)  # logged frame -> its parent frame (stick figures)
     input_names: list = field(default_factory=list)
     input_values: np.ndarray | None = None           # (N, nu) the inputs at each sample
+    contact_names: list = field(default_factory=list)  # unilateral contacts; flow = the bitmask of the closed ones
+    contact_rows: list = field(default_factory=list)   # the multiplier (row) of each contact's normal force
     andyc_version: str = andyc.__version__
     display: dict = field(default_factory=dict)      # state units, the ground, shapes: for pictures (andyc.spec.display)
 
@@ -83,6 +85,18 @@ class Run:
         if name in self.discrete_names:
             return self.discrete[:, self.discrete_names.index(name)]
         return self.state[:, self.state_names.index(name)]
+
+    @property
+    def contact_closed(self) -> np.ndarray:
+        """(N, contacts) 1 where a contact is closed (the sample's flow is the bitmask of the closed ones)."""
+        return np.array([(self.flow >> i) & 1 for i in range(len(self.contact_names))], dtype=np.int8).T.reshape(
+            len(self.time), len(self.contact_names))
+
+    @property
+    def normal_forces(self) -> np.ndarray:
+        """(N, contacts) each contact's normal force (its multiplier, >= 0 while it pushes), 0 where it is open."""
+        lam = self.multipliers[:, list(self.contact_rows)] if self.contact_rows else np.zeros((len(self.time), 0))
+        return np.where(self.contact_closed == 1, lam, 0.0)
 
     def event_names(self) -> list:
         """Name of the jump of each event."""
@@ -124,7 +138,9 @@ class Run:
                 "t_end": self.t_end, "status": self.status, "stats": json.dumps(self.stats),
                 "energy_correction": self.energy_correction, "flow_names": json.dumps(self.flow_names),
                 "jump_names": json.dumps(self.jump_names), "frame_parents": json.dumps(self.frame_parents),
-                "display": json.dumps(self.display)}
+                "display": json.dumps(self.display),
+                **({"contacts": json.dumps({"names": self.contact_names, "rows": self.contact_rows})}
+                   if self.contact_names else {})}
 
     def save(self, path) -> Path:
         """Write the run to path (.h5 or .csv; a CSV of a hybrid model also writes its events beside it,
@@ -172,6 +188,10 @@ def write_h5(run: Run, path: Path) -> None:
         f["energy"] = run.energy
         for name, xyz in run.frames.items():
             f[f"frames/{name}"] = xyz
+        if run.contact_names:
+            f["contacts/closed"] = run.contact_closed
+            f["contacts/normal_force"] = run.normal_forces
+            f["contacts"].attrs["names"] = run.contact_names
         ev = run.events
         table = np.zeros(len(ev["time"]), dtype=[("time", "f8"), ("jump", h5py.string_dtype()),
                                                  ("from_flow", "i4"), ("to_flow", "i4")])
@@ -188,6 +208,7 @@ def read_h5(path) -> Run:
     with h5py.File(path, "r") as f:
         a = dict(f.attrs)
         frames = {name: f["frames"][name][()] for name in f["frames"]} if "frames" in f else {}
+        contacts = json.loads(a.get("contacts", '{"names": [], "rows": []}'))
         jump_names = json.loads(a.get("jump_names", "[]"))
         table = f["events"][()]
         events = {"time": table["time"], "jump": np.array([jump_names.index(j.decode() if isinstance(j, bytes) else j)
@@ -211,7 +232,8 @@ def read_h5(path) -> Run:
                    discrete=f["discrete"][()] if "discrete" in f else None, events=events, jump_names=jump_names,
                    input_names=[str(s) for s in f["inputs"].attrs["names"]] if "inputs" in f else [],
                    input_values=f["inputs"][()] if "inputs" in f else None,
-                   frame_parents=json.loads(a.get("frame_parents", "{}")), display=json.loads(a.get("display", "{}")))
+                   frame_parents=json.loads(a.get("frame_parents", "{}")), display=json.loads(a.get("display", "{}")),
+                   contact_names=contacts["names"], contact_rows=contacts["rows"])
 
 
 def write_csv(run: Run, path: Path) -> None:
@@ -224,6 +246,9 @@ def write_csv(run: Run, path: Path) -> None:
                + [f"c_{m}" for m in run.multiplier_names])
     data = [run.time[:, None], run.state, run.discrete, run.input_values, run.flow[:, None], run.energy[:, None],
             run.multipliers, run.residual_position, run.residual_velocity]
+    if run.contact_names:
+        columns += [f"closed_{c}" for c in run.contact_names] + [f"normal_force_{c}" for c in run.contact_names]
+        data += [run.contact_closed, run.normal_forces]
     for name, xyz in run.frames.items():
         columns += [f"{name}.x", f"{name}.y", f"{name}.z"]
         data.append(xyz)

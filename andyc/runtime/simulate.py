@@ -42,6 +42,7 @@ import numpy as np
 from andyc.errors import SimulationError
 from andyc.runtime.adaptive import run_adaptive
 from andyc.runtime.compiled import CompiledModel, compile_integrator, work
+from andyc.runtime.contacts import initial_mode
 from andyc.runtime.events import EventLog
 from andyc.runtime.fixed_step import run_fixed_step
 from andyc.runtime.initial import consistent_initial_state, initial_state, require_independent_rows
@@ -65,7 +66,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     inputs: {name: value}, a value being a number, an expression of t and the states (a string) or a CSV
     table (a path ending in .csv); controller: a Python file defining control(t, x, d, p), which drives
     every input (see andyc.runtime.inputs). rtol, atol: the adaptive methods' tolerances.
-    x0, d0 and flow0 (a name or index): the initial state, discrete states and flow (default the model's).
+    x0, d0 and flow0 (a name or index): the initial state, discrete states and flow (default the model's; with
+    contacts, the mode of those touching at rest, andyc.runtime.contacts.initial_mode).
     progress: print t / t_end to stderr (default: when it is a terminal).
     interrupts: what may stop the run from outside (andyc.runtime.interrupts; default: SIGINT and
     SIGTERM, which then end the run with the status "interrupted: ..." instead of raising).
@@ -92,6 +94,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     compile_integrator(model)
     compile_integrator(model, *source.function_data)
     u = inputs_at(model, source, 0.0, x, p, d, flow)
+    if flow0 is None and model.contact_names:      # contacts touching at rest start closed
+        flow = initial_mode(model, 0.0, x, u, p, d)
     initial = consistent_initial_state(model, x, u, p, d, flow, init) if model.nc else {}
     if method in ("lagrange", "baumgarte") and model.nc:
         require_independent_rows(model, method, x, u, p, d, flow)
@@ -180,7 +184,8 @@ class _Assembly:
                    flow=f_log, flow_names=list(model.flow_names), discrete_names=list(model.discrete_names),
                    discrete=d_log, events=self.jumps.table(), jump_names=list(model.jump_names),
                    frame_parents={name: model.frame_parents[model.frame_names.index(name)] for name in frame_names},
-                   display=model.display)
+                   display=model.display, contact_names=list(model.contact_names),
+                   contact_rows=list(model.contact_rows))
 
 
 def _check_size(model: CompiledModel, t_end: float, dt: float, every: int) -> None:

@@ -85,18 +85,21 @@ class FrameQuantities:
         return self.names[key]
 
 
-def build_constraints(written: list, scope: Scope, quantities: FrameQuantities) -> list[Constraint]:
-    """The `constraints:` section, holonomic ones first (DESIGN.md run layout); multiplier names checked."""
-    constraints = [_constraint(i, c, scope, quantities) for i, c in enumerate(written)]
+def build_constraints(written: list, scope: Scope, quantities: FrameQuantities,
+                      contacts: list = ()) -> list[Constraint]:
+    """The `constraints:` section, then the rows of the `contacts:` section's gaps (andyc.spec.contacts), holonomic
+    ones first (DESIGN.md run layout; a contact's row is holonomic); multiplier names checked."""
+    constraints = [_constraint(("constraints", i), c, scope, quantities) for i, c in enumerate(written)]
+    constraints += [_constraint(("contacts", i), c, scope, quantities) for i, c in enumerate(contacts)]
     constraints.sort(key=lambda c: not c.holonomic)
-    _check_multipliers(constraints, written, scope)
+    _check_multipliers(constraints, {"constraints": written, "contacts": contacts}, scope)
     return constraints
 
 
-def _constraint(i: int, c: dict, scope: Scope, quantities: FrameQuantities) -> Constraint:
-    where = ("constraints", i)
-    holonomic = "holonomic" in c
-    key = "holonomic" if holonomic else "nonholonomic"
+def _constraint(where: tuple, c: dict, scope: Scope, quantities: FrameQuantities) -> Constraint:
+    """A constraint, or a contact's gap row (key `gap`: holonomic, one row)."""
+    holonomic = "holonomic" in c or "gap" in c
+    key = "gap" if "gap" in c else "holonomic" if holonomic else "nonholonomic"
     texts = c[key] if isinstance(c[key], list) else [c[key]]
     paths = [where + (key, j) for j in range(len(texts))] if isinstance(c[key], list) else [where + (key,)]
     in_frame = c.get("in", "world")
@@ -140,9 +143,14 @@ def _constraint(i: int, c: dict, scope: Scope, quantities: FrameQuantities) -> C
             continue
         free = value.free_symbols
         if holonomic and not free & coordinates:
-            scope.report.error(path, f"the constraint {text!r} does not depend on the coordinates or any frame "
-                               "position", "a holonomic constraint is Gamma(t, q) = 0; use coordinates or F.x, "
-                               "F.y, F.z")
+            if key == "gap":
+                scope.report.error(path, f"the gap {text!r} does not depend on the coordinates or any frame "
+                                   "position", "a contact's gap is the signed distance, >= 0 apart: write it with "
+                                   "coordinates or F.x, F.y, F.z (e.g. gap: foot.y)")
+            else:
+                scope.report.error(path, f"the constraint {text!r} does not depend on the coordinates or any frame "
+                                   "position", "a holonomic constraint is Gamma(t, q) = 0; use coordinates or F.x, "
+                                   "F.y, F.z")
         if not holonomic:
             if not free & velocities:
                 scope.report.error(path, f"the constraint {text!r} uses no speed or velocity",
@@ -192,15 +200,16 @@ def _gain(gains: dict, key: str, where, scope: Scope) -> sp.Expr:
     return value
 
 
-def _check_multipliers(constraints: list, written: list, scope: Scope):
-    """Multiplier names are unique and taken by nothing else (they name run-file columns)."""
+def _check_multipliers(constraints: list, written: dict, scope: Scope):
+    """Multiplier names are unique and taken by nothing else (they name run-file columns). written: the entries
+    of each section, by section name."""
     made = {f"{q.name}_dot": f"the rate of coordinate '{q.name}'" for q in scope.coordinates}
     made.update({s.name: f"the {'position' if s.component in 'xyz' else 'quaternion'} signal of frame "
                          f"'{s.frame}'" for s in scope.signals})
     made.update({n: f"the run-file column '{n}'" for n in ("time", "flow", "energy")})
     seen = {}
-    for c in sorted(constraints, key=lambda c: c.where[1]):        # in document order
-        given = written[c.where[1]].get("multiplier")
+    for c in sorted(constraints, key=lambda c: c.where):        # in document order, by section
+        given = written[c.where[0]][c.where[1]].get("multiplier")
         for j, name in enumerate(c.multipliers):
             if given is None:         # lambda_<constraint>: point at the name it comes from
                 path, what = c.where + ("name",), f"the default multiplier name '{name}' of constraint '{c.name}'"

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import builtins
 import math
+import re
 
 import sympy as sp
 
@@ -63,7 +64,7 @@ def build_hybrid(h: dict | None, constraints: list, scope: Scope,
     jumps = []
     written = h.get("jumps") or []
     for i, j in enumerate(written):
-        jump = _jump(i, j, written, flows, names, scope, quantities)
+        jump = _jump(i, j, written, flows, constraints, scope, quantities)
         if jump is not None:
             jumps.append(jump)
             impacted |= set(jump.impact_constraints)
@@ -75,10 +76,11 @@ def build_hybrid(h: dict | None, constraints: list, scope: Scope,
     return flows, jumps, initial_index
 
 
-def _jump(i: int, j: dict, written: list, flows: list, constraint_names: list, scope: Scope,
+def _jump(i: int, j: dict, written: list, flows: list, constraints: list, scope: Scope,
           quantities: FrameQuantities) -> Jump | None:
     """One jump, or None when its source or target flow does not exist (reported)."""
     where = ("hybrid", "jumps", i)
+    constraint_names = [c.name for c in constraints]
     flow_names = [f.name for f in flows]
     ok = scope.known(j["from"], flow_names, where + ("from",), "flow")
     ok = scope.known(j["to"], flow_names, where + ("to",), "flow") and ok
@@ -99,14 +101,22 @@ def _jump(i: int, j: dict, written: list, flows: list, constraint_names: list, s
     discrete = scope.discrete_names
     names = {**scope.forcing, **scope.rates, **discrete}
     context = ("guards, conditions and resets use parameters, inputs, coordinates, speeds (<coordinate>_dot "
-               "and declared speeds), discrete states, t and " + QUANTITY_HINT)
-    guard = _guard(j, where, names, context, states, found, quantity, scope)
-    enabled = []
+               "and declared speeds), discrete states, t and " + QUANTITY_HINT + "; guards and conditions also the "
+               "multipliers of the source flow's constraints")
+    # The multipliers of the source flow's rows; others only where written (reported then by _used_multipliers).
+    lams = multiplier_symbols(constraints)
+    source = next((f.constraints for f in flows if f.name == j["from"]), ())
     texts = j.get("enabled", [])
+    written_names = set(re.findall(r"[A-Za-z_]\w*", " ".join(map(str, [j["guard"]] + (texts if isinstance(texts, list)
+                                                                                       else [texts])))))
+    guard_names = {**names, **{name: symbol for name, (symbol, c) in lams.items()
+                               if c in source or name in written_names}}
+    guard = _guard(j, where, guard_names, context, states, found, quantity, scope, set(guard_names) - set(names))
+    enabled = []
     for k, text in enumerate(texts if isinstance(texts, list) else [texts]):
         path = where + ("enabled",) + ((k,) if isinstance(texts, list) else ())
         try:
-            conditions = parse_condition(text, names, True, quantity)
+            conditions = parse_condition(text, guard_names, True, quantity)
         except ExpressionError as exc:
             message = str(exc)
             if exc.name in scope.declared:   # a frame, body, ... written as a value
@@ -135,9 +145,10 @@ def _jump(i: int, j: dict, written: list, flows: list, constraint_names: list, s
     impact, restitution, impact_constraints = _impact(j, where, flows, constraint_names, scope)
     if not ok:
         return None
+    used = _used_multipliers(j, where, [guard, *enabled], lams, flows, scope)
     direction = {"falling": FALLING, "rising": RISING, "either": EITHER}[j["direction"]]
     return Jump(j["name"], j["from"], j["to"], guard, direction, tuple(enabled), impact, restitution,
-                impact_constraints, tuple(resets), int(j.get("priority", i)), found, where, _texts(j))
+                impact_constraints, tuple(resets), int(j.get("priority", i)), found, where, _texts(j), used)
 
 
 def _texts(j: dict) -> dict:
@@ -157,8 +168,35 @@ def _plain(value):
     return str(value)
 
 
+def multiplier_symbols(constraints: list) -> dict:
+    """{multiplier name: (symbol, constraint name)} of every constraint row. A multiplier is the force along its
+    row's gradient: M dv/dt = G + A^T lam (ANDY eq. 10), so the multiplier of a row written as a gap (>= 0
+    apart, e.g. `foot.y`) is >= 0 while the constraint pushes."""
+    return {name: (sp.Symbol(f"lam_{name}", real=True), c.name) for c in constraints for name in c.multipliers}
+
+
+def _used_multipliers(j: dict, where, exprs: list, lams: dict, flows: list, scope: Scope) -> dict:
+    """{symbol: name} of the multipliers a jump's guard and conditions use; each must be of a constraint active
+    in the jump's source flow (elsewhere it has no value)."""
+    source = next((f for f in flows if f.name == j["from"]), None)
+    free = set().union(*(e.free_symbols for e in exprs))
+    used = {}
+    for name, (symbol, constraint) in lams.items():
+        if symbol not in free:
+            continue
+        used[symbol] = name
+        if source is not None and constraint not in source.constraints:
+            key = "guard" if symbol in exprs[0].free_symbols else "enabled"
+            scope.report.error(where + (key,), f"multiplier '{name}' of constraint '{constraint}' has no value in "
+                               f"flow '{source.name}', the jump's source: the constraint is not active there",
+                               f"use the multipliers of the constraints of flow '{source.name}' "
+                               f"({', '.join(source.constraints) or 'none'}), or add '{constraint}' to its "
+                               "'constraints'")
+    return used
+
+
 def _guard(j: dict, where, names: dict, context: str, states: dict, found: dict, quantity,
-           scope: Scope) -> sp.Expr:
+           scope: Scope, multipliers: set = frozenset()) -> sp.Expr:
     """A jump's guard: a signed expression that changes during a flow (0 after a reported problem).
 
     The frame quantities it uses are recorded in `found` (through `quantity`)."""
@@ -175,12 +213,29 @@ def _guard(j: dict, where, names: dict, context: str, states: dict, found: dict,
                            "under 'enabled:'")
     guard = (sp.Integer(0) if op is not None
              else scope.expr(j["guard"], where + ("guard",), names, context, dotted=quantity))
-    moving = set(states.values()) | set(found) | {TIME}
+    moving = set(states.values()) | set(found) | {TIME} | {names[n] for n in multipliers}
     if len(scope.report.problems) == before and not guard.free_symbols & moving:
         scope.report.error(where + ("guard",), f"the guard {j['guard']!r} does not change during a flow",
                            "a guard is a signed expression of the coordinates, speeds, frame quantities or t "
                            "that crosses 0 where the jump happens")
     return guard
+
+
+def restitution(value, path, scope: Scope) -> sp.Expr:
+    """A coefficient of restitution: a constant expression of parameters in [0, 1] at their defaults."""
+    before = len(scope.report.problems)
+    e_expr, e = scope.constant(value, path, allow_time=True)
+    if len(scope.report.problems) > before:         # a bad expression is reported already
+        pass
+    elif TIME in e_expr.free_symbols:
+        scope.report.error(path, f"the coefficient of restitution {value!r} depends on t",
+                           "give a constant from 0 (plastic) to 1 (elastic): a number or an expression of "
+                           "parameters")
+    elif not 0 <= e <= 1:
+        shown = f"{e:g}" if e_expr.is_number else f"{value} = {e:g}"
+        scope.report.error(path, f"the coefficient of restitution is {shown}, outside [0, 1]",
+                           "give 0 (plastic) to 1 (elastic); more than 1 would add energy at every impact")
+    return e_expr
 
 
 def _impact(j: dict, where, flows: list, constraint_names: list, scope: Scope) -> tuple[str, sp.Expr, tuple]:
@@ -190,21 +245,9 @@ def _impact(j: dict, where, flows: list, constraint_names: list, scope: Scope) -
     if spec == "none":
         return "none", sp.Integer(0), ()
     if spec == "plastic":
-        restitution, named = sp.Integer(0), None
+        e, named = sp.Integer(0), None
     else:
-        path = where + ("impact", "restitution")
-        before = len(scope.report.problems)
-        restitution, e = scope.constant(spec["restitution"], path, allow_time=True)
-        if len(scope.report.problems) > before:         # a bad expression is reported already
-            pass
-        elif TIME in restitution.free_symbols:
-            scope.report.error(path, f"the coefficient of restitution {spec['restitution']!r} depends on t",
-                               "give a constant from 0 (plastic) to 1 (elastic): a number or an expression of "
-                               "parameters")
-        elif not 0 <= e <= 1:
-            shown = f"{e:g}" if restitution.is_number else f"{spec['restitution']} = {e:g}"
-            scope.report.error(path, f"the coefficient of restitution is {shown}, outside [0, 1]",
-                               "give 0 (plastic) to 1 (elastic); more than 1 would add energy at every impact")
+        e = restitution(spec["restitution"], where + ("impact", "restitution"), scope)
         named = spec.get("constraints")
         for k, name in enumerate(named or []):
             if scope.known(name, constraint_names, where + ("impact", "constraints", k), "constraint") \
@@ -217,5 +260,5 @@ def _impact(j: dict, where, flows: list, constraint_names: list, scope: Scope) -
                            f"'{target.name}' has no constraints",
                            "name the constraints that take the impact: impact: {restitution: e, constraints: "
                            "[names]}, or write the velocity change as a reset")
-    return ("plastic" if spec == "plastic" else "restitution"), restitution, \
+    return ("plastic" if spec == "plastic" else "restitution"), e, \
         tuple(n for n in constraint_names if n in chosen)

@@ -21,6 +21,7 @@ from andyc.errors import Diagnostic, SpecError
 from andyc.spec import urdf
 from andyc.spec.closed_form import build_closed_form
 from andyc.spec.constraints import FrameQuantities, build_constraints, check_conservative
+from andyc.spec.contacts import build_contacts
 from andyc.spec.elements import build_elements
 from andyc.spec.expect import build_expect
 from andyc.spec.frames import build_frames
@@ -100,8 +101,12 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
     elements = build_elements(data, scope, len(robot.data.get("bodies", [])) if robot else 0)
     # Frame quantities (F.x, F.vy, ...) are named once for the constraints and the jumps together.
     quantities = FrameQuantities(scope, data.get("bodies") or [])
-    constraints = build_constraints(data.get("constraints") or [], scope, quantities)
-    flows, jumps, initial_flow = build_hybrid(data.get("hybrid"), constraints, scope, quantities)
+    constraints = build_constraints(data.get("constraints") or [], scope, quantities, data.get("contacts") or [])
+    # Contacts: their modes are the flows and their impacts and liftoffs the jumps (andyc.spec.contacts).
+    contacts, flows, jumps = build_contacts(data.get("contacts") or [], constraints, "hybrid" in data, scope)
+    initial_flow = 0
+    if not contacts:
+        flows, jumps, initial_flow = build_hybrid(data.get("hybrid"), constraints, scope, quantities)
     closed_form = build_closed_form(data.get("closed_form"), jumps, scope, input_expressions)
     simulate = build_simulate(data.get("simulate"), scope, jumps)
     expect = build_expect(data.get("expect"), scope, constraints, jumps, closed_form)
@@ -128,5 +133,5 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
                 frames=frames + elements.offset_frames, bodies=elements.bodies, loads=elements.loads,
                 dampers=elements.dampers, springs=elements.springs, potentials=elements.potentials,
                 constraints=constraints, conserves_energy=conserves, discrete=scope.discrete, flows=flows,
-                jumps=jumps, initial_flow=initial_flow, input_expressions=input_expressions, driven_inputs=driven,
-                closed_form=closed_form, simulate=simulate, expect=expect, **origin)
+                jumps=jumps, initial_flow=initial_flow, contacts=contacts, input_expressions=input_expressions,
+                driven_inputs=driven, closed_form=closed_form, simulate=simulate, expect=expect, **origin)

@@ -214,6 +214,9 @@ class Jump:
     quantities: dict            # symbol -> FrameQuantity used by guard, enabled and resets
     where: tuple
     text: dict = field(default_factory=dict)        # guard, enabled, reset, impact as the model file writes them
+    multipliers: dict = field(default_factory=dict)  # multiplier symbol -> its name, used by guard or enabled
+    contact: int = -1           # the contact whose impact (CONTACT_IMPACT) or liftoff this is (andyc.spec.contacts)
+    kind: str = ""              # "impact" | "liftoff" for a contact's jump, "" for the user's
 
 
 @dataclass
@@ -241,6 +244,7 @@ class Spec:
     flows: list = field(default_factory=list)          # of Flow; one "default" flow without a hybrid section
     jumps: list = field(default_factory=list)          # of Jump, in document order
     initial_flow: int = 0
+    contacts: list = field(default_factory=list)       # of andyc.spec.contacts.Contact; their modes are the flows
     warnings: list = field(default_factory=list)   # of Diagnostic
     visuals: list = field(default_factory=list)    # URDF visual geometry, for later display (andyc.spec.urdf)
     locked: tuple = ()          # URDF joints held at given values (urdf: {lock: ...}), by their URDF name

@@ -33,6 +33,7 @@ SECTION_SINGULAR = {"parameters": "parameter", "inputs": "input", "coordinates":
                     "frames": "frame",
                     "bodies": "body", "forces": "force", "torques": "torque", "dampers": "damper",
                     "springs": "spring", "potentials": "potential", "constraints": "constraint",
+                    "contacts": "contact",
                     "discrete": "discrete state"}
 
 
@@ -156,7 +157,7 @@ def check_names(data: dict, report: Report) -> dict:
     entries += [(("coordinates", n), n) for n in (data.get("coordinates") or {})]
     entries += [(("speeds", n), n) for n in (data.get("speeds") or {})]
     entries += [(("discrete", n), n) for n in (data.get("discrete") or {})]
-    for section in ("frames",) + ELEMENT_SECTIONS + ("constraints",):
+    for section in ("frames",) + ELEMENT_SECTIONS + ("constraints", "contacts"):
         entries += [((section, i, "name"), x["name"]) for i, x in enumerate(data.get(section) or [])]
     # Names andyc makes: coordinate rates and signal states.
     made = {f"{c}_dot": f"the rate of coordinate '{c}'" for c in (data.get("coordinates") or {})}

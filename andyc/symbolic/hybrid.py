@@ -5,7 +5,10 @@ For each jump, with the guard g(t, q, v, d) (frame quantities allowed):
     dg/dt = rate(g) + jac(g) dv/dt        (dv/dt given: the flow's acceleration)
 
 which the runtime uses to tell, at an instant, whether a guard already past
-zero is moving further (the jump happens) or back (it does not). Resets are
+zero is moving further (the jump happens) or back (it does not). A guard may
+read the multipliers of its source flow (a contact's normal force); their rate
+is not derived (it would need d(dv/dt)/dt) and counts as 0, so such a guard
+already past zero happens at once, and one exactly at zero does not. Resets are
 kept as (target name, expression); the impact map acts on the velocity-level
 rows of the jump's impact constraints (see the generated `impact`).
 """
@@ -33,6 +36,8 @@ class JumpTerms:
     resets: list                # [(target name, expression)], simultaneous
     impact_rows: list           # velocity-level constraint rows that take the impact
     restitution: sp.Expr        # e, of parameters
+    uses_multipliers: bool = False  # guard or enabled read the source flow's multipliers (HybridTerms.multipliers)
+    contact: int = -1           # the contact whose impact this is (the runtime resolves it), or -1
 
 
 @dataclass
@@ -43,6 +48,7 @@ class HybridTerms:
     flow_inputs: list           # per flow: {input index: expression of parameters}
     jumps: list                 # of JumpTerms, in document order
     vdot: list                  # symbols standing for dv/dt in guard rates
+    multipliers: list           # symbols standing for the multiplier of each row in guards (lam in the leaves)
 
 
 def hybrid_terms(spec: Spec, quantities: FrameQuantities, constraints: ConstraintTerms) -> HybridTerms:
@@ -58,9 +64,9 @@ def hybrid_terms(spec: Spec, quantities: FrameQuantities, constraints: Constrain
         jumps.append(JumpTerms(
             j.name, flow_index[j.source], flow_index[j.target], j.direction, j.priority, j.guard, rate, enabled,
             list(j.resets), [r for r, name in enumerate(constraints.rows) if name in j.impact_constraints],
-            j.restitution))
+            j.restitution, bool(j.multipliers), j.contact if j.kind == "impact" else -1))
     return HybridTerms(
         flows=[f.name for f in spec.flows], initial=spec.initial_flow,
         flow_rows=[[r for r, name in enumerate(constraints.rows) if name in f.constraints] for f in spec.flows],
         flow_inputs=[{inputs.index(k): e for k, e in f.inputs.items()} for f in spec.flows],
-        jumps=jumps, vdot=vdot)
+        jumps=jumps, vdot=vdot, multipliers=[sp.Symbol(f"lam_{name}", real=True) for name in constraints.multipliers])

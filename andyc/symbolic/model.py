@@ -59,7 +59,8 @@ class SymbolicModel:
             def rows(flow) -> int:
                 return sum(len(c.rows) for c in spec.constraints if c.name in flow.constraints)
             flows = ", ".join(f"{f.name} ({plural(rows(f), 'row')})" for f in spec.flows)
-            freedom += (f"; hybrid: {plural(len(spec.flows), 'flow')} ({flows}), {plural(len(spec.jumps), 'jump')}, "
+            kind = f"contacts {', '.join(c.name for c in spec.contacts)}" if spec.contacts else "hybrid"
+            freedom += (f"; {kind}: {plural(len(spec.flows), 'flow')} ({flows}), {plural(len(spec.jumps), 'jump')}, "
                         f"{plural(len(spec.discrete), 'discrete state')}")
         n_elements = len(spec.loads) + len(spec.dampers) + len(spec.springs) + len(spec.potentials)
         n_frames = len([f for f in spec.frames if not f.internal])
