@@ -57,6 +57,9 @@ def test_automaton_is_the_files_flows_and_jumps(path):
     data = raw(path)
     graph = automaton(andyc.load(path))
     hybrid = data.get("hybrid")
+    if data.get("contacts"):
+        assert _contact_modes(graph) == _contact_modes_of_file(data)
+        return
     if not hybrid:      # one flow, every constraint active, no jump
         assert [(n["name"], n["constraints"]) for n in graph["nodes"]] == [
             ("default", [c["name"] for c in data.get("constraints") or []])] or len(graph["nodes"]) == 1
@@ -69,6 +72,33 @@ def test_automaton_is_the_files_flows_and_jumps(path):
     assert [n["name"] for n in graph["nodes"] if n["initial"]] == [initial]
     assert [(e["name"], e["source"], e["target"], e["guard"], e["direction"]) for e in graph["edges"]] == [
         (j["name"], j["from"], j["to"], str(j["guard"]), j.get("direction", "either")) for j in hybrid["jumps"]]
+
+
+def _contact_modes(graph) -> tuple:
+    return ({(n["name"], frozenset(n["constraints"]), n["initial"]) for n in graph["nodes"]},
+            {(e["source"], e["target"], e["guard"], e["direction"]) for e in graph["edges"]})
+
+
+def _contact_modes_of_file(data) -> tuple:
+    """The automaton a model's contacts: stand for, read from the file: one flow per set of closed contacts
+    (named by them, 'open' for none; the model's own constraints active in each), and from each flow an
+    impact of every open contact (its gap falling through zero; the impact solver picks the mode after) and
+    a liftoff of every closed one (its normal force, the multiplier, falling through zero) to the flow
+    without it."""
+    contacts = data["contacts"]
+    own = {c["name"] for c in data.get("constraints") or []}
+    nodes, edges = set(), set()
+    for mask in range(2 ** len(contacts)):
+        closed = [c["name"] for k, c in enumerate(contacts) if mask >> k & 1]
+        name = "+".join(closed) or "open"
+        nodes.add((name, frozenset(own | set(closed)), mask == 0))
+        for k, c in enumerate(contacts):
+            if mask >> k & 1:
+                rest = "+".join(n for n in closed if n != c["name"]) or "open"
+                edges.add((name, rest, c.get("multiplier", f"lambda_{c['name']}"), "falling"))
+            else:
+                edges.add((name, name, str(c["gap"]), "falling"))
+    return nodes, edges
 
 
 def test_passive_walker_automaton_is_a_cycle_of_six_flows_and_six_jumps():
