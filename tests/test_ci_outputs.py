@@ -5,18 +5,15 @@ one meaning of -o (the output; the build folder is --build-dir, the old spelling
 from __future__ import annotations
 
 import json
-import os
 import re
 import xml.etree.ElementTree as ET
 from importlib import resources
 from pathlib import Path
-from types import SimpleNamespace
 
 import jsonschema
 import pytest
-from click.testing import CliRunner
 
-from andyc import cli
+from tests.support.cli import invoke
 
 ROOT = Path(__file__).resolve().parents[1]
 BALL = (ROOT / "models" / "bouncing_ball.yaml").read_text()
@@ -32,16 +29,6 @@ expect:
 """
 
 
-def andyc(*args, cwd):
-    """The command line, in this process (its modules imported once), run in the folder `cwd`: the exit code
-    and the two streams as a user sees them."""
-    here = os.getcwd()
-    os.chdir(cwd)
-    try:
-        result = CliRunner().invoke(cli.main, [str(a) for a in args])
-    finally:
-        os.chdir(here)
-    return SimpleNamespace(returncode=result.exit_code, stdout=result.stdout, stderr=result.stderr)
 
 
 def output_schema() -> dict:
@@ -69,8 +56,8 @@ def line_of(text: str, needle: str, occurrence: int = 1) -> int:
 
 
 def test_andyc_test_lines_exit_code_and_junit(place):
-    result = andyc("test", "models", "--build-dir", "build", "--junit", "out/junit.xml", cwd=place)
-    assert result.returncode == 1
+    result = invoke("test", "models", "--build-dir", "build", "--junit", "out/junit.xml", cwd=place)
+    assert result.exit_code == 1
     text = BALL + EXPECT
     failures = [line for line in result.stderr.splitlines() if ": expect[" in line]
     assert failures == [
@@ -97,14 +84,14 @@ def test_andyc_test_lines_exit_code_and_junit(place):
 
 
 def test_andyc_test_json_and_github(place):
-    result = andyc("test", "models/ball.yaml", "--build-dir", "build", "--format", "json", cwd=place)
-    assert result.returncode == 1
+    result = invoke("test", "models/ball.yaml", "--build-dir", "build", "--format", "json", cwd=place)
+    assert result.exit_code == 1
     doc = validated(result.stdout)
     assert doc["command"] == "test" and doc["ok"] is False and doc["exit_code"] == 1
     (model,) = doc["results"]
     assert [o["ok"] for o in model["outcomes"]] == [True, True, True, False, False]
     assert [p["path"] for p in doc["problems"]] == ["expect[1].jumps", "expect[1].energy_drift"]
-    result = andyc("test", "models/ball.yaml", "--build-dir", "build", "--format", "github", cwd=place)
+    result = invoke("test", "models/ball.yaml", "--build-dir", "build", "--format", "github", cwd=place)
     line = line_of(BALL + EXPECT, "jumps: {bounce: 4}")
     assert (f"::error file=models/ball.yaml,line={line}::models/ball.yaml:{line}: expect[1].jumps: measured "
             "bounce 3 jumps, expected bounce 4") in result.stdout.splitlines()
@@ -112,43 +99,43 @@ def test_andyc_test_json_and_github(place):
 
 def test_andyc_test_passes_and_usage(place):
     (place / "good.yaml").write_text(BALL + EXPECT.split("  - t_end: 2\n")[0])
-    result = andyc("test", "good.yaml", "--build-dir", "build_good", cwd=place)     # (another file, same name)
-    assert result.returncode == 0, result.stderr
+    result = invoke("test", "good.yaml", "--build-dir", "build_good", cwd=place)     # (another file, same name)
+    assert result.exit_code == 0, result.stderr
     assert "2 checks in 1 model: all hold" in result.stdout
-    assert andyc("test", "missing.yaml", cwd=place).returncode == 2
+    assert invoke("test", "missing.yaml", cwd=place).exit_code == 2
 
 
 def test_check_json_and_github(place):
-    result = andyc("check", "models/bad.yaml", str(ROOT / "models" / "pendulum_a01.yaml"), "--format", "json",
+    result = invoke("check", "models/bad.yaml", str(ROOT / "models" / "pendulum_a01.yaml"), "--format", "json",
                    cwd=place)
-    assert result.returncode == 1
+    assert result.exit_code == 1
     doc = validated(result.stdout)
     (problem,) = doc["problems"]
     assert (problem["file"], problem["line"], problem["path"]) == ("models/bad.yaml", line_of(BALL, "mass: m}"),
                                                                      "bodies[0].mass")
     assert [r["ok"] for r in doc["results"]] == [False, True]
     assert result.stderr == ""                  # json: the one document, nothing else
-    result = andyc("check", "models/bad.yaml", "--format", "github", cwd=place)
-    assert result.returncode == 1
+    result = invoke("check", "models/bad.yaml", "--format", "github", cwd=place)
+    assert result.exit_code == 1
     assert re.search(rf"^::error file=models/bad.yaml,line={line_of(BALL, 'mass: m}')}::models/bad.yaml:\d+: "
                      r"bodies\[0\].mass: mass must be positive", result.stdout, re.M)
 
 
 def test_build_and_sim_json(place):
-    result = andyc("build", "models/ball.yaml", "--build-dir", "build", "--format", "json", cwd=place)
-    assert result.returncode == 0, result.stderr
+    result = invoke("build", "models/ball.yaml", "--build-dir", "build", "--format", "json", cwd=place)
+    assert result.exit_code == 0, result.stderr
     doc = validated(result.stdout)
     assert doc["results"][0]["module"] == "build/bouncing_ball/bouncing_ball.py"
-    result = andyc("sim", "models/ball.yaml", "--build-dir", "build", "-o", "out/ball.h5", "--format", "json",
+    result = invoke("sim", "models/ball.yaml", "--build-dir", "build", "-o", "out/ball.h5", "--format", "json",
                    cwd=place)
-    assert result.returncode == 0, result.stderr
+    assert result.exit_code == 0, result.stderr
     doc = validated(result.stdout)
     assert doc["results"][0]["outputs"] == ["out/ball.h5"] and doc["results"][0]["status"] == "finished"
     assert (place / "out" / "ball.h5").exists()
     # A run that stops (Zeno, at 4.06 s) is a run problem: exit 1, its status among the problems.
-    result = andyc("sim", "models/ball.yaml", "--build-dir", "build", "-o", "out/zeno.h5", "--t-end", "5",
+    result = invoke("sim", "models/ball.yaml", "--build-dir", "build", "-o", "out/zeno.h5", "--t-end", "5",
                    "--format", "json", cwd=place)
-    assert result.returncode == 1
+    assert result.exit_code == 1
     doc = validated(result.stdout)
     assert doc["ok"] is False and doc["problems"][0]["message"].startswith("stopped: Zeno behaviour")
 
@@ -157,14 +144,14 @@ def test_build_and_sim_json(place):
                                        (["build", "models/ball.yaml", "--out-dir", "build"], "--out-dir"),
                                        (["sim", "models/ball.yaml", "--out-dir", "build"], "--out-dir")])
 def test_the_old_build_folder_spellings_are_refused_with_a_hint(place, args, old):
-    result = andyc(*args, cwd=place)
-    assert result.returncode == 2
+    result = invoke(*args, cwd=place)
+    assert result.exit_code == 2
     assert (f"{old} is no longer the build folder: give it as --build-dir DIR (-o/--out is the output "
             "everywhere") in result.stderr
 
 
 def test_sim_o_is_the_run_file(place):
-    result = andyc("sim", "models/ball.yaml", "--build-dir", "build", "-o", "build", cwd=place)
-    assert result.returncode == 2
+    result = invoke("sim", "models/ball.yaml", "--build-dir", "build", "-o", "build", cwd=place)
+    assert result.exit_code == 2
     assert "unknown run file type ''; use .h5 or .csv (-o/--out is the run file; the build folder is --build-dir)" \
         in result.stderr

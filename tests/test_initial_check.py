@@ -9,17 +9,14 @@ the velocity-level row 2 x x_dot + 2 y y_dot is 0.
 
 from __future__ import annotations
 
-import os
 import re
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from andyc import cli
 from andyc.runtime.run import read_h5
+from tests.support.cli import invoke
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -52,16 +49,6 @@ def line_of(text: str, needle: str) -> int:
     return next(n for n, line in enumerate(text.splitlines(), 1) if needle in line)
 
 
-def andyc(*args, cwd):
-    """The command line, in this process (its modules imported once), run in the folder `cwd`: the exit code
-    and the two streams as a user sees them."""
-    here = os.getcwd()
-    os.chdir(cwd)
-    try:
-        result = CliRunner().invoke(cli.main, [str(a) for a in args])
-    finally:
-        os.chdir(here)
-    return SimpleNamespace(returncode=result.exit_code, stdout=result.stdout, stderr=result.stderr)
 
 
 @pytest.fixture(scope="module")
@@ -75,8 +62,8 @@ def place(tmp_path_factory):
 def test_check_finds_the_off_manifold_state_and_the_guard_past_zero_without_compiling(place):
     (place / "sub" / "ring_guard.yaml").write_text(GUARD)
     (place / "sub" / "ring_ok.yaml").write_text(RING.replace("1.1*L", "L").replace("name: ring_ci", "name: ring_ok"))
-    result = andyc("check", "sub/ring_guard.yaml", "sub/ring_ok.yaml", "--format", "text", cwd=place)
-    assert result.returncode == 1
+    result = invoke("check", "sub/ring_guard.yaml", "sub/ring_ok.yaml", "--format", "text", cwd=place)
+    assert result.exit_code == 1
     assert "Usage:" not in result.stderr and "Traceback" not in result.stderr
     lines = result.stderr.splitlines()
     ring = line_of(GUARD, "holonomic: x**2")
@@ -101,18 +88,18 @@ def test_the_model_may_say_to_project_or_start_as_is(place):
     for mode in ("project", "as-is"):
         (place / "sub" / "ring_mode.yaml").write_text(RING.replace("name: ring_ci", "name: ring_mode")
                                                       + f"simulate: {{init: {mode}}}\n")
-        result = andyc("check", "sub/ring_mode.yaml", cwd=place)
-        assert result.returncode == 0, result.stderr
+        result = invoke("check", "sub/ring_mode.yaml", cwd=place)
+        assert result.exit_code == 0, result.stderr
     (place / "sub" / "ring_mode.yaml").write_text(RING.replace("name: ring_ci", "name: ring_mode")
                                                   + "simulate: {init_tol: 0.3}\n")
-    assert andyc("check", "sub/ring_mode.yaml", cwd=place).returncode == 0       # 0.21 is within 0.3
+    assert invoke("check", "sub/ring_mode.yaml", cwd=place).exit_code == 0       # 0.21 is within 0.3
 
 
 def test_sim_refuses_the_off_manifold_state_as_a_model_problem(place):
     """The compiled module measures the same residual (an independent evaluation: generated code, not SymPy)."""
     (place / "sub" / "ring.yaml").write_text(RING)
-    result = andyc("sim", "sub/ring.yaml", "--build-dir", "build", "-o", "out/ring.h5", cwd=place)
-    assert result.returncode == 1
+    result = invoke("sim", "sub/ring.yaml", "--build-dir", "build", "-o", "out/ring.h5", cwd=place)
+    assert result.exit_code == 1
     assert "Usage:" not in result.stderr and "Error:" not in result.stderr
     line = line_of(RING, "holonomic: x**2")
     message = result.stderr.strip().splitlines()[-1]
@@ -124,16 +111,16 @@ def test_sim_refuses_the_off_manifold_state_as_a_model_problem(place):
 def test_simulate_section_gives_the_options_and_the_command_line_wins(place):
     (place / "sub" / "ring.yaml").write_text(RING + "simulate: {init: project, method: projection, t_end: 0.5, "
                                              "dt: 0.01, every: 5}\n")
-    result = andyc("sim", "sub/ring.yaml", "--build-dir", "build", "-o", "out/a.h5", cwd=place)
-    assert result.returncode == 0, result.stderr
+    result = invoke("sim", "sub/ring.yaml", "--build-dir", "build", "-o", "out/a.h5", cwd=place)
+    assert result.exit_code == 0, result.stderr
     run = read_h5(place / "out" / "a.h5")
     assert run.method == "projection" and run.t_end == 0.5 and run.dt == 0.01
     assert np.allclose(np.diff(run.time), 0.05)                         # every 5 steps of 0.01 s
     x, y = run.column("x"), run.column("y")
     assert np.max(np.abs(x ** 2 + y ** 2 - 1.0)) < 1e-12               # projected onto the circle first
-    result = andyc("sim", "sub/ring.yaml", "--build-dir", "build", "-o", "out/b.h5", "--t-end", "0.2",
+    result = invoke("sim", "sub/ring.yaml", "--build-dir", "build", "-o", "out/b.h5", "--t-end", "0.2",
                    "--method", "rk4", "--every", "1", cwd=place)
-    assert result.returncode == 0, result.stderr
+    assert result.exit_code == 0, result.stderr
     run = read_h5(place / "out" / "b.h5")
     assert run.method == "rk4" and run.t_end == 0.2 and run.dt == 0.01
     assert np.allclose(np.diff(run.time), 0.01)
@@ -142,8 +129,8 @@ def test_simulate_section_gives_the_options_and_the_command_line_wins(place):
 def test_simulate_section_names_are_checked(place):
     (place / "sub" / "ring_bad.yaml").write_text(RING.replace("name: ring_ci", "name: ring_bad")
                                                  + "simulate: {frames: [slidr], t_end: 0.01, dt: 0.1}\n")
-    result = andyc("check", "sub/ring_bad.yaml", cwd=place)
-    assert result.returncode == 1
+    result = invoke("check", "sub/ring_bad.yaml", cwd=place)
+    assert result.exit_code == 1
     text = result.stderr
     line = line_of(RING, "name: ring_ci") + RING.count("\n")
     assert re.search(rf"^sub/ring_bad.yaml:{line}: simulate.frames\[0\]: frame 'slidr' does not exist; did you "
@@ -154,6 +141,6 @@ def test_simulate_section_names_are_checked(place):
 def test_every_shipped_model_passes_check_with_its_simulate_section():
     """Including biped_rheonomic, whose paper start is off its constraints: it says `init: as-is`."""
     models = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "models").glob("*.yaml"))
-    result = andyc("check", *models, cwd=ROOT)
-    assert result.returncode == 0, result.stderr
+    result = invoke("check", *models, cwd=ROOT)
+    assert result.exit_code == 0, result.stderr
     assert result.stdout.count(" is valid: ") == len(models)

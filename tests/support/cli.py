@@ -2,6 +2,7 @@
 the streams, a process of its own), `invoke` in process with click's CliRunner (no interpreter
 start-up; for the many cases that need nothing more)."""
 
+import os
 import subprocess
 import sys
 
@@ -21,10 +22,17 @@ def andyc_cli(*args, cwd=None) -> subprocess.CompletedProcess:
                           text=True, timeout=HANG)
 
 
-def invoke(*args):
+def invoke(*args, cwd=None):
     """`andyc ARGS` in process: a click Result, stdout and stderr apart (`.stdout`, `.stderr`; `.output`
-    is both as a terminal shows them); arguments may be paths or numbers."""
-    return CliRunner().invoke(cli.main, [str(a) for a in args])
+    is both as a terminal shows them); arguments may be paths or numbers; `cwd`: the folder it runs in
+    (relative paths are the user's, as given)."""
+    here = os.getcwd()
+    if cwd is not None:
+        os.chdir(cwd)
+    try:
+        return CliRunner().invoke(cli.main, [str(a) for a in args])
+    finally:
+        os.chdir(here)
 
 
 def check(*files):
