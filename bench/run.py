@@ -324,55 +324,6 @@ def hybrid_benchmark(tmp: Path) -> None:
           f"before t_inf = {t_inf:.9f} s in {run.stats['wall_seconds'] * 1e3:.1f} ms: {run.status[:60]}...")
 
 
-def _best_run(model, t_end, dt, repeats=5, **options):
-    """The fastest of `repeats` runs (wall time), after one that compiles."""
-    andyc.simulate(model, 10 * dt, dt=dt, progress=False, **options)
-    return min((andyc.simulate(model, t_end, dt=dt, every=1000, progress=False, **options) for _ in range(repeats)),
-               key=lambda r: r.stats["wall_seconds"])
-
-
-def _steps_per_second(run) -> float:
-    s = run.stats
-    return (s["steps"] + s["event_trial_steps"]) / s["wall_seconds"]
-
-
-def contacts_benchmark(tmp: Path) -> None:
-    """Issue 21: runs with contacts, and what contact handling costs against the same motion without it."""
-    section("contacts (issue 21): resting ball, rod on two supports, hopper; RK4, best of 5")
-    build = tmp / "contacts_build"
-    ball = andyc.compile_model(ROOT / "models" / "bouncing_ball_contact.yaml", build)[0]
-    plain = andyc.compile_model(ROOT / "models" / "bouncing_ball.yaml", build)[0]
-    rod = andyc.compile_model(ROOT / "models" / "rod_drop.yaml", build)[0]
-    hopper = andyc.compile_model(ROOT / "models" / "hopper_contact.yaml", build)[0]
-    for label, model, t_end, dt, options in (
-            ("ball, bouncing then resting, 10 s", ball, 10.0, 1e-3, {}),
-            ("rod, e = 0.5, onto two supports, 3 s", rod, 3.0, 1e-3, {"parameters": {"e": 0.5}}),
-            ("hopper, 2 s", hopper, 2.0, 1e-4, {})):
-        run = _best_run(model, t_end, dt, **options)
-        print(f"  {label}: {run.stats['jumps']} jumps, {_steps_per_second(run):.3g} steps/s "
-              f"({run.stats['wall_seconds'] * 1e3:.1f} ms)")
-    # The same 4 s of bouncing (the same impacts, before the accumulation point): the hand-written jump's
-    # compiled impact against the contact's impact solved from Python (andyc.runtime.contacts); and that solve
-    # alone, timed on the first impact's state.
-    with_contact, without = _best_run(ball, 4.0, 1e-3), _best_run(plain, 4.0, 1e-3)
-    print(f"  the first 4 s of the ball ({with_contact.stats['jumps']} impacts): contact "
-          f"{with_contact.stats['wall_seconds'] * 1e3:.1f} ms, hand-written jump {without.stats['wall_seconds'] * 1e3:.1f} "
-          "ms (the steps between impacts run the same compiled code)")
-    from andyc.runtime.contacts import resolve_impact
-
-    for label, model, options in (("ball", ball, {}), ("rod (two contacts)", rod, {"parameters": {"e": 0.5}})):
-        run = _best_run(model, 1.0, 1e-3, repeats=1, **options)
-        t, x, p = run.events["time"][0], run.events["state_before"][0], model.parameters(options.get("parameters"))
-        u, d = model.input_defaults, model.initial_discrete(p)
-        best = float("inf")
-        for _ in range(5):
-            tic = time.perf_counter()
-            for _ in range(200):
-                resolve_impact(model, t, x.copy(), u, p, d, 0, False)
-            best = min(best, (time.perf_counter() - tic) / 200)
-        print(f"  one contact impact solved (Python, {label}): {best * 1e6:.0f} us")
-
-
 def _pin_microseconds(model, data, q, v, tau, n=100_000, repeats=3) -> float:
     """Best of `repeats`: microseconds per pin.aba call from Python."""
     import pinocchio as pin
@@ -513,6 +464,9 @@ def main(argv=None):
             if "hybrid" in only:
                 hybrid_benchmark(tmp)
             if "contacts" in only:
+                from contacts import contacts_benchmark
+
+                section("contacts (issue 21): resting ball, rod on two supports, hopper; RK4, best of 5")
                 contacts_benchmark(tmp)
             if "urdf" in only:
                 urdf_benchmark(tmp)
