@@ -14,8 +14,8 @@ from PIL import Image
 import andyc
 from andyc.plot import figure_for, plot_run, plot_sticks, snapshot_indices, stick_edges, stick_plane, sticks_figure
 from tests.support.cli import invoke, run_python
-from tests.support.runs import (constrained_run, hybrid_run, inputs_run, make_run, plain_run, planar_run,
-                                quaternion_run, spatial_run)
+from tests.support.runs import (constrained_run, contact_run, hybrid_run, inputs_run, make_run, plain_run,
+                                planar_run, quaternion_run, spatial_run)
 
 
 # -- what a figure holds --------------------------------------------------------------------------------
@@ -305,3 +305,17 @@ def test_compass_gait_through_andyc_plot(compiled, tmp_path):
     assert result.exit_code == 0, result.output
     with Image.open(tmp_path / "r.gif") as im:
         assert im.format == "GIF" and im.n_frames == 6
+
+
+def test_a_run_with_contacts_gets_their_normal_forces_and_closed_spans():
+    """The contacts panel: each contact's normal force (0 while open, whatever the multiplier holds then), and
+    its closed span shaded: here t >= 1 s, in the contact's colour."""
+    run = contact_run()
+    fig = figure_for(run)
+    (ax,) = [a for a in fig.axes if a.get_gid() == "contacts"]
+    (line,) = ax.get_lines()
+    np.testing.assert_array_equal(line.get_ydata(), np.where(run.time >= 1.0, 9.81, 0.0))
+    (shade,) = ax.collections
+    xs = np.concatenate([path.vertices[:, 0] for path in shade.get_paths()])
+    assert xs.min() == pytest.approx(1.0) and xs.max() == pytest.approx(2.0)
+    assert [a.get_gid() for a in fig.axes].index("contacts") < [a.get_gid() for a in fig.axes].index("multipliers")

@@ -86,6 +86,8 @@ def _series_panels(run: Run) -> list:
             panels.append((gid, partial(_states, cols=[run.state_names.index(n) for n in names], ylabel=ylabel)))
     if run.input_names and len(run.time) and np.ptp(run.input_values, axis=0).max() > 0:
         panels.append(("inputs", _inputs))      # inputs that change (driven, or set by flows)
+    if run.contact_names:
+        panels.append(("contacts", _contacts))
     if run.multiplier_names:
         panels += [("multipliers", _multipliers), ("residuals", _residuals)]
     return panels
@@ -257,6 +259,17 @@ def _quaternions(ax, run: Run, bases: list) -> None:
         for c, s in enumerate(QUATERNION):
             ax.plot(run.time, run.column(b + s), color=f"C{c}", ls=style, lw=1, label=b + s)
     ax.set_ylabel("quaternion (w, x, y, z), 1")
+    _legend(ax)
+
+
+def _contacts(ax, run: Run) -> None:
+    """Each contact's normal force (0 while open), and the spans where it is closed shaded in its colour."""
+    closed, force = run.contact_closed, run.normal_forces
+    for i, name in enumerate(run.contact_names):
+        ax.plot(run.time, force[:, i], color=f"C{i}", lw=1, label=f"normal force {name}")
+        ax.fill_between(run.time, 0, 1, where=closed[:, i] == 1, step="post", color=f"C{i}", alpha=0.12,
+                        transform=ax.get_xaxis_transform(), lw=0)
+    ax.set_ylabel("contacts: normal force, N")
     _legend(ax)
 
 

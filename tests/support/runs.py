@@ -71,6 +71,20 @@ def constrained_run(n=50) -> Run:
                     residual_velocity=np.column_stack([1e-13 * np.cos(t), np.zeros(n)]))
 
 
+def contact_run(n=41) -> Run:
+    """A ball on the ground contact (issue 21): falling while open (flow 0) until t = 1, then resting on it,
+    closed (flow 1), its multiplier (the normal force) m g = 9.81 N there and a stray -3 while open (the run
+    reports 0 for an open contact's force)."""
+    t = np.linspace(0.0, 2.0, n)
+    closed = t >= 1.0
+    y = np.where(closed, 0.0, 4.905 * (1.0 - t ** 2))
+    return make_run(["y", "y_dot"], 1, 1, np.column_stack([y, np.gradient(y, t)]),
+                    flow=closed.astype(np.int64), flow_names=["open", "ground"], jump_names=["ground_impact"],
+                    multiplier_names=["normal_force"], multipliers=np.where(closed, 9.81, -3.0)[:, None],
+                    residual_position=np.zeros((n, 1)), residual_velocity=np.zeros((n, 1)),
+                    contact_names=["ground"], contact_rows=[0])
+
+
 def inputs_run(n=40, changing=True) -> Run:
     """Inputs u (a ramp, or constant) and v (constant)."""
     t = np.linspace(0.0, 2.0, n)
