@@ -45,24 +45,28 @@ def test_the_wheel_carries_the_templates_the_schema_and_the_numerics(installed):
     bin_dir, work = installed
     where = subprocess.run([str(bin_dir / "python"), "-c", "import andyc, pathlib; p = pathlib.Path(andyc.__file__)"
                             ".parent; print(p); print(sorted(x.name for x in (p / 'templates').glob('*.*'))); "
-                            "print((p / 'schemas' / 'andyc-model.schema.json').is_file()); "
+                            "print(sorted(x.name for x in (p / 'schemas').glob('*.json'))); "
                             "print(sorted(x.name for x in (p / 'numerics').glob('*.py')))"],
                            capture_output=True, text=True, cwd=work)
     assert where.returncode == 0, where.stderr
     folder, templates, schema, numerics = where.stdout.splitlines()
     assert "site-packages" in folder and not folder.startswith(str(ROOT))
     # Every template and every file of the algorithms every build copies (andyc/numerics), as in the tree.
-    assert templates == str(sorted(x.name for x in (ROOT / "andyc" / "templates").glob("*.*"))) and schema == "True"
+    assert templates == str(sorted(x.name for x in (ROOT / "andyc" / "templates").glob("*.*")))
+    assert schema == str(sorted(x.name for x in (ROOT / "andyc" / "schemas").glob("*.json")))   # model, --format json
     assert numerics == str(sorted(x.name for x in (ROOT / "andyc" / "numerics").glob("*.py")))
-    assert "module.py.j2" in templates and "integrator.py" in numerics
+    assert "module.py.j2" in templates and "integrator.py" in numerics and "andyc-output.schema.json" in schema
 
 
 def test_check_build_and_sim_run_from_the_wheel_in_another_folder(installed):
     bin_dir, work = installed
     andyc = str(bin_dir / "andyc")
+    out = {}
     for args in (["check", "pendulum.yaml"], ["build", "pendulum.yaml"],
-                 ["sim", "pendulum.yaml", "--t-end", "0.1", "--out", "run.h5"]):
+                 ["sim", "pendulum.yaml", "--t-end", "0.1", "--out", "run.h5"], ["test", "pendulum.yaml"]):
         proc = subprocess.run([andyc, *args], capture_output=True, text=True, cwd=work)
         assert proc.returncode == 0, (args, proc.stderr)
+        out[args[0]] = proc.stdout
     assert (work / "build" / "double_pendulum" / "double_pendulum.py").is_file()
-    assert "100 steps" in proc.stdout and (work / "run.h5").is_file()
+    assert "100 steps" in out["sim"] and (work / "run.h5").is_file()
+    assert "all hold" in out["test"]            # the model's expectations, run from the installed package
