@@ -155,3 +155,24 @@ def test_sim_o_is_the_run_file(place):
     assert result.exit_code == 2
     assert "unknown run file type ''; use .h5 or .csv (-o/--out is the run file; the build folder is --build-dir)" \
         in result.stderr
+
+
+@pytest.mark.parametrize("args, says", [
+    (["sim", "models/ball.yaml", "--dt", "-1", "--format", "json"], "--dt"),
+    (["test", "missing.yaml", "--format=json"], "missing.yaml"),
+    (["check", "--format", "json", "--bogus", "models/ball.yaml"], "--bogus"),
+], ids=["bad-value", "missing-file", "unknown-option"])
+def test_a_usage_error_under_format_json_is_a_json_document_too(place, args, says):
+    """A command line refused before the command runs (exit 2) still prints the one JSON document a CI
+    job parses, the message in it; click's message still goes to stderr, and stdout holds nothing else."""
+    result = invoke(*args, cwd=place)
+    assert result.exit_code == 2
+    doc = validated(result.stdout)
+    assert (doc["command"], doc["ok"], doc["exit_code"], doc["results"]) == (args[0], False, 2, [])
+    (p,) = doc["problems"]
+    assert says in p["message"] and says in result.stderr
+
+
+def test_a_usage_error_without_format_json_prints_no_json(place):
+    result = invoke("sim", "models/ball.yaml", "--dt", "-1", cwd=place)
+    assert result.exit_code == 2 and result.stdout == ""

@@ -32,6 +32,7 @@ import click
 import andyc
 from andyc.cli import analysis, build, eom, graph, linearize, plot, sim, sweep, test, view
 from andyc.cli.common import Refused
+from andyc.cli.formats import json_command, usage_report
 from andyc.outputs import OutputError
 
 
@@ -40,15 +41,25 @@ class _Andyc(click.Group):
     with undecodable bytes); an output that must not be written, Ctrl-C and bugs get a message, not a
     traceback (ANDYC_DEBUG=1 shows the traceback of a bug)."""
 
-    def main(self, *args, **kwargs):
+    def main(self, args=None, *rest, **kwargs):
         for stream in (sys.stdout, sys.stderr):
             try:
                 stream.reconfigure(errors="backslashreplace")
             except (AttributeError, ValueError):
                 pass
-        return super().main(*args, **kwargs)
+        args = list(sys.argv[1:] if args is None else args)
+        self.json_command = json_command(args)
+        return super().main(args, *rest, **kwargs)
 
     def invoke(self, ctx):
+        try:
+            return self._invoke(ctx)
+        except click.ClickException as exc:
+            if getattr(self, "json_command", None):     # a usage error under --format json: a JSON document too
+                usage_report(self.json_command, exc.format_message(), exc.exit_code)
+            raise
+
+    def _invoke(self, ctx):
         try:
             return super().invoke(ctx)
         except OutputError as exc:

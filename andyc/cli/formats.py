@@ -91,3 +91,22 @@ class Report:
             for entry in self.problems:
                 click.echo(annotation(entry))
         sys.exit(code)
+
+
+REPORTING = ("check", "build", "sim", "test")      # the commands that take --format
+
+
+def json_command(args: list) -> str | None:
+    """The command of a command line that asks for --format json (check, build, sim or test), else None: a
+    usage error, found before the command runs, then gets its JSON document too (usage_report)."""
+    command = next((a for a in args if not a.startswith("-")), None)
+    pairs = list(zip(args, args[1:]))
+    wants = ("--format", "json") in pairs or "--format=json" in args
+    return command if wants and command in REPORTING else None
+
+
+def usage_report(command: str, message: str, code: int) -> None:
+    """The JSON document of a command line andyc refused (exit 2): no results, the one problem. The message
+    itself still goes to stderr as click prints it."""
+    click.echo(json.dumps({"andyc_version": andyc.__version__, "command": command, "ok": False, "exit_code": code,
+                           "problems": [problem(message)], "results": []}, ensure_ascii=True))
