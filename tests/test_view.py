@@ -5,6 +5,7 @@ two playback times, the status line names the time and the active flow, and no r
 The browser tests skip, saying why, where chromium or Playwright is missing (.ci/run installs chromium
 when apt can)."""
 
+import json
 import re
 import shutil
 from pathlib import Path
@@ -73,6 +74,17 @@ def test_the_page_is_one_file_with_nothing_from_elsewhere():
     assert "</" not in data
 
 
+def test_text_in_the_data_cannot_end_its_script_element():
+    """Whatever text the data holds, it stays inside its JSON block: no '</script' or '<!--' forms there, and
+    the JSON reads back equal."""
+    data = view_data(walker_run())
+    hostile = '</script><script>alert(1)</script><!--'
+    data["model"] = hostile
+    page = view_html(data)
+    block = page.split('id="andyc-data">', 1)[1].split("</script>", 1)[0]
+    assert "<" not in block and json.loads(block)["model"] == hostile
+
+
 def test_view_command_writes_the_page_and_refuses_what_it_cannot_show(tmp_path):
     path = walker_run().save(tmp_path / "walker.h5")
     result = CliRunner().invoke(cli.main, ["view", str(path)])
@@ -114,7 +126,9 @@ def screenshots(browser, page_file: Path, times, out_dir: Path):
     shots = []
     for i, t in enumerate(times):
         page.evaluate(f"window.andycView.seek({t})")
-        page.wait_for_timeout(250)           # a few animation frames: the status line follows
+        # The status line follows on the next animation frame: wait for it, however busy the machine.
+        page.wait_for_function(f"document.getElementById('status').textContent.includes('t = {t:.2f} s')",
+                               timeout=120_000)
         png = out_dir / f"{page_file.stem}_{i}.png"
         page.locator("canvas").first.screenshot(path=str(png))
         with Image.open(png) as im:

@@ -87,11 +87,13 @@ def view_html(data: dict) -> str:
     """The page of `data` (`view_data`): MeshCat's bundle, the data as JSON and the page's script,
     put into andyc/templates/view.html in one pass (no inserted text is searched again)."""
     page = resources.files("andyc").joinpath("templates/view.html").read_text(encoding="utf-8")
-    # Inside <script>, no '</' may end the element early; the data's text (names are identifiers) and
-    # the title are escaped all the same.
+    # Inside <script>, no '</' may end the element early. The data's text (names are identifiers today) has
+    # every '<' as the JSON escape \u003c all the same, so that no '</script' nor '<!--' can ever form in it;
+    # the title is escaped too.
     script = lambda text: text.replace("</", "<\\/")  # noqa: E731
+    data_json = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("<", "\\u003c")
     parts = {"TITLE": html.escape(f"{data['model']}: andyc view"), "MESHCAT": script(meshcat_bundle()),
-             "DATA": script(json.dumps(data, separators=(",", ":"), allow_nan=False))}
+             "DATA": data_json}
     return re.sub(r"\{\{(TITLE|MESHCAT|DATA)\}\}", lambda m: parts[m.group(1)], page)
 
 
