@@ -220,6 +220,11 @@ def test_final_expression_bounds(compiled, tmp_path):
                         r"th \+ t = \S+ at t = 1 s, expected >= 0 and <= 1", str(o))
     th = float(re.search(r"th \+ t = (\S+)", str(o)).group(1)) - 1.0
     assert th > 0.5                         # the pole has fallen from 0.1 rad in a second: th + t > 1
+    # A value that is not a real number fails, whatever the bounds, and says so (sqrt(-1 - th^2) has none).
+    _, found = outcomes(compiled, tmp_path, "cart_pole",
+                        "  - t_end: 1\n    final: [{value: 'sqrt(-1 - th**2)', max: 1.0e+300}]\n")
+    o = the_check(found, "final")
+    assert not o.ok and "= nan (not a real number) at t = 1 s" in str(o)
 
 
 # -- the loader ------------------------------------------------------------------------------------

@@ -14,18 +14,20 @@ simulate()'s defaults (the same as andyc sim's). Every expectation yields one Ou
     states           max_i |x_i(t) - target_i| <= tol; x(t) linear between samples (exact on a sample); the
                      target: given values, the closed form x(t) (the model's closed_form), or a stored run
                      file's states at t (linear between its samples)
-    final            min <= f(final state) <= max, f parsed by andyc.spec.expressions and evaluated by SymPy
-                     on numbers (never as code)
+    final            min <= f(final state) <= max, f parsed by andyc.spec.expressions, evaluated
+                     on numbers by andyc.analysis.evaluate (as sweeps' --metric), never as code
 """
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from andyc.analysis.evaluate import numeric
 from andyc.errors import SimulationError, printable
 from andyc.spec.expect import Check, Expectation
 
@@ -201,24 +203,20 @@ def _states(check: Check, run, model, spec) -> tuple:
 
 
 def _final(check: Check, run, model, spec) -> tuple:
-    import sympy as sp
-
     values = {}
     for name, symbol in check.data["symbols"].items():
-        if name in run.parameters:
-            values[symbol] = run.parameters[name]
-        else:
-            values[symbol] = float(run.column(name)[-1])
+        values[symbol.name] = run.parameters[name] if name in run.parameters else float(run.column(name)[-1])
     if check.data["time"]:
         from andyc.spec.expressions import TIME
 
-        values[TIME] = float(run.time[-1])
-    value = complex(sp.sympify(check.data["expr"]).xreplace({s: sp.Float(v) for s, v in values.items()}).evalf())
+        values[TIME.name] = float(run.time[-1])
+    with np.errstate(all="ignore"):
+        value = float(numeric(check.data["expr"], values))
     low, high = check.data["min"], check.data["max"]
-    ok = value.imag == 0 and (low is None or value.real >= low) and (high is None or value.real <= high)
+    ok = math.isfinite(value) and (low is None or value >= low) and (high is None or value <= high)
     bounds = " and ".join(x for x in (f">= {low:.12g}" if low is not None else "",
                                        f"<= {high:.12g}" if high is not None else "") if x)
-    shown = f"{value.real:.9g}" if value.imag == 0 else f"{value:.6g} (not real)"
+    shown = f"{value:.9g}" if math.isfinite(value) else f"{value} (not a real number)"
     return ok, f"{check.data['value']} = {shown} at t = {run.time[-1]:.6g} s", bounds
 
 

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from andyc.analysis.evaluate import numeric
 from andyc.spec.expressions import ExpressionError, parse, syntax_tree
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -217,42 +218,3 @@ def _run_function(function: str, args: tuple, series: dict, run) -> float:
         if not len(values):
             return math.nan
         return float({"max": np.max, "min": np.min, "mean": np.mean}[function](values))
-
-
-def numeric(expr, values: dict):
-    """The value of a SymPy expression (built by andyc's parser) at `values` {symbol name: float or array},
-    walking its tree with NumPy's functions; nothing is compiled or run as code."""
-    import sympy as sp
-
-    if expr.is_Number or isinstance(expr, sp.NumberSymbol):
-        return float(expr)
-    if expr.is_Symbol:
-        return values[expr.name]
-    args = [numeric(a, values) for a in expr.args]
-    if expr.is_Add:
-        return sum(args[1:], args[0])
-    if expr.is_Mul:
-        out = args[0]
-        for a in args[1:]:
-            out = out * a
-        return out
-    if expr.is_Pow:
-        return np.power(np.asarray(args[0], dtype=float), args[1])
-    function = _NUMPY.get(type(expr).__name__)
-    if function is None:
-        raise MetricError(f"cannot evaluate {type(expr).__name__} in a metric")
-    return function(*args)
-
-
-def _reduce(f):
-    def apply(*args):
-        out = args[0]
-        for a in args[1:]:
-            out = f(out, a)
-        return out
-    return apply
-
-
-_NUMPY = {"sin": np.sin, "cos": np.cos, "tan": np.tan, "asin": np.arcsin, "acos": np.arccos, "atan": np.arctan,
-          "atan2": np.arctan2, "sinh": np.sinh, "cosh": np.cosh, "tanh": np.tanh, "exp": np.exp, "log": np.log,
-          "Abs": np.abs, "sign": np.sign, "Min": _reduce(np.fmin), "Max": _reduce(np.fmax)}
