@@ -110,8 +110,8 @@ def test_cli_prints_and_writes_the_linearization(tmp_path):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["passive_walker", "--flow", "IFixOOpen"], "flow 'IFixOOpen' has 3 active constraint rows; a constrained flow "
-                                                "is linearized at rest"),
+    (["passive_walker", "--flow", "IFixOOpen"], "flow 'IFixOOpen' is constrained and moves, so it is linearized "
+                                                "about a steady motion, where every coordinate that moves is cyclic"),
     (["fourbar", "--at", "th1_dot=0", "--at", "th2_dot=0", "--at", "th3_dot=0", "--at", "th2=1"],
      "the point is off flow 'default''s constraint manifold (largest residual"),
     (["cart_pole", "--at", "phi=0"], "no coordinate or speed named 'phi' (--at); states: x, th, x_dot, th_dot"),

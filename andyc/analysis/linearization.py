@@ -5,6 +5,11 @@ names -- the model's initial state with some coordinates and speeds given, its p
 some overridden, a flow, a time; optionally moved to the nearest rest point first -- and the result is
 written out: a report for reading and, on request, DIR/<name>_linearization.npz with DIR/<name>_A.csv and
 DIR/<name>_B.csv.
+
+A constrained flow's speeds that the point does not give are completed from its rows (c = A v + b is linear
+in v: the least change of those speeds that makes c = 0), so that `--at phi_dot=10` is a rolling disk's
+steady motion with its contact point's speeds following. (andyc.analysis.eigensweep sweeps one value and
+locates where stability changes.)
 """
 
 from __future__ import annotations
@@ -15,17 +20,20 @@ import numpy as np
 
 from andyc.errors import plural
 from andyc.outputs import write_atomic
-from andyc.symbolic.linearize import Linearization, LinearizeError, default_point, find_equilibrium, linearize
+from andyc.symbolic.linearize import (Linearization, LinearizeError, default_point, find_equilibrium,
+                                      linearize, values_at)
 from andyc.symbolic.model import SymbolicModel
 
 
 def linearize_at(model: SymbolicModel, at: dict | None = None, parameters: dict | None = None,
                  inputs: dict | None = None, flow: str | None = None, t: float = 0.0,
-                 equilibrium: bool = False) -> Linearization:
+                 equilibrium: bool = False, cyclic=None) -> Linearization:
     """A and B of `flow` (a name; default the initial flow) at time t about the model's initial state with the
     coordinates and speeds in `at` {name: value} set, at its parameters and inputs with `parameters` and
     `inputs` {name: value} overriding their defaults (the flow's own inputs win). equilibrium: first move the
     coordinates to the rest point nearest them (speeds 0, dv/dt = 0; andyc.symbolic.linearize.find_equilibrium).
+    The speeds of a constrained flow not in `at` are completed from its rows (see the module docstring).
+    cyclic: the coordinates a steady motion leaves out (default: those the flow's equations do not use).
 
     LinearizeError for an unknown flow, input, parameter, coordinate or speed, and for a point the
     linearization does not handle; the message names what exists."""
@@ -49,16 +57,45 @@ def linearize_at(model: SymbolicModel, at: dict | None = None, parameters: dict 
         n = len(spec.coordinates)
         x[:n] = find_equilibrium(model, x[:n], u, p, d, t, k)
         x[n:] = 0.0
-    return linearize(model, x, u, p, d, t, k)
+    x = _complete_speeds(model, x, u, p, d, t, k, set(at or {}))
+    return linearize(model, x, u, p, d, t, k, cyclic)
+
+
+def _complete_speeds(model: SymbolicModel, x, u, p, d, t, flow, given: set) -> np.ndarray:
+    """x with the speeds not in `given` changed least (least squares) so that the flow's rows hold: c = A v + b
+    = 0, exactly, as c is linear in v. Unchanged where the rows hold or the flow has none."""
+    flow = model.hybrid.initial if flow is None else flow
+    rows, C = model.hybrid.flow_rows[flow], model.constraints
+    n = len(model.v)
+    speeds = list(model.spec.speed_names)
+    free = [j for j, name in enumerate(speeds) if name not in given]
+    if not rows or not free:
+        return x
+    values = values_at(model, [C.c[r] for r in rows] + [C.A[r, j] for r in rows for j in free], x, u, p, d, t)
+    c, A = values[:len(rows)], values[len(rows):].reshape(len(rows), len(free))
+    if np.max(np.abs(c)) <= 1e-12 * max(1.0, np.max(np.abs(x))):
+        return x
+    x = x.copy()
+    x[n + np.array(free)] -= np.linalg.lstsq(A, c, rcond=None)[0]
+    return x
+
+
+def unstable_count(eigenvalues) -> int:
+    """How many eigenvalues have a positive real part, past the round-off of the largest (1e-9 of it)."""
+    ev = np.asarray(eigenvalues)
+    return int(np.sum(ev.real > 1e-9 * max(1.0, np.abs(ev).max(initial=0.0))))
 
 
 def report(lin: Linearization, name: str) -> str:
     """The linearization of model `name` for reading: the point, the null-space bases of a constrained flow,
     A and B with their states and inputs, the eigenvalues and how many have a positive real part."""
     with np.printoptions(precision=6, suppress=False, linewidth=120):
-        point = ", ".join(f"{n} = {v:.10g}" for n, v in zip(lin.state_names, lin.x))
+        point = ", ".join(f"{n} = {v:.10g}" for n, v in zip(lin.point_names or lin.state_names, lin.x))
         inputs = ", ".join(f"{n} = {v:.10g}" for n, v in zip(lin.input_names, lin.u)) or "none"
         lines = [f"{name}: linearized in flow '{lin.flow}' at t = {lin.t:g} about {point}; inputs {inputs}"]
+        if lin.cyclic:
+            lines.append(f"a steady motion: the cyclic coordinates {', '.join(lin.cyclic)} are left out; dq = N_q z "
+                         "(zero rows for them), dv = N_v w + P z (P keeps the speeds on the constraints as q moves)")
         if lin.form == "null-space":
             lines.append(f"flow '{lin.flow}' is constrained: null-space form, dq = N_q z, dv = N_v w (orthonormal "
                          f"bases of the null space of its constraint rows at the point)\nN_q =\n{lin.basis_q}\n"
@@ -69,7 +106,7 @@ def report(lin: Linearization, name: str) -> str:
     ev = lin.eigenvalues
     lines.append("eigenvalues: " + ", ".join(f"{e.real:.10g}{e.imag:+.10g}j" if e.imag else f"{e.real:.10g}"
                                              for e in ev))
-    unstable = int(np.sum(ev.real > 1e-9 * max(1.0, np.abs(ev).max())))     # (past round-off of the largest)
+    unstable = unstable_count(ev)
     lines.append(f"{plural(unstable, 'eigenvalue')} with positive real part" + (" (unstable)" if unstable else ""))
     return "\n".join(lines)
 

@@ -45,3 +45,30 @@ def fourbar_branch(p: dict, th0: float, w0: float, times) -> tuple:
 def fourbar_crank_angle(p: dict, th0: float, w0: float, times) -> np.ndarray:
     """The crank angle th of `fourbar_branch`."""
     return fourbar_branch(p, th0, w0, times)[0]
+
+
+def rolling_disk_lean_rate2(m: float, r: float, g: float, A: float, C: float, spin: float) -> float:
+    """lambda^2 of the lean of a disk rolling upright and straight at spin rate `spin` (rad/s; forward speed
+    r * spin), mass m, radius r, diametral and axial moments of inertia A and C about its centre.
+
+    Linearized about the steady motion (lean th = 0), the lean and the heading psi obey (Routh, "Advanced
+    Rigid Dynamics", 1905, the rolling disc; Neimark & Fufaev, "Dynamics of Nonholonomic Systems", 1972,
+    ch. III):
+
+        (A + m r^2) th'' = m g r th - (C + m r^2) spin psi',     A psi'' = C spin th',
+
+    the first the moment about the contact's heading axis (gravity tips the disk, the gyroscopic moment of the
+    spinning disk turning at psi' and the rolling constraint's force right it), the second the moment about the
+    vertical. From rest in psi' the second integrates to psi' = (C spin / A) th, so th'' = lambda^2 th with
+
+        lambda^2 = (m g r - (C + m r^2) C spin^2 / A) / (A + m r^2):
+
+    lean is unstable (lambda real) while lambda^2 > 0 and oscillates at |lambda| beyond."""
+    return (m * g * r - (C + m * r * r) * C * spin * spin / A) / (A + m * r * r)
+
+
+def rolling_disk_critical_spin(m: float, r: float, g: float, A: float, C: float) -> float:
+    """The least spin rate at which upright rolling is stable: lambda^2 = 0 in rolling_disk_lean_rate2,
+    spin^2 = A m g r / (C (C + m r^2)); for a thin uniform disk (A = m r^2/4, C = m r^2/2), g / (3 r): a
+    forward speed of sqrt(g r / 3)."""
+    return float(np.sqrt(A * m * g * r / (C * (C + m * r * r))))

@@ -29,6 +29,28 @@ bases of null(A_h) and null(A) at the point, dq = N_q z and dv = N_v w, and
 At rest (v = 0, kappa = 0) A a = 0 for every q on the manifold, so A da = 0
 and the projection on N_v loses nothing: the eigenvalues are the mechanism's.
 
+A constrained flow that moves is linearized about a steady motion: constant
+speeds (dv/dt = 0 at the point), every coordinate that moves cyclic (it
+appears in none of the flow's M, G and rows, so its value does not matter:
+the wheel's position, its spin angle). The cyclic coordinates leave the state
+(the selection E keeps the others), and since c = A(q) v + b changes with q
+when v != 0, a change dq = E N_q z of the coordinates takes the speeds off
+the manifold unless they change too. The chart of the manifold about the
+point is therefore
+
+    dq = E N_q z,   dv = N_v w + P z,   P = -A^+ (dc/dq) E N_q,
+
+(A^+ the pseudo-inverse: the least change of v that keeps c = 0), and with
+dq/dt = v and N_v^T P = 0 (the range of A^+ is orthogonal to null(A)):
+
+    dz/dt = (E N_q)^T (N_v w + P z),
+    dw/dt = N_v^T (da/dq E N_q z + da/dv (N_v w + P z)) + N_v^T da/du du.
+
+At rest P = 0 and E = I, which is the form above. This is the linearization
+about a relative equilibrium in the sense of Routh's steady motions (Routh,
+"Advanced Rigid Dynamics", 1905, ch. V; Neimark & Fufaev, "Dynamics of
+Nonholonomic Systems", 1972, ch. III, for nonholonomic ones).
+
 An equilibrium (dv/dt = 0 at v = 0) of an unconstrained flow is found by
 Newton's method on G(t, q, 0, u) = 0 with this exact Jacobian dG/dq
 (scipy.optimize.root, 'hybr').
@@ -64,6 +86,8 @@ class Linearization:
     input_names: list
     basis_q: np.ndarray | None = None      # (nq, nq - holonomic rank), orthonormal
     basis_v: np.ndarray | None = None      # (nv, nv - rank of all rows), orthonormal
+    cyclic: tuple = ()                      # coordinates left out of a steady motion's state (see above)
+    point_names: tuple = ()                 # the names of x (coordinates and speeds); default state_names
 
     @property
     def form(self) -> str:
@@ -161,10 +185,14 @@ def values_at(model: SymbolicModel, exprs: list, x, u, p, d=(), t: float = 0.0) 
     return np.array([point.evaluate(e)[0] for e in exprs])
 
 
-def linearize(model: SymbolicModel, x, u, p, d=(), t: float = 0.0, flow: int | None = None) -> Linearization:
+def linearize(model: SymbolicModel, x, u, p, d=(), t: float = 0.0, flow: int | None = None,
+              cyclic=None) -> Linearization:
     """A and B of `flow` (default the initial one) about state x and inputs u, at parameters p, discrete states d.
 
-    x, u, p, d are ordered as the generated module's STATES, INPUTS, PARAMETERS and DISCRETE_STATES.
+    x, u, p, d are ordered as the generated module's STATES, INPUTS, PARAMETERS and DISCRETE_STATES. A
+    constrained flow that moves is linearized about a steady motion, without the cyclic coordinates: those
+    named in `cyclic`, or else every coordinate that moves (each must appear in none of the flow's equations;
+    cyclic_coordinates).
     """
     flow = model.hybrid.initial if flow is None else flow
     _check_supported(model, flow)
@@ -182,7 +210,7 @@ def linearize(model: SymbolicModel, x, u, p, d=(), t: float = 0.0, flow: int | N
     G, dG = _evaluate(point, list(model.G))
     names, inputs = _state_names(model), list(model.spec.inputs)
     if rows:
-        return _constrained(model, point, rows, M, dM, G, dG, x, u, t, flow)
+        return _constrained(model, point, rows, M, dM, G, dG, x, u, t, flow, cyclic)
     a = np.linalg.solve(M, G)
     da = np.linalg.solve(M, dG - np.einsum("ijk,j->ik", dM, a))     # (n, 2n + nu)
     A = np.zeros((2 * n, 2 * n))
@@ -199,24 +227,51 @@ def _evaluate(point: _Point, exprs: list) -> tuple[np.ndarray, np.ndarray]:
     return np.array([v for v, _ in pairs]), np.array([g for _, g in pairs]).reshape(len(exprs), -1)
 
 
-def _constrained(model: SymbolicModel, point: _Point, rows: list, M, dM, G, dG, x, u, t, flow) -> Linearization:
-    """The null-space form of a constrained flow at rest on its manifold (see the module docstring)."""
+def cyclic_coordinates(model: SymbolicModel, flow: int, x, u, p, d=(), t: float = 0.0) -> list[str]:
+    """The coordinates the flow's equations (M, G, its rows' A, kappa, c and phi) do not depend on, so that a
+    steady motion may move them: those that appear in none of them, and those that appear but cancel (a
+    symmetric disk's spin angle, which the recursive kinematics carry through cos and sin): the equations
+    take the same values, to 1e-12 relative, with the coordinate moved by 1 and by 2.5 from the point."""
+    C = model.constraints
+    rows = model.hybrid.flow_rows[flow]
+    exprs = [*model.M, *model.G, *(e for r in rows for e in (*C.A.row(r), C.kappa[r], C.c[r])),
+             *(C.phi[r] for r in rows if r < C.nh)]
+    defs = dict(model.assignments)
+    used = set().union(*(sp.sympify(e).free_symbols for e in exprs),
+                       *(defs[s].free_symbols for s in model.intermediates_of(exprs)))
+    x = np.asarray(x, dtype=float)
+    here = None
+    out = []
+    for i, (c, q) in enumerate(zip(model.spec.coordinates, model.q)):
+        if q in used:
+            if here is None:
+                here = values_at(model, exprs, x, u, p, d, t)
+            tol = 1e-12 * max(1.0, np.max(np.abs(here)))
+            moved = (values_at(model, exprs, np.where(np.arange(len(x)) == i, x + shift, x), u, p, d, t)
+                     for shift in (1.0, 2.5))
+            if any(np.max(np.abs(v - here)) > tol for v in moved):
+                continue
+        out.append(c.name)
+    return out
+
+
+def _constrained(model: SymbolicModel, point: _Point, rows: list, M, dM, G, dG, x, u, t, flow,
+                 cyclic=None) -> Linearization:
+    """The null-space form of a constrained flow at rest on its manifold, or about a steady motion (see the
+    module docstring)."""
     C, n, name = model.constraints, len(model.v), model.spec.name
     m, k = len(rows), dG.shape[1]
+    holonomic = [i for i, r in enumerate(rows) if r < C.nh]
     A_rows, dA = _evaluate(point, [C.A[r, j] for r in rows for j in range(n)])
     A_rows, dA = A_rows.reshape(m, n), dA.reshape(m, n, k)
     kappa, dkappa = _evaluate(point, [C.kappa[r] for r in rows])
-    phi = _evaluate(point, [C.phi[r] for r in rows if r < C.nh])[0]
-    c = _evaluate(point, [C.c[r] for r in rows])[0]
+    phi = np.array([point.evaluate(C.phi[rows[i]])[0] for i in holonomic])
+    c, dc = _evaluate(point, [C.c[r] for r in rows])
     flow_name = model.hybrid.flows[flow]
-    speeds = x[n:]
-    if np.any(speeds != 0.0):
-        raise LinearizeError(f"{name}: flow '{flow_name}' has {m} active constraint rows; a constrained flow is "
-                             f"linearized at rest: set every speed to 0 (--at <coordinate>_dot=0)")
     worst = max(np.max(np.abs(phi), initial=0.0), np.max(np.abs(c), initial=0.0))
     if worst > 1e-9 * max(1.0, np.max(np.abs(x))):
         j = int(np.argmax(np.abs(np.concatenate([phi, c]))))
-        row = rows[j if j < len(phi) else j - len(phi)]
+        row = rows[holonomic[j] if j < len(phi) else j - len(phi)]
         raise LinearizeError(f"{name}: the point is off flow '{flow_name}''s constraint manifold (largest residual "
                              f"{worst:.3g}, in constraint '{C.rows[row]}'); give coordinates that satisfy the "
                              f"constraints with --at (a sample of a run, for instance)")
@@ -226,19 +281,73 @@ def _constrained(model: SymbolicModel, point: _Point, rows: list, M, dM, G, dG, 
     rhs = np.concatenate([dG - np.einsum("ijk,j->ik", dM, a) + np.einsum("rik,r->ik", dA, lam),
                           -np.einsum("rjk,j->rk", dA, a) - dkappa])
     da = np.linalg.lstsq(saddle, rhs, rcond=None)[0][:n]
+    kept, left_out = _steady_coordinates(model, flow, point, x, a, G, M, cyclic)
     from scipy.linalg import null_space
-    Nq = null_space(A_rows[[i for i, r in enumerate(rows) if r < C.nh]]) if C.nh else np.eye(n)
+    E = np.eye(n)[:, kept]
+    Nq = null_space(A_rows[holonomic] @ E) if holonomic else np.eye(len(kept))
     Nv = null_space(A_rows)
+    T = E @ Nq                                              # dq = T z
+    P = -np.linalg.pinv(A_rows) @ dc[:, :n] @ T            # dv = N_v w + P z stays on the manifold
     nz, nw = Nq.shape[1], Nv.shape[1]
     A = np.zeros((nz + nw, nz + nw))
-    A[:nz, nz:] = Nq.T @ Nv
-    A[nz:, :nz] = Nv.T @ da[:, :n] @ Nq
+    A[:nz, :nz] = T.T @ P
+    A[:nz, nz:] = T.T @ Nv
+    A[nz:, :nz] = Nv.T @ (da[:, :n] @ T + da[:, n:2 * n] @ P)
     A[nz:, nz:] = Nv.T @ da[:, n:2 * n] @ Nv
     B = np.zeros((nz + nw, len(u)))
     B[nz:, :] = Nv.T @ da[:, 2 * n:]
-    holonomic_only = nz == nw and np.allclose(Nq.T @ Nv, np.eye(nz))
+    holonomic_only = nz == nw and np.allclose(T.T @ Nv, np.eye(nz))
     names = [f"z{i + 1}" for i in range(nz)] + [f"z{i + 1}_dot" if holonomic_only else f"w{i + 1}" for i in range(nw)]
-    return Linearization(A, B, x, u, t, flow_name, names, list(model.spec.inputs), Nq, Nv)
+    return Linearization(A, B, x, u, t, flow_name, names, list(model.spec.inputs), T, Nv, tuple(left_out),
+                         tuple(_state_names(model)))
+
+
+def _steady_coordinates(model: SymbolicModel, flow: int, point: _Point, x, a, G, M, cyclic) -> tuple[list, list]:
+    """(kept, left out): the indices of the coordinates in the linear state, and the names of the cyclic ones
+    left out. At rest with no `cyclic` given, every coordinate is kept. Otherwise the point must be a steady
+    motion (the module docstring): LinearizeError says which coordinate or speed is not steady."""
+    spec, n = model.spec, len(model.v)
+    coordinates = [c.name for c in spec.coordinates]
+    speeds = np.asarray(x[n:2 * n])
+    flow_name = model.hybrid.flows[flow]
+    if cyclic is None and not np.any(speeds != 0.0):
+        return list(range(n)), []
+    free = cyclic_coordinates(model, flow, x, *(np.array([float(point.values[s]) for s in group])
+                                                for group in (model.inputs, model.parameters, model.discrete)),
+                              float(point.values[model.t]))
+    if cyclic is None:
+        moving = [coordinates[i] for i in np.flatnonzero(speeds != 0.0) if coordinates[i] not in free]
+        cyclic = free
+        if moving:
+            raise LinearizeError(
+                f"{spec.name}: flow '{flow_name}' is constrained and moves, so it is linearized about a steady "
+                f"motion, where every coordinate that moves is cyclic (appears in none of the flow's equations); "
+                f"{', '.join(f'{c} (speed {speeds[coordinates.index(c)]:.6g})' for c in moving)} "
+                f"{'moves but appears' if len(moving) == 1 else 'move but appear'} in them (cyclic here: "
+                f"{', '.join(free) or 'none'}); set {', '.join(f'{c}_dot=0' for c in moving)} with --at")
+    else:
+        unknown = [c for c in cyclic if c not in coordinates]
+        if unknown:
+            raise LinearizeError(f"{spec.name}: no coordinate named {', '.join(unknown)} (--cyclic); coordinates: "
+                                 f"{', '.join(coordinates)}")
+        wrong = [c for c in cyclic if c not in free]
+        if wrong:
+            raise LinearizeError(f"{spec.name}: {', '.join(wrong)} {'is' if len(wrong) == 1 else 'are'} not cyclic "
+                                 f"in flow '{flow_name}' (cyclic coordinates appear in none of its equations; "
+                                 f"these are: {', '.join(free) or 'none'}); leave {'it' if len(wrong) == 1 else 'them'}"
+                                 " out of --cyclic")
+        moving = [coordinates[i] for i in np.flatnonzero(speeds != 0.0) if coordinates[i] not in cyclic]
+        if moving:
+            raise LinearizeError(f"{spec.name}: {', '.join(moving)} moves in a steady motion but is not cyclic; "
+                                 f"set {', '.join(f'{c}_dot=0' for c in moving)} with --at, or add it to --cyclic")
+    scale = max(1.0, np.max(np.abs(G)), np.max(np.abs(M)) * np.max(np.abs(speeds)) ** 2)
+    if np.max(np.abs(a), initial=0.0) > 1e-9 * scale:
+        i = int(np.argmax(np.abs(a)))
+        speed_names = list(spec.speed_names)
+        raise LinearizeError(f"{spec.name}: the point is no steady motion of flow '{flow_name}': d({speed_names[i]})"
+                             f"/dt = {a[i]:.6g} there, where every speed must be constant; give another point "
+                             "with --at (the upright disk rolling straight, a wheel at constant speed)")
+    return [i for i, c in enumerate(coordinates) if c not in cyclic], list(cyclic)
 
 
 def _state_names(model: SymbolicModel) -> list:

@@ -79,22 +79,23 @@ def check_names(names, model) -> None:
         seen.add(name)
 
 
-def grid(specs) -> Points:
-    """The full grid of ('NAME=A:B:N', ...): N values from A to B (both included) per name."""
+def grid(specs, option: str = "--grid") -> Points:
+    """The full grid of ('NAME=A:B:N', ...): N values from A to B (both included) per name; `option` names
+    the option in messages."""
     names, axes = [], []
     for text in specs:
         name, sep, rest = text.partition("=")
         parts = rest.split(":")
         if not sep or len(parts) != 3 or not _NAME.fullmatch(name.strip()):
-            raise PointsError(f"--grid '{text}': not NAME=FROM:TO:COUNT (e.g. slope=0:0.1:20)")
-        low, high = _number(parts[0], text, "--grid"), _number(parts[1], text, "--grid")
+            raise PointsError(f"{option} '{text}': not NAME=FROM:TO:COUNT (e.g. slope=0:0.1:20)")
+        low, high = _number(parts[0], text, option), _number(parts[1], text, option)
         count = parts[2].strip()
         if not count.lstrip("-").isdigit():
-            raise PointsError(f"--grid '{text}': the count '{count}' is not a whole number")
+            raise PointsError(f"{option} '{text}': the count '{count}' is not a whole number")
         if int(count) < 1:
-            raise PointsError(f"--grid '{text}': an empty range ({count} values); give a count of at least 1")
+            raise PointsError(f"{option} '{text}': an empty range ({count} values); give a count of at least 1")
         if int(count) > 1 and low == high:
-            raise PointsError(f"--grid '{text}': an empty range (from {low:g} to {high:g}); give two different "
+            raise PointsError(f"{option} '{text}': an empty range (from {low:g} to {high:g}); give two different "
                               f"ends, or a count of 1")
         names.append(name.strip())
         axes.append(np.linspace(low, high, int(count)))
