@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 import click
@@ -35,24 +36,20 @@ from andyc.outputs import check_folder, check_output
 def linearize(file, at, sets, input_values, flow, t, find_equilibrium, cyclic, sweep_range, out_dir):
     """Linearize FILE's equations of motion: dx' = A dx + B du, from exact derivatives; print the eigenvalues."""
     from andyc.analysis.linearization import linearize_at, output_paths, report, save
-    from andyc.symbolic.linearize import LinearizeError
 
     spec, model = derived(file)
     if out_dir:
         check_folder(out_dir, spec.files)
-        for path in output_paths(out_dir, spec.name):
-            check_output(path, spec.files, "linearization")
     parameters, inputs = split_sets(parse_sets(sets), spec.inputs)
     inputs.update(parse_sets(input_values, "--input"))
     states = parse_sets(at, "--at")
     cyclic = [c.strip() for c in cyclic.split(",") if c.strip()] if cyclic is not None else None
     if sweep_range is not None:
         return _sweep(file, spec, model, sweep_range, states, parameters, inputs, flow, t, out_dir)
-    try:
+    for path in output_paths(out_dir, spec.name) if out_dir else ():
+        check_output(path, spec.files, "linearization")
+    with _exit_on_linearize_error(file):
         lin = linearize_at(model, states, parameters, inputs, flow, t, find_equilibrium, cyclic)
-    except LinearizeError as exc:
-        click.echo(f"{file}: {exc}", err=True)
-        sys.exit(1)
     click.echo(report(lin, spec.name))
     if out_dir:
         npz = save(lin, out_dir, spec.name)[0]
@@ -62,21 +59,16 @@ def linearize(file, at, sets, input_values, flow, t, find_equilibrium, cyclic, s
 def _sweep(file, spec, model, text, states, parameters, inputs, flow, t, out_dir):
     from andyc.analysis.eigensweep import report, save, sweep
     from andyc.analysis.sweeps.points import PointsError, grid
-    from andyc.symbolic.linearize import LinearizeError
 
     try:
         points = grid([text], "--sweep")
     except PointsError as exc:
         raise click.BadParameter(str(exc), param_hint="--sweep") from None
     name, values = points.names[0], points.axes[0]
-    if out_dir:
-        for suffix in (".csv", ".png"):
-            check_output(Path(out_dir) / f"{spec.name}_sweep_{name}{suffix}", spec.files, "sweep")
-    try:
+    for suffix in (".csv", ".png") if out_dir else ():
+        check_output(Path(out_dir) / f"{spec.name}_sweep_{name}{suffix}", spec.files, "sweep")
+    with _exit_on_linearize_error(file):
         sw = sweep(model, name, values, states, parameters, inputs, flow, t)
-    except LinearizeError as exc:
-        click.echo(f"{file}: {exc}", err=True)
-        sys.exit(1)
     click.echo(report(sw, spec.name))
     if out_dir:
         from andyc.plot.eigenplot import plot_eigenvalues
@@ -86,3 +78,15 @@ def _sweep(file, spec, model, text, states, parameters, inputs, flow, t, out_dir
         plot_eigenvalues(name, sw.values, sw.eigenvalues, [c.value for c in sw.changes], png,
                          f"{spec.name}: eigenvalues along {name}")
         click.echo(f"wrote {csv} and {png.name}")
+
+
+@contextmanager
+def _exit_on_linearize_error(file):
+    """A point or model the linearization does not handle: its message, FILE first, and exit 1."""
+    from andyc.symbolic.linearize import LinearizeError
+
+    try:
+        yield
+    except LinearizeError as exc:
+        click.echo(f"{file}: {exc}", err=True)
+        sys.exit(1)
