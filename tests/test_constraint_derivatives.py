@@ -115,7 +115,8 @@ def test_nonlinear_rows_jacobian_and_kappa_agree_with_finite_differences(compile
         x = random_state(model, rng)
         _, c, A, kappa = evaluate(model, t, x, p)
         xdot = path_rate(model, t, x, p)
-        dc = (evaluate(model, t + EPS, x + EPS * xdot, p)[1] - evaluate(model, t - EPS, x - EPS * xdot, p)[1]) / (2 * EPS)
+        ahead, behind = evaluate(model, t + EPS, x + EPS * xdot, p), evaluate(model, t - EPS, x - EPS * xdot, p)
+        dc = (ahead[1] - behind[1]) / (2 * EPS)
         scale = 1 + np.abs(c).max() + np.abs(kappa).max() + np.abs(A).max()
         np.testing.assert_allclose(kappa, dc, atol=1e-7 * scale, err_msg="kappa != dc/dt at dv/dt = 0")
         for j in range(model.nv):

@@ -278,7 +278,8 @@ def test_an_impact_on_a_nonlinear_row_is_refused(tmp_path):
 """
     d = one_problem(tmp_path, text)
     assert_at(d, line_of(text, "impact: plastic"), "hybrid.jumps[0].impact")
-    assert d.message == "the impact of jump 'land' acts on constraint 'steer', whose rows are not all linear in the speeds"
+    assert d.message == ("the impact of jump 'land' acts on constraint 'steer', whose rows are not all linear in "
+                         "the speeds")
     assert "impact: {restitution: e, constraints: [...]}" in d.hint
     named = edit(text, "impact: plastic", "impact: {restitution: 0, constraints: [ground]}")
     assert load_text(tmp_path, named, "named.yaml").jumps[0].impact_constraints == ("ground",)

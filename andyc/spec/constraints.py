@@ -209,9 +209,10 @@ def _nonholonomic_row(value: sp.Expr, text: str, path: tuple, velocities: set, s
                     if isinstance(f, _KINKS) and f.free_symbols & velocities})
     if kinks:
         scope.report.error(path, f"in {text!r}: the constraint is not smooth in the speeds: its derivative "
-                           f"jumps where {' or '.join(kinks)} of a speed or velocity switches branch", "write a smooth row (a row nonlinear in the speeds needs its "
-                           "Jacobian dPhi/dv along the motion): square both sides, e.g. x_dot**2 - c**2, or "
-                           "keep one branch, e.g. x_dot - c")
+                           f"jumps where {' or '.join(kinks)} of a speed or velocity switches branch",
+                           "write a smooth row (a row nonlinear in the speeds needs its Jacobian dPhi/dv along "
+                           "the motion): square both sides, e.g. x_dot**2 - c**2, or keep one branch, e.g. "
+                           "x_dot - c")
         return None
     return "nonlinear"
 
@@ -309,7 +310,8 @@ def check_conservative(elements: Elements, constraints: list, frames: list, writ
                                                 else sp.expand(r.subs({s: 0 for s in speeds})) != 0)]
         if rest:
             i = texts.index(rest[0])
-            why = "has a force whose power lam dPhi/dv v is not 0 on the motion" if i in c.nonlinear else "has a term without speeds"
+            why = ("has a force whose power lam dPhi/dv v is not 0 on the motion" if i in c.nonlinear
+                   else "has a term without speeds")
             workers.append(f"constraint '{c.name}' ({rest[0]!r} {why})")
     workers += [f"frame '{f.name}' (its link depends on t)" for f in frames
                 if any(TIME in _free(step) for step in f.transforms)]
