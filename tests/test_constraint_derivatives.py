@@ -10,8 +10,9 @@ at their rates) and t(s) = t + s. Then, with central differences:
     A     = dc/dv                      (c is affine in v)
 
 The models cover frame positions and velocities in world and in a moving
-frame (`in: c`), angular velocities, a ball joint (quaternion signals) and
-time-dependent (rheonomic) rows.
+frame (`in: c`), angular velocities, a ball joint (quaternion signals),
+time-dependent (rheonomic) rows, and rows nonlinear in the speeds (there A is
+checked by central differences in each speed instead).
 """
 
 import numpy as np
@@ -85,6 +86,45 @@ def test_jacobian_and_kappa_agree_with_finite_differences(compiled, name, reques
             y = x.copy()
             y[model.nq + j] += 1.0
             np.testing.assert_allclose(evaluate(model, t, y, p)[1] - c, A[:, j], atol=1e-12 * scale)
+
+
+@pytest.fixture(scope="module")
+def swing_bar_nonlinear(tmp_path_factory):
+    """The swing bar with rows nonlinear in the speeds (issue 24): frame velocities of moving frames in a
+    moving frame's axes, squared and multiplied together, with coordinates, frame positions and t; so kappa
+    carries every term (dPhi/dq q', dPhi/dt, and the frame quantities' rates)."""
+    spec = yaml.safe_load((MODELS / "swing_bar.yaml").read_text())
+    spec["name"] = "swing_bar_nonlinear"
+    spec["constraints"] = [
+        {"name": "bar3_spin", "in": "bar1",
+         "nonholonomic": ["bar3.vx**2 + bar2.wy*bar3.vy*bar3.x - qh_dot**2*sin(t) + wz*sqrt(1 + bar3.vz**2)",
+                          "bar3.wz*qh_dot - cos(qh)*bar2.vx**2 + 0.3*t*wx**3"]},
+    ]
+    path = tmp_path_factory.mktemp("models") / "swing_bar_nonlinear.yaml"
+    path.write_text(yaml.safe_dump(spec, sort_keys=False))
+    return path
+
+
+def test_nonlinear_rows_jacobian_and_kappa_agree_with_finite_differences(compiled, swing_bar_nonlinear):
+    """As above, with c not affine in v: A = dc/dv by central differences in each speed."""
+    model = compiled(swing_bar_nonlinear)
+    p = model.parameter_defaults
+    rng = np.random.default_rng(24)
+    for _ in range(5):
+        t = rng.uniform(0, 3)
+        x = random_state(model, rng)
+        _, c, A, kappa = evaluate(model, t, x, p)
+        xdot = path_rate(model, t, x, p)
+        ahead, behind = evaluate(model, t + EPS, x + EPS * xdot, p), evaluate(model, t - EPS, x - EPS * xdot, p)
+        dc = (ahead[1] - behind[1]) / (2 * EPS)
+        scale = 1 + np.abs(c).max() + np.abs(kappa).max() + np.abs(A).max()
+        np.testing.assert_allclose(kappa, dc, atol=1e-7 * scale, err_msg="kappa != dc/dt at dv/dt = 0")
+        for j in range(model.nv):
+            step = np.zeros(model.nx)
+            step[model.nq + j] = EPS
+            fd = (evaluate(model, t, x + step, p)[1] - evaluate(model, t, x - step, p)[1]) / (2 * EPS)
+            np.testing.assert_allclose(A[:, j], fd, atol=1e-7 * scale, err_msg=f"A[:, {j}] != dc/dv")
+        assert np.abs(kappa).min() > 1e-3                  # the test has something to check
 
 
 def test_rheonomic_rows_carry_their_time_derivatives(compiled):

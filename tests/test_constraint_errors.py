@@ -208,15 +208,89 @@ def test_in_without_frame_quantities_has_no_effect(tmp_path):
 
 # -- 3. what each kind of row may be ---------------------------------------------------
 
-@pytest.mark.parametrize("row", ["tip.vz - x*y_dot**2", "tip.vz - tip.vx*tip.vy", "sin(tip.vz)"],
-                         ids=["squared-speed", "product-of-velocities", "function-of-velocity"])
-def test_nonholonomic_row_not_linear_in_the_speeds(tmp_path, row):
+@pytest.mark.parametrize("row", ["tip.vz - sqrt(tip.vx**2 + y_dot**2)", "tip.vz**2 - x*y_dot**2",
+                                 "tip.vz*tip.vx - z*y_dot**2"],
+                         ids=["cone", "squared-speeds", "product-of-velocities"])
+def test_nonholonomic_row_nonlinear_in_the_speeds_is_a_row(tmp_path, row):
+    """Braun & Goldfarb's Phi_v(t, q, v) = 0 (issue 24); each is homogeneous in the speeds, so its force does no
+    work and conserves_energy stands (Euler: dPhi/dv v = k Phi)."""
+    spec = load_text(tmp_path, with_skate(f"[z_dot - y_dot, {row}]"))
+    (skate,) = [c for c in spec.constraints if c.name == "skate"]
+    assert skate.nonlinear == (1,) and spec.conserves_energy and spec.warnings == []
+
+
+@pytest.mark.parametrize("row, why", [
+    ("tip.vz - x*y_dot**2 - y_dot", "has a force whose power lam dPhi/dv v is not 0 on the motion"),
+    ("tip.vy**2 + tip.vz**2 - L**2", "has a force whose power lam dPhi/dv v is not 0 on the motion"),
+], ids=["mixed-degrees", "isokinetic"])
+def test_conserves_energy_with_a_nonlinear_row_that_does_work(tmp_path, row, why):
     text = with_skate(f"[{row}]")
     d = one_problem(tmp_path, text)
+    assert_at(d, line_of(text, "conserves_energy: true"), "conserves_energy")
+    assert d.message == f"the model declares energy conserved, but constraint 'skate' ({row!r} {why}) does work"
+
+
+@pytest.mark.parametrize("row", ["sin(tip.vz)**2 + cos(tip.vz)**2 - x", "tip.vz*(sin(x)**2 + cos(x)**2 - 1)"],
+                         ids=["nonlinear", "linear"])
+def test_nonholonomic_row_whose_speed_jacobian_vanishes(tmp_path, row):
+    """Speeds written, but dPhi/dv = 0 identically: no constraint on the speeds (and no force direction)."""
+    text = with_skate(f"[{row}]")
+    d = one_problem(tmp_path, text)           # and no conserves_energy complaint about the same row
     assert_at(d, line_of(text, row), "constraints[1].nonholonomic[0]")
-    assert d.message == f"in {row!r}: the constraint is not linear in the speeds and velocities"
-    assert d.hint.startswith("a nonholonomic constraint is J(q, t) speeds + b(q, t) = 0")
-    assert "squared, multiplied together or inside functions" in d.hint
+    assert d.message == (f"in {row!r}: the derivative of the constraint with respect to the speeds is identically 0, "
+                         "so it does not constrain them")
+    assert d.hint.startswith("simplify the row: a constraint on positions goes under 'holonomic:'")
+
+
+@pytest.mark.parametrize("row, kink", [("abs(tip.vz) - y_dot", "abs"), ("tip.vz - max(y_dot, 0)", "max"),
+                                       ("sign(tip.vz)*y_dot - x", "sign")])
+def test_nonholonomic_row_not_smooth_in_the_speeds(tmp_path, row, kink):
+    text = with_skate(f"['{row}']")
+    d = one_problem(tmp_path, text)
+    assert_at(d, line_of(text, row), "constraints[1].nonholonomic[0]")
+    assert d.message == (f"in {row!r}: the constraint is not smooth in the speeds: its derivative jumps where "
+                         f"{kink} of a speed or velocity switches branch")
+    assert d.hint.startswith("write a smooth row")
+
+
+HOPPER = """name: hop
+parameters: {m: 1, g: 9.81, k: 0.5}
+coordinates:
+  x: {velocity: 2}
+  y: {initial: 1, velocity: 1}
+gravity: [0, -g, 0]
+frames:
+  - {name: sx, parent: world, prismatic: x, axis: x}
+  - {name: p, parent: sx, prismatic: y, axis: y}
+bodies:
+  - {name: bead, frame: p, mass: m}
+constraints:
+  - {name: ground, holonomic: y}
+  - {name: steer, nonholonomic: x_dot**2 + y_dot**2 - 5}
+"""
+
+
+def test_an_impact_on_a_nonlinear_row_is_refused(tmp_path):
+    text = HOPPER + """hybrid:
+  flows: [{name: air, constraints: [steer]}, {name: down, constraints: [ground, steer]}]
+  jumps:
+    - {name: land, from: air, to: down, guard: y, direction: falling, impact: plastic}
+"""
+    d = one_problem(tmp_path, text)
+    assert_at(d, line_of(text, "impact: plastic"), "hybrid.jumps[0].impact")
+    assert d.message == ("the impact of jump 'land' acts on constraint 'steer', whose rows are not all linear in "
+                         "the speeds")
+    assert "impact: {restitution: e, constraints: [...]}" in d.hint
+    named = edit(text, "impact: plastic", "impact: {restitution: 0, constraints: [ground]}")
+    assert load_text(tmp_path, named, "named.yaml").jumps[0].impact_constraints == ("ground",)
+
+
+def test_contacts_with_a_nonlinear_row_are_refused(tmp_path):
+    text = edit(HOPPER, "  - {name: ground, holonomic: y}\n", "") + "contacts:\n  - {name: ground, gap: y}\n"
+    d = one_problem(tmp_path, text)
+    assert_at(d, line_of(text, "x_dot**2 + y_dot**2 - 5"), "constraints[0].nonholonomic")
+    assert d.message == ("constraint 'steer' is not linear in the speeds, and the model has contacts, whose impacts "
+                         "keep the model's constraints through their rows J v + b = 0")
 
 
 def test_nonholonomic_row_with_no_speed(tmp_path):
@@ -395,14 +469,14 @@ def test_cli_check_one_bad_constraint_prints_one_line(tmp_path, monkeypatch):
 
 
 def test_cli_check_reports_every_constraint_problem_at_once(tmp_path, monkeypatch):
-    text = edit(with_skate("[tip.vz - tip.vx*tip.vy]"), "{stiffness: k, damping: b}", "{stiffness: -k, damping: b}")
+    text = edit(with_skate("[abs(tip.vz) - tip.vx]"), "{stiffness: k, damping: b}", "{stiffness: -k, damping: b}")
     text = edit(text, "constraints:\n", "dampers:\n  - {name: drag, speed: x, coefficient: b}\nconstraints:\n")
     found = check_all_at_once(tmp_path, monkeypatch, text, 3)
     assert [(m["file"], int(m["line"]), m["path"]) for m in found] == [
         ("bad.yaml", line_of(text, "conserves_energy: true"), "conserves_energy"),
         ("bad.yaml", line_of(text, "stiffness: -k"), "constraints[0].gains.stiffness"),
-        ("bad.yaml", line_of(text, "tip.vx*tip.vy"), "constraints[1].nonholonomic[0]")]
-    assert "damper 'drag'" in found[0]["what"] and "not linear" in found[2]["what"]
+        ("bad.yaml", line_of(text, "abs(tip.vz)"), "constraints[1].nonholonomic[0]")]
+    assert "damper 'drag'" in found[0]["what"] and "not smooth" in found[2]["what"]
 
 
 def test_cli_check_ball_in_bowl_is_valid():

@@ -20,8 +20,9 @@ STATE = "t, x, u, p, d"
 DOCS = {
     "dynamics": "M (NV, NV) and G (NV,) with M dv/dt = G (ANDY eq. 8).",
     "dynamics_constraints": "`dynamics` and `constraints_into` in one pass that shares their subexpressions.",
-    "constraints_into": "phi (NH,), c = A v + b (NC,), A (NC, NV), kappa (NC,) with dc/dt = A dv/dt + kappa (ANDY eq. "
-                        "11), into the rows of the scratch S (andyc_numerics/layout.py).",
+    "constraints_into": "phi (NH,), c (NC,: dphi/dt, then the nonholonomic rows), A = dc/dv (NC, NV), kappa "
+                        "(NC,) with dc/dt = A dv/dt + kappa (ANDY eq. 11), into the rows of the scratch S "
+                        "(andyc_numerics/layout.py).",
     "signal_rates": "Rates of the nonholonomic signals (ANDY eq. 4) into xdot[NQ + NV:].",
     "energy": "Total mechanical energy: kinetic + gravity + springs + potentials.",
     "power": "Power of the non-conservative elements (forces, torques, dampers).",

@@ -138,7 +138,8 @@ def _constraint(where: tuple, c: dict, scope: Scope, quantities: FrameQuantities
     parsed = [row(text, path) for text, path in zip(texts, paths)]
     coordinates = {q.q for q in scope.coordinates} | {s for s, f in found.items() if f.kind == "position"}
     velocities = set(scope.rates.values()) | {s for s, f in found.items() if f.kind != "position"}
-    for value, text, path in zip(parsed, texts, paths):
+    nonlinear = []                                  # the nonholonomic rows not linear in the speeds
+    for j, (value, text, path) in enumerate(zip(parsed, texts, paths)):
         if value is None:                           # reported already
             continue
         free = value.free_symbols
@@ -152,14 +153,11 @@ def _constraint(where: tuple, c: dict, scope: Scope, quantities: FrameQuantities
                                    "position", "a holonomic constraint is Gamma(t, q) = 0; use coordinates or F.x, "
                                    "F.y, F.z")
         if not holonomic:
-            if not free & velocities:
-                scope.report.error(path, f"the constraint {text!r} uses no speed or velocity",
-                                   "a constraint on positions goes under 'holonomic:'; a nonholonomic one is "
-                                   "J(q, t) speeds + b(q, t) = 0")
-            elif any(sp.diff(value, a, b) != 0 for a in free & velocities for b in free & velocities):
-                scope.report.error(path, f"in {text!r}: the constraint is not linear in the speeds and velocities",
-                                   "a nonholonomic constraint is J(q, t) speeds + b(q, t) = 0; speeds and "
-                                   "velocities may not be squared, multiplied together or inside functions")
+            kind = _nonholonomic_row(value, text, path, velocities, scope)
+            if kind is None:                        # reported: no later check looks at the row again
+                parsed[j] = sp.Integer(0)
+            elif kind == "nonlinear":
+                nonlinear.append(j)
     if "in" in c and in_ok and not found and None not in parsed:
         scope.report.error(where + ("in",), f"'in: {in_frame}' has no effect: the constraint uses no frame "
                            "quantity", f"remove 'in', or write the constraint with frame quantities such as "
@@ -181,7 +179,62 @@ def _constraint(where: tuple, c: dict, scope: Scope, quantities: FrameQuantities
     stiffness = _gain(gains, "stiffness", where, scope) if holonomic else sp.Integer(0)
     damping = _gain(gains, "damping", where, scope)
     return Constraint(c["name"], holonomic, rows, tuple(multipliers), stiffness, damping,
-                      found, where, tuple(paths))
+                      found, where, tuple(paths), tuple(nonlinear))
+
+
+def _nonholonomic_row(value: sp.Expr, text: str, path: tuple, velocities: set, scope: Scope) -> str | None:
+    """"linear" or "nonlinear" for a valid nonholonomic row Phi_v(t, q, v) = 0 (Braun & Goldfarb §2, item c),
+    after reporting the row if it is none: it must use a speed or a frame velocity, its velocity Jacobian
+    A = dPhi_v/dv may not vanish identically (the row would not constrain the speeds: Phi_v = 0 says
+    nothing about the motion, or holds of positions only), and a row nonlinear in the speeds must be
+    smooth in them (A continuous), since A and the acceleration-level form A dv/dt + kappa = 0 are
+    taken along the motion (andyc.symbolic.constraints)."""
+    moving = value.free_symbols & velocities
+    if not moving:
+        scope.report.error(path, f"the constraint {text!r} uses no speed or velocity",
+                           "a constraint on positions goes under 'holonomic:'; a nonholonomic one is "
+                           "Phi(t, q, speeds) = 0, e.g. J(q, t) speeds + b(q, t) = 0")
+        return None
+    gradient = [sp.diff(value, s) for s in sorted(moving, key=str)]
+    if all(_vanishes(d) for d in gradient):
+        scope.report.error(path, f"in {text!r}: the derivative of the constraint with respect to the speeds is "
+                           "identically 0, so it does not constrain them",
+                           "simplify the row: a constraint on positions goes under 'holonomic:'; a nonholonomic "
+                           "one changes with the speeds (its Jacobian dPhi/dv is what the constraint force acts "
+                           "along)")
+        return None
+    if all(sp.diff(d, s) == 0 for d in gradient for s in moving):
+        return "linear"
+    kinks = sorted({str(f.func).lower() for f in sp.preorder_traversal(value)
+                    if isinstance(f, _KINKS) and f.free_symbols & velocities})
+    if kinks:
+        scope.report.error(path, f"in {text!r}: the constraint is not smooth in the speeds: its derivative "
+                           f"jumps where {' or '.join(kinks)} of a speed or velocity switches branch",
+                           "write a smooth row (a row nonlinear in the speeds needs its Jacobian dPhi/dv along "
+                           "the motion): square both sides, e.g. x_dot**2 - c**2, or keep one branch, e.g. "
+                           "x_dot - c")
+        return None
+    return "nonlinear"
+
+
+# Functions of the speeds whose derivative jumps: a row using them has a discontinuous Jacobian.
+_KINKS = (sp.Abs, sp.sign, sp.Min, sp.Max)
+
+
+def _vanishes(e: sp.Expr) -> bool:
+    """e is identically 0: at once, or after simplification (rows are short user expressions; a long one is
+    not simplified, and counts as not 0). A value clearly not 0 at a generic point settles it without
+    simplifying."""
+    if e == 0:
+        return True
+    point = {s: sp.Float(0.3 + 0.137 * i) for i, s in enumerate(sorted(e.free_symbols, key=str))}
+    try:
+        value = complex(e.xreplace(point).evalf())
+    except (TypeError, ValueError):         # not a number there (a pole, nan): simplify instead
+        value = 0.0
+    if abs(value) > 1e-9:
+        return False
+    return sp.count_ops(e) <= 200 and sp.simplify(e) == 0
 
 
 def _gain(gains: dict, key: str, where, scope: Scope) -> sp.Expr:
@@ -235,6 +288,10 @@ def check_conservative(elements: Elements, constraints: list, frames: list, writ
 
     A holonomic constraint does work when it depends on t; a nonholonomic row J v + b = 0 when its
     term without speeds, b, is not 0 (J may depend on t: its force is normal to every allowed velocity).
+    A row Phi_v nonlinear in the speeds v acts along A = dPhi_v/dv, so its power is lam A v: it does no
+    work when A v vanishes wherever Phi_v does, i.e. when A v / Phi_v is free of the speeds (Euler: a row
+    homogeneous of degree k in the speeds and frame velocities has A v = k Phi_v; Appell-Hamel's
+    z_dot - k sqrt(x_dot^2 + y_dot^2) does no work, Gauss's isokinetic |v|^2 - c does).
     `written`: the `constraints:` section as written (a row is named as written).
     """
     workers = [f"damper '{x.name}'" for x in elements.dampers] + [f"{x.kind} '{x.name}'" for x in elements.loads]
@@ -248,10 +305,14 @@ def check_conservative(elements: Elements, constraints: list, frames: list, writ
         speeds = set(scope.rates.values()) | {s for s, f in c.quantities.items() if f.kind != "position"}
         texts = written[c.where[1]]["nonholonomic"]
         texts = texts if isinstance(texts, list) else [texts]
-        rest = [text for r, text in zip(c.rows, texts)
-                if r.free_symbols & speeds and sp.expand(r.subs({s: 0 for s in speeds})) != 0]
+        rest = [text for j, (r, text) in enumerate(zip(c.rows, texts))
+                if r.free_symbols & speeds and (_works(r, speeds) if j in c.nonlinear
+                                                else sp.expand(r.subs({s: 0 for s in speeds})) != 0)]
         if rest:
-            workers.append(f"constraint '{c.name}' ({rest[0]!r} has a term without speeds)")
+            i = texts.index(rest[0])
+            why = ("has a force whose power lam dPhi/dv v is not 0 on the motion" if i in c.nonlinear
+                   else "has a term without speeds")
+            workers.append(f"constraint '{c.name}' ({rest[0]!r} {why})")
     workers += [f"frame '{f.name}' (its link depends on t)" for f in frames
                 if any(TIME in _free(step) for step in f.transforms)]
     workers += [f"spring '{x.name}' (depends on t)" for x in elements.springs
@@ -262,6 +323,12 @@ def check_conservative(elements: Elements, constraints: list, frames: list, writ
         scope.report.error(("conserves_energy",), "the model declares energy conserved, but " + ", ".join(workers)
                            + (" does" if len(workers) == 1 else " do") + " work",
                            "remove 'conserves_energy: true', or the elements that do work")
+
+
+def _works(row: sp.Expr, speeds: set) -> bool:
+    """A row nonlinear in the speeds does work: A v / Phi_v depends on the speeds (see check_conservative)."""
+    power = sum((sp.diff(row, s) * s for s in row.free_symbols & speeds), sp.Integer(0))
+    return bool(sp.simplify(power / row).free_symbols & speeds)
 
 
 def _free(step) -> set:

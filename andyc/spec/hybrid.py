@@ -76,6 +76,30 @@ def build_hybrid(h: dict | None, constraints: list, scope: Scope,
     return flows, jumps, initial_index
 
 
+def check_nonlinear_impacts(constraints: list, jumps: list, contacts: list, scope: Scope) -> None:
+    """Impacts need velocity rows linear in the speeds: the impact map solves J v+ = -e J v- in one step
+    (ANDY eq. 19), and a contact's impact keeps the model's own rows at c+ = c- + J dv = 0 (andyc.runtime.
+    contacts); for a row Phi_v nonlinear in v neither is the impact it describes. Such rows are refused
+    there, for now."""
+    nonlinear = {c.name: c for c in constraints if c.nonlinear}
+    if not nonlinear:
+        return
+    for jump in jumps:
+        hit = [n for n in jump.impact_constraints if n in nonlinear]
+        if hit and not jump.kind:
+            scope.report.error(jump.where + ("impact",), f"the impact of jump '{jump.name}' acts on constraint "
+                               f"'{hit[0]}', whose rows are not all linear in the speeds",
+                               "an impact map solves J v+ = -e J v- over rows J v + b = 0: name the constraints "
+                               "that take it, without that one (impact: {restitution: e, constraints: [...]}), "
+                               "or set the speeds after the jump with a reset")
+    if contacts:
+        first = next(iter(nonlinear.values()))
+        scope.report.error(first.row_where[first.nonlinear[0]], f"constraint '{first.name}' is not linear in the "
+                           "speeds, and the model has contacts, whose impacts keep the model's constraints through "
+                           "their rows J v + b = 0", "write the constraint linear in the speeds in a model with "
+                           "contacts, or model the contacts as jumps of a hybrid section")
+
+
 def _jump(i: int, j: dict, written: list, flows: list, constraints: list, scope: Scope,
           quantities: FrameQuantities) -> Jump | None:
     """One jump, or None when its source or target flow does not exist (reported)."""

@@ -25,7 +25,7 @@ from andyc.spec.contacts import build_contacts
 from andyc.spec.elements import build_elements
 from andyc.spec.expect import build_expect
 from andyc.spec.frames import build_frames
-from andyc.spec.hybrid import build_hybrid
+from andyc.spec.hybrid import build_hybrid, check_nonlinear_impacts
 from andyc.spec.meaning import meaning_sha256
 from andyc.spec.model import Spec
 from andyc.spec.schema_errors import schema, schema_problems
@@ -107,6 +107,7 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
     initial_flow = 0
     if not contacts:
         flows, jumps, initial_flow = build_hybrid(data.get("hybrid"), constraints, scope, quantities)
+    check_nonlinear_impacts(constraints, jumps, contacts, scope)
     closed_form = build_closed_form(data.get("closed_form"), jumps, scope, input_expressions)
     simulate = build_simulate(data.get("simulate"), scope, jumps)
     expect = build_expect(data.get("expect"), scope, constraints, jumps, closed_form)

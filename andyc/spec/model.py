@@ -159,7 +159,8 @@ class FrameQuantity:
 
 @dataclass(frozen=True)
 class Constraint:
-    """Holonomic rows Gamma(t, q) = 0 or nonholonomic rows J(t, q) v + b = 0 (ANDY eq. 10-15)."""
+    """Holonomic rows Gamma(t, q) = 0 or nonholonomic rows Phi_v(t, q, v) = 0 (ANDY eq. 10-15; Braun & Goldfarb
+    §2, item c), each nonholonomic row either linear in the speeds, J(t, q) v + b = 0, or not (`nonlinear`)."""
     name: str
     holonomic: bool
     rows: tuple                 # of sp.Expr in q, v, t, parameters and FrameQuantity symbols
@@ -169,6 +170,7 @@ class Constraint:
     quantities: dict            # symbol -> FrameQuantity, for the symbols the rows use
     where: tuple
     row_where: tuple = ()       # document path of each row
+    nonlinear: tuple = ()       # indices of the nonholonomic rows that are not linear in the speeds
 
 
 @dataclass(frozen=True)

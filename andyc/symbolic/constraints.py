@@ -1,12 +1,23 @@
-"""Constraint residuals, Jacobian and velocity-product term (ANDY eq. 10-12).
+"""Constraint residuals, Jacobian and velocity-product term (ANDY eq. 10-12; Braun & Goldfarb Part II §2).
 
 With speeds v (coordinate rates first) the active constraints give
 
     phi(t, q)        holonomic residuals Gamma                          (nh rows)
-    c = A v + b      velocity-level residuals: dGamma/dt, then the
-                     nonholonomic rows J v + b                         (nc rows)
+    c(t, q, v)       velocity-level residuals: dGamma/dt = A v + b, then the
+                     nonholonomic rows Phi_v as written               (nc rows)
+    A = dc/dv        their velocity Jacobian, at the state
     kappa            dc/dt at dv/dt = 0, so that dc/dt = A dv/dt + kappa  (eq. 11:
                      the J' v term, with the explicit d/dt terms of rheonomic rows)
+
+A nonholonomic row may be nonlinear in v (Braun & Goldfarb §2.2.3: Phi_v(t, q, v) = 0,
+Appell-Hamel's z' - k sqrt(x'^2 + y'^2), Gauss's isokinetic |v|^2 - c). Nothing
+below assumes linearity: differentiating the row along the motion gives
+dPhi_v/dt = A dv/dt + kappa with A = dPhi_v/dv and kappa = dPhi_v/dt + dPhi_v/dq q'
+(+ the frame quantities' terms), both evaluated at the current state, so the
+multiplier solve (A M^-1 A^T lam = -kappa - A a) and the projection's one-pass
+velocity correction (eq. 4: v <- v - M^-1 A^T (A M^-1 A^T)^+ Phi_v, A at the
+state: one Newton step on Phi_v, no iteration) take such rows unchanged. For a
+linear row J v + b these are J and J' v + db/dt, as before.
 
 A row is a small user expression f in t, q, v and frame-quantity symbols
 (`tip.x`, `tip.vx`, `tip.wx`; model.FrameQuantity). It is differentiated as

@@ -12,7 +12,7 @@ differentiation), every partial df/ds coming from SymPy's `diff` of that one
 small expression, evaluated at the point in double precision.
 
 A flow with active constraint rows (c = A v + b, the first of them
-holonomic, A_h = dphi/dq; ANDY eq. 10-12) is linearized at rest on its
+holonomic, A_h = dphi/dq; ANDY eq. 10-12; rows nonlinear in v are refused) is linearized at rest on its
 constraint manifold, in the null-space form. The acceleration a and the
 multipliers lam solve M a = G + A^T lam, A a = -kappa, so their derivatives
 solve the same saddle-point matrix:
@@ -144,6 +144,14 @@ def _check_supported(model: SymbolicModel, flow: int) -> None:
     if len(model.v) != len(model.q):
         raise LinearizeError(f"{name}: linearize needs one speed per coordinate (dq/dt = v); this model has "
                              f"{len(model.q)} coordinates and {len(model.v)} speeds")
+    active = {model.constraints.rows[r] for r in model.hybrid.flow_rows[flow]}
+    nonlinear = [c.name for c in model.spec.constraints if c.nonlinear and c.name in active]
+    if nonlinear:
+        # At rest a row nonlinear in the speeds (|v|^2 = c, a cone z' = k |v_xy|) has no tangent space of
+        # allowed speeds, or none at all: the null-space form below needs rows J v + b = 0.
+        raise LinearizeError(f"{name}: constraint '{nonlinear[0]}' is not linear in the speeds; linearize handles "
+                             f"flows whose velocity rows are J v + b = 0 (the null-space form at rest), so flow "
+                             f"'{model.hybrid.flows[flow]}' is not linearized")
 
 
 def default_point(model: SymbolicModel, parameters: dict | None = None, inputs: dict | None = None,
