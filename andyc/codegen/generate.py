@@ -87,6 +87,7 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
                               _gain_parameter(spec, c.stiffness), _gain_parameter(spec, c.damping))
                              for c in spec.constraints],
         "conserves_energy": spec.conserves_energy,
+        "work_slots": model.work_names,
         "discrete": [x.name for x in spec.discrete],
         "has_closed_form": bool(spec.closed_form),
         **_hybrid_context(model),

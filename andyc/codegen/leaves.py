@@ -25,6 +25,8 @@ DOCS = {
     "signal_rates": "Rates of the nonholonomic signals (ANDY eq. 4) into xdot[NQ + NV:].",
     "energy": "Total mechanical energy: kinetic + gravity + springs + potentials.",
     "power": "Power of the non-conservative elements (forces, torques, dampers).",
+    "powers": "The power of each work slot (WORK_SLOTS) into xdot[NX:]: the rates of the work the integrator carries; "
+              "lam (NC,): the multipliers of the rows in use, 0 for the others.",
     "frame_positions": "Origins of FRAMES in world coordinates into out (len(FRAMES), 3).",
     "constraint_gains": "Soft-constraint gains K_s and K_d of each row (ANDY eq. 13-15), for the baumgarte method, "
                         "into S.",
@@ -108,6 +110,10 @@ def leaves(model: SymbolicModel) -> Leaves:
     out.add("dynamics", f"{STATE}, M, G", mass + force + mirror)
     out.add("energy", STATE, [("e", model.energy)], returns="e")
     out.add("power", STATE, [("w", model.power)], returns="w")
+    if model.work_names:
+        nx = len(model.q) + n + len(model.signals)
+        powers = [e for _, e in model.powers] + [sp.Integer(0)] * (len(model.work_names) - len(model.powers))
+        out.add("powers", f"{STATE}, lam, xdot", [(f"xdot[{nx + i}]", e) for i, e in enumerate(powers)])
     frames = list(model.frame_positions)
     out.add("frame_positions", f"{STATE}, out",
             [(f"out[{k}, {i}]", model.frame_positions[f][i]) for k, f in enumerate(frames) for i in range(3)])

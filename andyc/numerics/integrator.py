@@ -57,9 +57,27 @@ def update_inputs(inputs, t, x, p, d, flow, u, data):
     return OK
 
 
+@jit(inline="always")
+def stage_powers(model, w, t, x, u, p, d, flow, xdot):
+    """xdot[NX:NX + NW] = the power of each work slot at (t, x), after rhs_mode_into in `flow` (whose constraint
+    solve left the multipliers of the flow's rows in S's y row): the work W is integrated with the motion."""
+    if model.nw == 0:
+        return
+    lam, S, y0 = w.lam, w.S, model.s_y
+    for i in range(model.nc):
+        lam[i] = 0.0
+    for r in range(model.flow_nrows[flow]):
+        lam[model.flow_rows[flow, r]] = S[y0, r]
+    call(model.powers, (t, x, u, p, d, lam, xdot))
+
+
 @jit
 def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale):
     """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status.
+
+    x is the state (NX) followed by the work of each slot (NW, andyc/symbolic/work.py): their rates are the
+    powers (stage_powers), so the work is RK4's own quadrature of the power along the step's stages, and the
+    augmented system's RK4 step is exactly this one (the motion does not depend on W).
 
     Stage s evaluates at t + c_s h, x + c_s h k_(s-1), c = (0, 1/2, 1/2, 1). A step whose largest
     entry exceeds GROWTH_LIMIT times `scale` (the largest entry of the states so far, at least 1)
@@ -79,12 +97,14 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale):
         status = rhs_mode_into(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
         if status != OK:
             return status
+        stage_powers(model, w, t + c * h, xt, u, p, d, flow, k[s])
     total = 0.0
     grown = 0.0
     for j in range(nx):
         out[j] = x[j] + h / 6.0 * (k[0, j] + 2.0 * k[1, j] + 2.0 * k[2, j] + k[3, j])
         total += out[j]
-        grown = max(grown, abs(out[j]))
+        if j < model.nx:            # (the work may grow without bound: a driven model)
+            grown = max(grown, abs(out[j]))
     if not math.isfinite(total):
         return NONFINITE
     if grown > GROWTH_LIMIT * scale:
@@ -183,7 +203,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
         data = borrowed(data)
     counts[2] = row
     scale = 1.0
-    for j in range(x.shape[0]):
+    for j in range(model.nx):
         scale = max(scale, abs(x[j]))
     if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
         return i, row, INPUT_FAILED, t, flow, -1
@@ -226,7 +246,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
                 status = jump(model, w, best, t, x, u, p, d)
                 return i, row, status, t, model.jump_target[best], best
             x[:] = x1
-            for j in range(x.shape[0]):
+            for j in range(model.nx):
                 scale = max(scale, abs(x[j]))
         t = t_next
         i += 1
@@ -318,3 +338,25 @@ def evaluate_constraints(model, w, log, p, phi, c, lam):
                 phi[r, i] = S[model.s_phi, i]
         if multipliers(model, w, log.t[r], x, u, p, d, flow, lam[r]) != OK:
             lam[r, :] = math.nan
+
+
+@jit
+def evaluate_powers(model, w, log, p, out):
+    """The power of each work slot at the logged samples, out (N, NW); a constraint's with the ideal multipliers
+    of the sample's flow (see dynamics.multipliers)."""
+    nx, lam, xdot = model.nx, w.lam, w.k[0]
+    for r in range(log.t.shape[0]):
+        t, x, u, d = log.t[r], log.x[r], log.u[r], log.d[r]
+        for i in range(model.nc):
+            lam[i] = 0.0
+        if model.flow_nrows[log.flow[r]] > 0 and multipliers(model, w, t, x, u, p, d, log.flow[r], lam) != OK:
+            out[r, :] = math.nan
+            continue
+        for i in range(model.nc):
+            if not math.isfinite(lam[i]):
+                lam[i] = 0.0
+        for i in range(model.nw):
+            xdot[nx + i] = 0.0
+        call(model.powers, (t, x, u, p, d, lam, xdot))
+        for i in range(model.nw):
+            out[r, i] = xdot[nx + i]

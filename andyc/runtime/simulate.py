@@ -158,7 +158,7 @@ class _Assembly:
         model, p, frame_names, fixed = self.model, self.p, self.frame_names, self.method in FIXED_STEP
         stats = {**stats, "wall_seconds": time.perf_counter() - self.start, "jumps": len(self.jumps.times),
                  **self.initial}
-        t_log, x_log, u_log, f_log, d_log = log
+        t_log, x_log, u_log, f_log, d_log = log        # x_log: the state, then the work (andyc.runtime.work)
         n = t_log.shape[0]
         energy = np.empty(n)
         integrator = model.numerics.integrator
@@ -172,12 +172,17 @@ class _Assembly:
             xyz = np.empty((n, len(model.frame_names), 3))
             integrator.evaluate_frames(model.ref, log, p, xyz)
             frames_out = {name: xyz[:, model.frame_names.index(name)] for name in frame_names}
+        power = np.empty((n, model.nw))
+        if model.nw:
+            integrator.evaluate_powers(model.ref, work(model).ref, log, p, power)
         held = u_log[0] if n else self.source.held(model.initial_flow)
         return Run(model=model.name, spec_sha256=model.spec_sha256, method=self.method, dt=self.dt, nq=model.nq,
                    nv=model.nv, rtol=0.0 if fixed else self.rtol, atol=0.0 if fixed else self.atol, t_end=self.t_end,
                    parameters=dict(zip(model.parameter_names, map(float, p))),
                    inputs={n: self.source.drives.get(n, float(v)) for n, v in zip(model.input_names, held)},
-                   state_names=list(model.state_names), time=t_log, state=x_log, input_names=list(model.input_names),
+                   state_names=list(model.state_names), time=t_log, state=np.ascontiguousarray(x_log[:, :model.nx]),
+                   work_names=list(model.work_names), work=np.ascontiguousarray(x_log[:, model.nx:]), power=power,
+                   input_names=list(model.input_names),
                    input_values=u_log, energy=energy, frames=frames_out, status=status, stats=stats,
                    multiplier_names=list(model.multiplier_names), multipliers=lam, residual_position=phi,
                    residual_velocity=c, energy_correction=bool(self.energy_correction),
@@ -194,7 +199,7 @@ def _check_size(model: CompiledModel, t_end: float, dt: float, every: int) -> No
     if steps > MAX_STEPS:
         raise SimulationError(f"t_end / dt = {steps:.3g} steps, past the limit of {MAX_STEPS:.0e}; raise dt or "
                               f"shorten t_end")
-    width = 2 + model.nx + len(model.input_names) + model.nd
+    width = 2 + model.nx + model.nw + len(model.input_names) + model.nd
     size = (steps / every + 2) * width * 8
     if size > MAX_LOG_BYTES:
         raise SimulationError(f"the run would log {steps / every:.3g} samples ({size / 1e9:.3g} GB), past the "

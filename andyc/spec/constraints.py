@@ -239,19 +239,18 @@ def check_conservative(elements: Elements, constraints: list, frames: list, writ
     """
     workers = [f"damper '{x.name}'" for x in elements.dampers] + [f"{x.kind} '{x.name}'" for x in elements.loads]
     # (Rows without coordinates, or without speeds, are reported by _constraint() already.)
+    speeds = set(scope.rates.values())
+    positions = {q.q for q in scope.coordinates}
     for c in sorted(constraints, key=lambda c: c.where[1]):
-        if c.holonomic:
-            positions = {q.q for q in scope.coordinates} | set(c.quantities)
-            if any(TIME in r.free_symbols and r.free_symbols & positions for r in c.rows):
-                workers.append(f"constraint '{c.name}' (depends on t)")
+        rows = working_rows(c, positions, speeds)
+        if not rows:
             continue
-        speeds = set(scope.rates.values()) | {s for s, f in c.quantities.items() if f.kind != "position"}
+        if c.holonomic:
+            workers.append(f"constraint '{c.name}' (depends on t)")
+            continue
         texts = written[c.where[1]]["nonholonomic"]
         texts = texts if isinstance(texts, list) else [texts]
-        rest = [text for r, text in zip(c.rows, texts)
-                if r.free_symbols & speeds and sp.expand(r.subs({s: 0 for s in speeds})) != 0]
-        if rest:
-            workers.append(f"constraint '{c.name}' ({rest[0]!r} has a term without speeds)")
+        workers.append(f"constraint '{c.name}' ({texts[rows[0]]!r} has a term without speeds)")
     workers += [f"frame '{f.name}' (its link depends on t)" for f in frames
                 if any(TIME in _free(step) for step in f.transforms)]
     workers += [f"spring '{x.name}' (depends on t)" for x in elements.springs
@@ -262,6 +261,19 @@ def check_conservative(elements: Elements, constraints: list, frames: list, writ
         scope.report.error(("conserves_energy",), "the model declares energy conserved, but " + ", ".join(workers)
                            + (" does" if len(workers) == 1 else " do") + " work",
                            "remove 'conserves_energy: true', or the elements that do work")
+
+
+def working_rows(c: Constraint, positions: set, speeds: set) -> list[int]:
+    """The rows of constraint c whose force does work on the motion (their power -lam b is not 0): a holonomic row
+    Gamma(t, q) that depends on t (b = dGamma/dt), a nonholonomic row J v + b with a term b without speeds.
+    positions: the coordinate symbols; speeds: the speed symbols. (A row whose J alone depends on t does no work:
+    its force is normal to every allowed velocity.)"""
+    if c.holonomic:
+        positions = positions | set(c.quantities)
+        return [i for i, r in enumerate(c.rows) if TIME in r.free_symbols and r.free_symbols & positions]
+    speeds = speeds | {s for s, f in c.quantities.items() if f.kind != "position"}
+    return [i for i, r in enumerate(c.rows)
+            if r.free_symbols & speeds and sp.expand(r.subs({s: 0 for s in speeds})) != 0]
 
 
 def _free(step) -> set:

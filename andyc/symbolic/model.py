@@ -35,6 +35,8 @@ class SymbolicModel:
     power: sp.Expr            # power of the non-conservative elements
     frame_positions: dict     # frame name -> 3x1, world (user frames only)
     elements: list            # ElementTerms, per element
+    powers: list              # (element, power) of each element that does work (work.py), in terms of lam too
+    work_names: list          # the work slots the integrator carries: the elements of `powers`, then 'jumps'
     constraints: ConstraintTerms  # phi, c = A v + b, kappa (eq. 10-12); empty without constraints
     hybrid: HybridTerms       # flows, jumps (one flow, no jumps without a hybrid section)
     derive_seconds: float = 0.0
