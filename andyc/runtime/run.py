@@ -11,6 +11,7 @@ import numpy as np
 import andyc
 from andyc.errors import plural, printable
 from andyc.outputs import write_atomic
+from andyc.runtime.status import drift, largest_residual
 
 
 @dataclass
@@ -128,6 +129,10 @@ class Run:
                            f"velocity {_largest(self.residual_velocity):.3g}")
             if "initial_projection" in s:
                 constraints += f" (initial state projected from {s['initial_projection']:.3g})"
+            if self.finished:
+                clause = drift(self.method, *largest_residual(self.residual_position, self.residual_velocity,
+                                                              self.time))
+                constraints += f"; {clause}" if clause else ""
         if self.jump_names:
             counts = {}
             for name in self.event_names():

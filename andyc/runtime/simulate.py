@@ -52,6 +52,7 @@ from andyc.runtime.methods import FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
 from andyc.runtime.options import Events, Init, Projection
 from andyc.runtime.progress import Progress
 from andyc.runtime.run import Run
+from andyc.runtime.status import lost_constraints
 
 
 def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str = "rk4", *,
@@ -175,6 +176,7 @@ class _Assembly:
         power = np.empty((n, model.nw))
         if model.nw:
             integrator.evaluate_powers(model.ref, work(model).ref, log, p, power)
+        status = lost_constraints(self.method, status, phi, c, t_log)
         held = u_log[0] if n else self.source.held(model.initial_flow)
         return Run(model=model.name, spec_sha256=model.spec_sha256, method=self.method, dt=self.dt, nq=model.nq,
                    nv=model.nv, rtol=0.0 if fixed else self.rtol, atol=0.0 if fixed else self.atol, t_end=self.t_end,
