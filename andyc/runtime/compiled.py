@@ -48,6 +48,7 @@ class CompiledModel:
     constraint_gains: tuple = ()  # (constraint, "holonomic" | "nonholonomic", stiffness parameter, damping parameter)
     conserves_energy: bool = False
     work_names: tuple = ()      # the work slots carried after the state (andyc.runtime.work): elements, then 'jumps'
+    untracked_work: tuple = ()  # frames moved by a link that depends on t (their driving work is not in the work)
     source: str = ""            # the model file's name
     constraint_where: tuple = ()  # (line, document path) of each row in the model file
     discrete_names: tuple = ()

@@ -100,6 +100,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     initial = consistent_initial_state(model, x, u, p, d, flow, init) if model.nc else {}
     if method in ("lagrange", "baumgarte") and model.nc:
         require_independent_rows(model, method, x, u, p, d, flow)
+    if projection.energy_correction:
+        _require_free_speed(model, x, u, p, d, flow)
     bar = Progress(f"{model.name} {method}", t_end, enabled=progress)
     interrupts = interrupts or Interrupts()
     start = time.perf_counter()
@@ -127,14 +129,34 @@ def _check_option(name: str, value, kind: type) -> None:
 
 def _energy_correction(model: CompiledModel, method: str, projection: Projection) -> Projection:
     """projection with energy_correction decided: by default on for the projection method of a model that
-    declares energy conserved; asked for elsewhere, refused."""
+    declares energy conserved. Asked for, it corrects to the energy balance E - E0 - W = 0 (W the work of every
+    element, andyc.runtime.work; 0 on a conservative model): refused for another method, and for a model whose
+    balance is not known (a frame moved by a link that depends on t)."""
     if projection.energy_correction is None:
         return dataclasses.replace(projection, energy_correction=model.conserves_energy and method == "projection")
-    if projection.energy_correction and not (model.conserves_energy and method == "projection"):
-        raise SimulationError("energy correction needs the projection method and a model that declares "
-                              "'conserves_energy: true'" + ("" if model.conserves_energy else
-                                                            f" ({model.name} does not)"))
+    if projection.energy_correction and method != "projection":
+        raise SimulationError(f"energy correction needs the projection method, not {method}; use --method projection")
+    if projection.energy_correction and model.untracked_work:
+        raise SimulationError(f"{model.source}: energy correction: the energy law E - E0 - W = 0 is not known: frame "
+                              f"'{model.untracked_work[0]}' moves by a link that depends on t, whose driving work "
+                              "andyc does not derive; run without --energy-correction")
     return projection
+
+
+def _require_free_speed(model: CompiledModel, x, u, p, d, flow) -> None:
+    """An energy correction needs a speed the constraints leave free at the start (Braun & Goldfarb eq. 6:
+    the direction N L^T v is 0 when the rows fix every speed); FILE:LINE of the first row when they do."""
+    rows = model.active_rows(flow)
+    if not rows:
+        return
+    A = np.zeros((model.nc, model.nv))
+    model.module.constraints(0.0, x, u, p, d, np.empty(model.nh), np.empty(model.nc), A, np.empty(model.nc))
+    rank = np.linalg.matrix_rank(A[rows])
+    if rank >= model.nv:
+        line, path = model.constraint_where[rows[0]]
+        raise SimulationError(f"{model.source}:{line}: {path}: the energy law has no speed to correct: the "
+                              f"{len(rows)} constraint rows active at the start fix all {model.nv} speeds (rank "
+                              f"{rank}); run without energy correction")
 
 
 @dataclass
