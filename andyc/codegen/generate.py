@@ -88,7 +88,7 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
                               _gain_parameter(spec, c.stiffness), _gain_parameter(spec, c.damping))
                              for c in spec.constraints],
         "conserves_energy": spec.conserves_energy,
-        "work_slots": model.work_names,
+        "work_slots": model.work_names, "row_work": model.row_work,
         "untracked_work": rheonomic_frames(spec.frames),
         "discrete": [x.name for x in spec.discrete],
         "has_closed_form": bool(spec.closed_form),

@@ -18,15 +18,14 @@ from andyc.symbolic.model import SymbolicModel
 
 STATE = "t, x, u, p, d"
 DOCS = {
-    "dynamics": "M (NV, NV) and G (NV,) with M dv/dt = G (ANDY eq. 8).",
+    "dynamics": "M (NV, NV) and G (NV,) with M dv/dt = G (ANDY eq. 8); then the power of each element that does work "
+                "into G[NV:] (andyc/symbolic/work.py).",
     "dynamics_constraints": "`dynamics` and `constraints_into` in one pass that shares their subexpressions.",
     "constraints_into": "phi (NH,), c = A v + b (NC,), A (NC, NV), kappa (NC,) with dc/dt = A dv/dt + kappa (ANDY eq. "
                         "11), into the rows of the scratch S (andyc_numerics/layout.py).",
     "signal_rates": "Rates of the nonholonomic signals (ANDY eq. 4) into xdot[NQ + NV:].",
     "energy": "Total mechanical energy: kinetic + gravity + springs + potentials.",
     "power": "Power of the non-conservative elements (forces, torques, dampers).",
-    "powers": "The power of each work slot (WORK_SLOTS) into xdot[NX:]: the rates of the work the integrator carries; "
-              "lam (NC,): the multipliers of the rows in use, 0 for the others.",
     "frame_positions": "Origins of FRAMES in world coordinates into out (len(FRAMES), 3).",
     "constraint_gains": "Soft-constraint gains K_s and K_d of each row (ANDY eq. 13-15), for the baumgarte method, "
                         "into S.",
@@ -101,7 +100,7 @@ def leaves(model: SymbolicModel) -> Leaves:
     n, cons, spec = model.dof, model.constraints, model.spec
     mass = [(f"M[{i}, {j}]", model.M[i, j]) for i in range(n) for j in range(i, n)]
     mirror = [(f"M[{j}, {i}]", sp.Symbol(f"M[{i}, {j}]")) for i in range(n) for j in range(i + 1, n)]
-    force = [(f"G[{i}]", model.G[i]) for i in range(n)]
+    force = [(f"G[{i}]", model.G[i]) for i in range(n)] + [(f"G[{n + i}]", e) for i, e in enumerate(model.powers)]
     at = scratch_layout(n, cons.nc, len(model.hybrid.jumps))      # the rows of S
     rows = ([(f"S[{at['phi']}, {i}]", e) for i, e in enumerate(cons.phi)]
             + [(f"S[{at['cv']}, {i}]", e) for i, e in enumerate(cons.c)]
@@ -110,10 +109,6 @@ def leaves(model: SymbolicModel) -> Leaves:
     out.add("dynamics", f"{STATE}, M, G", mass + force + mirror)
     out.add("energy", STATE, [("e", model.energy)], returns="e")
     out.add("power", STATE, [("w", model.power)], returns="w")
-    if model.work_names:
-        nx = len(model.q) + n + len(model.signals)
-        powers = [e for _, e in model.powers] + [sp.Integer(0)] * (len(model.work_names) - len(model.powers))
-        out.add("powers", f"{STATE}, lam, xdot", [(f"xdot[{nx + i}]", e) for i, e in enumerate(powers)])
     frames = list(model.frame_positions)
     out.add("frame_positions", f"{STATE}, out",
             [(f"out[{k}, {i}]", model.frame_positions[f][i]) for k, f in enumerate(frames) for i in range(3)])

@@ -59,16 +59,25 @@ def update_inputs(inputs, t, x, p, d, flow, u, data):
 
 @jit(inline="always")
 def stage_powers(model, w, t, x, u, p, d, flow, xdot):
-    """xdot[NX:NX + NW] = the power of each work slot at (t, x), after rhs_mode_into in `flow` (whose constraint
-    solve left the multipliers of the flow's rows in S's y row): the work W is integrated with the motion."""
+    """xdot[NX:NX + NW] = the power of each work slot at (t, x) (andyc/symbolic/work.py), right after
+    rhs_mode_into in `flow`: the elements' from the dynamics leaf (it wrote them after G), each working
+    constraint row's -lam (c - A v) from the multipliers the flow's constraint solve left in S's y row and the
+    row's A and c in S. So the work W is integrated with the motion."""
+    nx, nv, nq = model.nx, model.nv, model.nq
     if model.nw == 0:
         return
-    lam, S, y0 = w.lam, w.S, model.s_y
-    for i in range(model.nc):
-        lam[i] = 0.0
+    G, S = w.G, w.S
+    for i in range(model.nw):           # (the leaf writes the elements' slots only: the others stay 0 in G)
+        xdot[nx + i] = G[nv + i]
     for r in range(model.flow_nrows[flow]):
-        lam[model.flow_rows[flow, r]] = S[y0, r]
-    call(model.powers, (t, x, u, p, d, lam, xdot))
+        row = model.flow_rows[flow, r]
+        slot = model.row_work[row]
+        if slot < 0:
+            continue
+        b = S[model.s_cv, row]
+        for j in range(nv):
+            b -= S[model.s_a + row, j] * x[nq + j]
+        xdot[nx + slot] -= S[model.s_y, r] * b
 
 
 @jit
@@ -343,20 +352,18 @@ def evaluate_constraints(model, w, log, p, phi, c, lam):
 @jit
 def evaluate_powers(model, w, log, p, out):
     """The power of each work slot at the logged samples, out (N, NW); a constraint's with the ideal multipliers
-    of the sample's flow (see dynamics.multipliers)."""
-    nx, lam, xdot = model.nx, w.lam, w.k[0]
+    of the sample's flow (see dynamics.multipliers), the jumps' 0."""
+    nx, xdot = model.nx, w.k[0]
     for r in range(log.t.shape[0]):
-        t, x, u, d = log.t[r], log.x[r], log.u[r], log.d[r]
-        for i in range(model.nc):
-            lam[i] = 0.0
-        if model.flow_nrows[log.flow[r]] > 0 and multipliers(model, w, t, x, u, p, d, log.flow[r], lam) != OK:
-            out[r, :] = math.nan
-            continue
-        for i in range(model.nc):
-            if not math.isfinite(lam[i]):
-                lam[i] = 0.0
-        for i in range(model.nw):
-            xdot[nx + i] = 0.0
-        call(model.powers, (t, x, u, p, d, lam, xdot))
+        t, x, u, d, flow = log.t[r], log.x[r], log.u[r], log.d[r], log.flow[r]
+        if model.flow_nrows[flow] > 0:
+            if multipliers(model, w, t, x, u, p, d, flow, w.lam) != OK:
+                out[r, :] = math.nan
+                continue
+            for n in range(model.flow_nrows[flow]):          # (multipliers leaves them in y, as the rhs does)
+                w.S[model.s_y, n] = w.lam[model.flow_rows[flow, n]]
+        else:
+            call(model.dynamics, (t, x, u, p, d, w.M, w.G))
+        stage_powers(model, w, t, x, u, p, d, flow, xdot)
         for i in range(model.nw):
             out[r, i] = xdot[nx + i]

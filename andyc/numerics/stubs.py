@@ -19,11 +19,6 @@ def signal_rates(t, x, u, p, d, xdot):
     return None
 
 
-@leaf("powers")
-def powers(t, x, u, p, d, lam, xdot):
-    return None
-
-
 @leaf("constraint_gains")
 def constraint_gains(p, S):
     return None

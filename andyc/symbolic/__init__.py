@@ -23,7 +23,7 @@ from andyc.symbolic.hybrid import hybrid_terms
 from andyc.symbolic.kinematics import frame_kinematics
 from andyc.symbolic.model import SymbolicModel
 from andyc.symbolic.reduce import merge_rigid_bodies
-from andyc.symbolic.work import JUMPS, element_powers
+from andyc.symbolic.work import work_slots
 
 
 def derive(spec: Spec) -> SymbolicModel:
@@ -43,7 +43,7 @@ def derive(spec: Spec) -> SymbolicModel:
     quantities = FrameQuantities(spec, kin, emit)
     constraints = constraint_terms(spec, quantities)
     hybrid = hybrid_terms(spec, quantities, constraints)
-    powers = element_powers(spec, terms, constraints, hybrid.multipliers)
+    work_names, powers, row_work = work_slots(spec, terms, constraints)
     rates = {sym: rate for K in kin.values() for sym, rate in K.signal_rates.items()}
     return SymbolicModel(
         spec=spec, t=TIME,
@@ -53,7 +53,7 @@ def derive(spec: Spec) -> SymbolicModel:
         inputs=[s for s, _ in spec.inputs.values()],
         assignments=emit.assignments, M=M, G=G, energy=energy, power=power,
         frame_positions={f.name: kin[f.name].r for f in spec.frames if not f.internal},
-        elements=terms, powers=powers, work_names=[name for name, _ in powers] + ([JUMPS] if spec.jumps else []),
+        elements=terms, powers=powers, work_names=work_names, row_work=row_work,
         constraints=constraints, hybrid=hybrid, derive_seconds=time.perf_counter() - start)
 
 

@@ -17,9 +17,10 @@ part). The elements that do work, each with its power P_i:
 The constraint's power: its force A^T lam (M dv/dt = G + A^T lam) has power v . A^T lam = lam . (c - b); a
 holonomic row Gamma(t, q) has b = dGamma/dt at fixed q, a nonholonomic row J v + b its term without
 speeds. Only the rows whose b is not 0 are elements (andyc.spec.constraints.working_rows): the others do no
-work on any allowed motion. lam is the multiplier vector the numerics pass (HybridTerms.multipliers, `lam`
-in the leaves; 0 for the rows a flow does not use). Written as -lam . (c - A v), so that a run whose c
-drifts from 0 still gets the b of its actual state.
+work on any allowed motion. The numerics compute it from the multipliers of the step's own constraint solve
+and the rows' A and c (the table ROW_WORK of the build), as -lam . (c - A v), so that a run whose c
+drifts from 0 still gets the b of its actual state; the elements' powers are written by the dynamics leaf
+after G (G[NV + i]), sharing its subexpressions.
 
 Not here: a frame whose link depends on t (its driving power is not derived; the balance of such a model
 includes it as an error), and the energy a jump changes (the integrator adds E+ - E- to the work `jumps`).
@@ -36,25 +37,29 @@ from andyc.spec.model import Spec
 JUMPS = "jumps"     # the work slot of the energy the jumps change (resets, impacts): E+ - E- at each
 
 
-def element_powers(spec: Spec, terms: list, constraints, multipliers: list) -> list[tuple[str, sp.Expr]]:
-    """(element name, power) of every element that does work, in the model's order: forces and torques,
-    dampers, springs and potentials that depend on t (from `terms`, the ElementTerms), then constraints.
-    multipliers: the symbol of each constraint row's multiplier (lam)."""
-    out = [(e.name, e.power) for e in terms if e.power != 0]
-    v = sp.Matrix(spec.speed_symbols)
+def work_slots(spec: Spec, terms: list, constraints) -> tuple[list, list, list]:
+    """The work slots of the model: (names, powers, row_slot). names: every element that does work, in the
+    model's order (forces and torques, dampers, springs and potentials that depend on t: `terms`, the
+    ElementTerms), then each constraint with a working row, then 'jumps' when the model has jumps. powers: the
+    power of each element slot (the first len(powers) names), which the dynamics leaf writes after G. row_slot:
+    for each velocity-level row of `constraints`, the slot its power -lam (c - A v) goes to, or -1 (the
+    numerics compute it from the step's multipliers, A and c)."""
+    elements = [(e.name, e.power) for e in terms if e.power != 0]
+    names, powers = [n for n, _ in elements], [e for _, e in elements]
+    row_slot = [-1] * constraints.nc
     positions = {c.q for c in spec.coordinates}
     for c in spec.constraints:
         working = working_rows(c, positions, set(spec.speed_symbols))
         if not working:
             continue
+        # A constraint's velocity-level rows, in order (holonomic constraints' rows come first in the model's).
         rows = [i for i, name in enumerate(constraints.rows) if name == c.name]
-        # Holonomic rows come first in `rows`; a holonomic constraint's rows are its velocity-level rows in order.
-        power = sp.Integer(0)
         for k in working:
-            i = rows[k]
-            power -= multipliers[i] * (constraints.c[i] - (constraints.A[i, :] * v)[0])
-        out.append((c.name, power))
-    return out
+            row_slot[rows[k]] = len(names)
+        names.append(c.name)
+    if spec.jumps:
+        names.append(JUMPS)
+    return names, powers, row_slot
 
 
 def time_power(energy: sp.Expr) -> sp.Expr:
