@@ -24,6 +24,7 @@ from scipy.integrate import solve_ivp
 
 import andyc
 from andyc.runtime.run import read_h5
+from tests.support import MODELS
 from tests.support.diagnostics import line_of, problems
 
 
@@ -164,3 +165,12 @@ frames:
   - {name: tip, parent: arm, translation: [0, -1, 0]}
 bodies: [{name: b, frame: tip, mass: m}]
 """
+
+
+def test_the_jumps_work_slot_name_is_reserved(tmp_path):
+    """A model with jumps logs the energy they change as the work 'jumps' (work_jumps, power_jumps)."""
+    text = (MODELS / "bouncing_ball.yaml").read_text().replace(
+        "constraints:\n", "dampers: [{name: jumps, coefficient: 0.1, speed: y}]\nconstraints:\n")
+    (d,) = problems(tmp_path, text, name="bouncing_ball.yaml")
+    assert (d.line, d.path) == (line_of(text, "name: jumps"), "dampers[0].name")
+    assert "the name 'jumps' is taken by the work of the model's jumps" in str(d)

@@ -206,7 +206,7 @@ def _check_multipliers(constraints: list, written: dict, scope: Scope):
     made = {f"{q.name}_dot": f"the rate of coordinate '{q.name}'" for q in scope.coordinates}
     made.update({s.name: f"the {'position' if s.component in 'xyz' else 'quaternion'} signal of frame "
                          f"'{s.frame}'" for s in scope.signals})
-    made.update({n: f"the run-file column '{n}'" for n in ("time", "flow", "energy")})
+    made.update({n: f"the run-file column '{n}'" for n in ("time", "flow", "energy", "energy_balance")})
     seen = {}
     for c in sorted(constraints, key=lambda c: c.where):        # in document order, by section
         given = written[c.where[0]][c.where[1]].get("multiplier")
@@ -285,6 +285,18 @@ def check_energy_law(data: dict, frames: list, constraints: list, flows: list, i
         elif rows >= speeds:
             scope.report.error(path, f"the energy law has no speed to correct: the {rows} constraint rows of the "
                                f"initial flow fix all {speeds} speeds", "remove energy_correction")
+
+
+def check_work_names(data: dict, jumps: list, scope: Scope):
+    """A model with jumps carries the energy they change as the work slot 'jumps' (andyc/symbolic/work.py, the
+    run files' work_jumps and power_jumps): no element that does work may take that name."""
+    if not jumps:
+        return
+    for section in ("forces", "torques", "dampers", "springs", "potentials", "constraints"):
+        for i, entry in enumerate(data.get(section) or []):
+            if isinstance(entry, dict) and entry.get("name") == "jumps":
+                scope.report.error((section, i, "name"), "the name 'jumps' is taken by the work of the model's "
+                                   "jumps (the run files' work_jumps, power_jumps)", "choose another name")
 
 
 def working_rows(c: Constraint, positions: set, speeds: set) -> list[int]:
