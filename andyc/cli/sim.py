@@ -39,8 +39,8 @@ from andyc.runtime.methods import MAX_STEPS, METHODS
                    "the manifold (project), or start from it anyway (as-is).")
 @click.option("--init-tol", default=1e-6, show_default=True, type=NON_NEGATIVE, help="Largest initial constraint residual accepted by check.")
 @click.option("--energy-correction/--no-energy-correction", default=None,
-              help="Braun & Goldfarb energy correction of the projection method; default on when the model "
-                   "declares conserves_energy.")
+              help="Braun & Goldfarb energy correction of the projection method, to the balance E - E0 - W = 0 "
+                   "(W the logged work of every element); default on when the model declares conserves_energy.")
 @click.option("--energy-tol", default=1e-6, show_default=True, type=NON_NEGATIVE,
               help="Energy correction only where 2T exceeds this (Braun & Goldfarb eq. 6).")
 @click.option("--event-tol", default=1e-12, show_default=True, type=Number(0, 1, low_open=True),

@@ -22,6 +22,7 @@ from pathlib import Path
 import jinja2
 
 import andyc
+from andyc.spec.constraints import rheonomic_frames
 from andyc.errors import format_path
 from andyc.outputs import check_output, create_once, update_text, write_text
 from andyc.codegen.buildfiles import (PACKAGE, BuildResult, build_key, equations_path, jumps_path, module_name,
@@ -87,6 +88,8 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
                               _gain_parameter(spec, c.stiffness), _gain_parameter(spec, c.damping))
                              for c in spec.constraints],
         "conserves_energy": spec.conserves_energy,
+        "work_slots": model.work_names, "row_work": model.row_work,
+        "untracked_work": rheonomic_frames(spec.frames),
         "discrete": [x.name for x in spec.discrete],
         "has_closed_form": bool(spec.closed_form),
         **_hybrid_context(model),

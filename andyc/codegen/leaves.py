@@ -18,7 +18,8 @@ from andyc.symbolic.model import SymbolicModel
 
 STATE = "t, x, u, p, d"
 DOCS = {
-    "dynamics": "M (NV, NV) and G (NV,) with M dv/dt = G (ANDY eq. 8).",
+    "dynamics": "M (NV, NV) and G (NV,) with M dv/dt = G (ANDY eq. 8); then the power of each element that does work "
+                "into G[NV:] (andyc/symbolic/work.py).",
     "dynamics_constraints": "`dynamics` and `constraints_into` in one pass that shares their subexpressions.",
     "constraints_into": "phi (NH,), c (NC,: dphi/dt, then the nonholonomic rows), A = dc/dv (NC, NV), kappa "
                         "(NC,) with dc/dt = A dv/dt + kappa (ANDY eq. 11), into the rows of the scratch S "
@@ -100,7 +101,7 @@ def leaves(model: SymbolicModel) -> Leaves:
     n, cons, spec = model.dof, model.constraints, model.spec
     mass = [(f"M[{i}, {j}]", model.M[i, j]) for i in range(n) for j in range(i, n)]
     mirror = [(f"M[{j}, {i}]", sp.Symbol(f"M[{i}, {j}]")) for i in range(n) for j in range(i + 1, n)]
-    force = [(f"G[{i}]", model.G[i]) for i in range(n)]
+    force = [(f"G[{i}]", model.G[i]) for i in range(n)] + [(f"G[{n + i}]", e) for i, e in enumerate(model.powers)]
     at = scratch_layout(n, cons.nc, len(model.hybrid.jumps))      # the rows of S
     rows = ([(f"S[{at['phi']}, {i}]", e) for i, e in enumerate(cons.phi)]
             + [(f"S[{at['cv']}, {i}]", e) for i, e in enumerate(cons.c)]

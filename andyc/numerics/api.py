@@ -118,7 +118,7 @@ class Functions:
         """M(q), (NV, NV)."""
         p, u, d, _ = self._args(u, p, d, None)
         nv = self.sizes["nv"]
-        M, G = np.zeros((nv, nv)), np.zeros(nv)
+        M, G = np.zeros((nv, nv)), np.zeros(self.sizes["ng"])     # (the leaf writes the elements' powers after G)
         _dynamics(self.model, float(t), _vector(x), u, p, d, M, G)
         return M
 
@@ -127,9 +127,9 @@ class Functions:
         u = self.driven(t, x, u, p, d, flow)
         p, u, d, _ = self._args(u, p, d, flow)
         nv = self.sizes["nv"]
-        M, G = np.zeros((nv, nv)), np.zeros(nv)
+        M, G = np.zeros((nv, nv)), np.zeros(self.sizes["ng"])     # (the leaf writes the elements' powers after G)
         _dynamics(self.model, float(t), _vector(x), u, p, d, M, G)
-        return G
+        return G[:nv].copy()
 
     def rhs(self, t, x, u=None, p=None, d=None, flow=None):
         """dx/dt in `flow`, for scipy.integrate.solve_ivp, with the ideal constraint forces of the flow's rows."""

@@ -188,8 +188,9 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
       position (eq. 3)  x <- x (+) L^-T C_q^+ (-phi)
       velocity (eq. 4)  v <- v + L^-T C^+ (-c), at the corrected position
     With energy_tol >= 0, energy (eq. 5-6): with r = N L^T v, N = I - C^+ C the projector onto the
-    constraints' null space, v <- v - L^-T r (E - e0) / |r|^2 when |r|^2 (2T on the constraint
-    manifold) exceeds energy_tol. One pass, no iteration. Returns a status.
+    constraints' null space, v <- v - L^-T r (E - e0 - W) / |r|^2 when |r|^2 (2T on the constraint
+    manifold) exceeds energy_tol; W = the sum of x[NX:NX + NW], the work carried with the state (0 for a
+    model on which nothing does work: the law E = e0). One pass, no iteration. Returns a status.
     """
     normalize(model, x)
     if not constrain and energy_tol < 0.0:
@@ -232,7 +233,10 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
         for i in range(nv):
             rr += r[i] * r[i]
         if rr > energy_tol:
-            scale = -(call(model.energy, (t, x, u, p, d)) - e0) / rr
+            target = e0                # the balance E = E0 + W (Braun & Goldfarb's energy law, W the work slots)
+            for i in range(model.nw):
+                target += x[model.nx + i]
+            scale = -(call(model.energy, (t, x, u, p, d)) - target) / rr
             for i in range(nv):
                 r[i] *= scale
             solve_upper(M, r, nv)

@@ -57,9 +57,36 @@ def update_inputs(inputs, t, x, p, d, flow, u, data):
     return OK
 
 
+@jit(inline="always")
+def stage_powers(model, w, t, x, u, p, d, flow, xdot):
+    """xdot[NX:NX + NW] = the power of each work slot at (t, x) (andyc/symbolic/work.py), right after
+    rhs_mode_into in `flow`: the elements' from the dynamics leaf (it wrote them after G), each working
+    constraint row's -lam (c - A v) from the multipliers the flow's constraint solve left in S's y row and the
+    row's A and c in S. So the work W is integrated with the motion."""
+    nx, nv, nq = model.nx, model.nv, model.nq
+    if model.nw == 0:
+        return
+    G, S = w.G, w.S
+    for i in range(model.nw):           # (the leaf writes the elements' slots only: the others stay 0 in G)
+        xdot[nx + i] = G[nv + i]
+    for r in range(model.flow_nrows[flow]):
+        row = model.flow_rows[flow, r]
+        slot = model.row_work[row]
+        if slot < 0:
+            continue
+        b = S[model.s_cv, row]
+        for j in range(nv):
+            b -= S[model.s_a + row, j] * x[nq + j]
+        xdot[nx + slot] -= S[model.s_y, r] * b
+
+
 @jit
 def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale):
     """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status.
+
+    x is the state (NX) followed by the work of each slot (NW, andyc/symbolic/work.py): their rates are the
+    powers (stage_powers), so the work is RK4's own quadrature of the power along the step's stages, and the
+    augmented system's RK4 step is exactly this one (the motion does not depend on W).
 
     Stage s evaluates at t + c_s h, x + c_s h k_(s-1), c = (0, 1/2, 1/2, 1). A step whose largest
     entry exceeds GROWTH_LIMIT times `scale` (the largest entry of the states so far, at least 1)
@@ -79,12 +106,14 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale):
         status = rhs_mode_into(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
         if status != OK:
             return status
+        stage_powers(model, w, t + c * h, xt, u, p, d, flow, k[s])
     total = 0.0
     grown = 0.0
     for j in range(nx):
         out[j] = x[j] + h / 6.0 * (k[0, j] + 2.0 * k[1, j] + 2.0 * k[2, j] + k[3, j])
         total += out[j]
-        grown = max(grown, abs(out[j]))
+        if j < model.nx:            # (the work may grow without bound: a driven model)
+            grown = max(grown, abs(out[j]))
     if not math.isfinite(total):
         return NONFINITE
     if grown > GROWTH_LIMIT * scale:
@@ -183,7 +212,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
         data = borrowed(data)
     counts[2] = row
     scale = 1.0
-    for j in range(x.shape[0]):
+    for j in range(model.nx):
         scale = max(scale, abs(x[j]))
     if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
         return i, row, INPUT_FAILED, t, flow, -1
@@ -226,7 +255,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
                 status = jump(model, w, best, t, x, u, p, d)
                 return i, row, status, t, model.jump_target[best], best
             x[:] = x1
-            for j in range(x.shape[0]):
+            for j in range(model.nx):
                 scale = max(scale, abs(x[j]))
         t = t_next
         i += 1
@@ -318,3 +347,23 @@ def evaluate_constraints(model, w, log, p, phi, c, lam):
                 phi[r, i] = S[model.s_phi, i]
         if multipliers(model, w, log.t[r], x, u, p, d, flow, lam[r]) != OK:
             lam[r, :] = math.nan
+
+
+@jit
+def evaluate_powers(model, w, log, p, out):
+    """The power of each work slot at the logged samples, out (N, NW); a constraint's with the ideal multipliers
+    of the sample's flow (see dynamics.multipliers), the jumps' 0."""
+    nx, xdot = model.nx, w.k[0]
+    for r in range(log.t.shape[0]):
+        t, x, u, d, flow = log.t[r], log.x[r], log.u[r], log.d[r], log.flow[r]
+        if model.flow_nrows[flow] > 0:
+            if multipliers(model, w, t, x, u, p, d, flow, w.lam) != OK:
+                out[r, :] = math.nan
+                continue
+            for n in range(model.flow_nrows[flow]):          # (multipliers leaves them in y, as the rhs does)
+                w.S[model.s_y, n] = w.lam[model.flow_rows[flow, n]]
+        else:
+            call(model.dynamics, (t, x, u, p, d, w.M, w.G))
+        stage_powers(model, w, t, x, u, p, d, flow, xdot)
+        for i in range(model.nw):
+            out[r, i] = xdot[nx + i]

@@ -17,7 +17,9 @@ walker's step a fifth of its time.)
 The leaves, each with t, x (state), u (inputs), p (parameters), d (discrete states) first where
 marked STATE; k is a jump's index; S is the scratch of layout.py:
 
-    dynamics(STATE, M, G)                     M (NV, NV) and G (NV,): M dv/dt = G (ANDY eq. 8)
+    dynamics(STATE, M, G)                     M (NV, NV) and G (NV,): M dv/dt = G (ANDY eq. 8); then into
+                                              G[NV:] the power of each element that does work (andyc/symbolic/
+                                              work.py; G has NV + NW entries)
     dynamics_constraints(STATE, M, G, S)      both this and constraints_into, sharing subexpressions
     constraints_into(STATE, S)                phi (NH,), c = A v + b (NC,), A (NC, NV) and kappa (NC,)
                                               with dc/dt = A dv/dt + kappa (ANDY eq. 11), into S
@@ -46,19 +48,20 @@ import numpy as np
 from .compiler import NUMBA, cfunc, jit
 from .layout import VECTORS, scratch_layout
 
-SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj")
+SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj", "nw")
 ROWS = ("s_a", "s_c", "s_w") + tuple(f"s_{name}" for name in VECTORS)  # the first row of each part of S
 TABLES = ("quaternions",                            # index in x of each quaternion signal's w
           "flow_rows", "flow_nrows", "flow_nhrows",  # active rows of each flow (holonomic first), then -1
           "impact_rows", "impact_nrows",             # rows taking each jump's impact
           "jump_source", "jump_target", "jump_direction", "jump_priority", "jump_order", "jump_multipliers",
-          "jump_contact")                            # the contact whose impact jump k is, or -1
+          "jump_contact",                            # the contact whose impact jump k is, or -1
+          "row_work")                                # the work slot of each row's constraint power, or -1
 LEAF_NAMES = ("dynamics", "dynamics_constraints", "constraints_into", "signal_rates", "energy", "power",
               "frame_positions", "constraint_gains", "restitution", "guard", "guard_rate", "enabled", "reset",
               "flow_inputs", "closed_form")
 WORK = {    # the arrays of Work: name -> shape, from the sizes and the scratch layout
-    "M": ("nv", "nv"), "G": ("nv",), "S": ("rows", "width"),
-    "k": (4, "nx"), "xt": ("nx",), "x1": ("nx",), "xb": ("nx",), "xc": ("nx",), "x_event": ("nx",),
+    "M": ("nv", "nv"), "G": ("ng",), "S": ("rows", "width"),
+    "k": (4, "na"), "xt": ("na",), "x1": ("na",), "xb": ("na",), "xc": ("na",), "x_event": ("na",),
     "xdot": ("nx",), "g0": ("nj",), "u": ("nu",), "lam": ("nc",),
 }
 
@@ -191,28 +194,29 @@ else:
 
 @jit
 def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, impact_rows, impact_nrows, jump_source,
-           jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact, leaves):
+           jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact, row_work, leaves):
     (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_positions,
      constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form) = leaves
     return Model(sizes[0], sizes[1], sizes[2], sizes[3], sizes[4], sizes[5], sizes[6], sizes[7], sizes[8], sizes[9],
+                 sizes[10],
                  rows[0], rows[1], rows[2], rows[3], rows[4], rows[5], rows[6], rows[7], rows[8], rows[9], rows[10],
                  rows[11], rows[12],
                  borrowed(quaternions), borrowed(flow_rows), borrowed(flow_nrows), borrowed(flow_nhrows),
                  borrowed(impact_rows), borrowed(impact_nrows), borrowed(jump_source), borrowed(jump_target),
                  borrowed(jump_direction), borrowed(jump_priority), borrowed(jump_order), borrowed(jump_multipliers),
-                 borrowed(jump_contact),
+                 borrowed(jump_contact), borrowed(row_work),
                  dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_positions,
                  constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form,
                  (quaternions, flow_rows, flow_nrows, flow_nhrows, impact_rows, impact_nrows, jump_source, jump_target,
-                  jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact))
+                  jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact, row_work))
 
 
 def sizes_of(equations) -> dict:
     """The sizes of a generated <name>_equations.py module (NQ, NV, ...), with the scratch layout's "rows" and
     "width", by lower-case name."""
-    sizes = {name: int(getattr(equations, name.upper())) for name in SIZES}
+    sizes = {name: int(getattr(equations, name.upper(), 0)) for name in SIZES}
     layout = scratch_layout(sizes["nv"], sizes["nc"], sizes["nj"])
-    return {**sizes, "rows": layout["rows"], "width": layout["width"]}
+    return {**sizes, "na": sizes["nx"] + sizes["nw"], "ng": sizes["nv"] + sizes["nw"], "rows": layout["rows"], "width": layout["width"]}
 
 
 def new_model(equations, stubs) -> Model:

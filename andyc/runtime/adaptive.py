@@ -19,6 +19,7 @@ from andyc.numerics.status import IDEAL, INPUT_FAILED, OK
 from andyc.runtime.compiled import work
 from andyc.runtime.events import apply_jump, follow_instant_jumps
 from andyc.runtime.status import INTERRUPTED, at, ending, failure, nonfinite, solver_failed
+from andyc.runtime.work import JumpWork, with_work
 
 
 def scipy_method(name: str):
@@ -36,8 +37,11 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
     """Integrate from (0, x) to t_end with SciPy's `method`, logging the grid i dt_out. Returns (log, status,
     stats)."""
     module, rhs_mode_into = model.module, model.numerics.dynamics.rhs_mode_into
+    stage_powers = model.numerics.integrator.stage_powers
     w = work(model)
-    xdot = np.empty(model.nx)
+    nx = model.nx
+    x = with_work(model, x)         # the state, then the work of each slot: extra components of the solver's y
+    xdot = np.empty(x.shape[0])
     calls = [0]
     current = [flow]
 
@@ -51,9 +55,11 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
     def fun(t, y):
         calls[0] += 1
         y = np.ascontiguousarray(y)      # (Radau's Jacobian passes columns of a matrix)
-        status = rhs_mode_into(model.ref, w.ref, t, y, inputs(t, y), p, d, current[0], xdot, IDEAL)
+        u = inputs(t, y)
+        status = rhs_mode_into(model.ref, w.ref, t, y, u, p, d, current[0], xdot, IDEAL)
         if status != OK:
             raise _Stopped(t, status)
+        stage_powers(model.ref, w.ref, t, y, u, p, d, current[0], xdot)
         return xdot.copy()
 
     n_out = int(math.floor(t_end / dt_out + 1e-9)) + 1
@@ -72,7 +78,9 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
 
     interrupts.partial = partial
     try:
-        flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, jumps, w, IDEAL)
+        balance = JumpWork(model, x, out_u[0], p, d, t)
+        flow, message = follow_instant_jumps(model, t, x[:nx], source, p, d, flow, jumps, w, IDEAL)
+        balance.add(x, inputs(t, x), d)
         while message is None and t < t_end:
             current[0] = flow
             solver = scipy_method(method)(fun, t, x, t_end, rtol=rtol, atol=atol)
@@ -105,9 +113,13 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
                     continue
                 k, t, x_before = hit
                 x = x_before.copy()
-                flow, message = apply_jump(model, k, t, x, inputs(t, x_before), p, d, w, jumps)
+                u_before = inputs(t, x_before).copy()
+                balance = JumpWork(model, x_before, u_before, p, d, t)
+                flow, message = apply_jump(model, k, t, x[:nx], u_before, p, d, w, jumps)
                 if message is None:
-                    flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, jumps, w, IDEAL)
+                    flow, message = follow_instant_jumps(model, t, x[:nx], source, p, d, flow, jumps, w, IDEAL)
+                current[0] = flow
+                balance.add(x, inputs(t, x), d)
                 break
             else:
                 t, x = solver.t, solver.y.copy()
@@ -116,7 +128,7 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
     if message is not None and out_t[-1] != t:
         out_t.append(t), out_x.append(x.copy()), out_f.append(flow), out_d.append(d.copy())
         u = np.empty(len(model.input_names))
-        ok = source.into(model, t, x, p, d, flow, u) == OK
+        ok = source.into(model, t, x[:nx], p, d, flow, u) == OK
         out_u.append(u if ok else np.full_like(u, np.nan))
     return (_log(model, out_t, out_x, out_u, out_f, out_d), ending(message, len(out_t), jumps),
             {"steps": steps, "rhs_evaluations": calls[0]})
@@ -125,7 +137,7 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
 def _log(model, out_t, out_x, out_u, out_f, out_d):
     """The integrator's Log arrays (t, x, u, flow, d) of the samples collected as lists."""
     n = len(out_t)
-    return (np.array(out_t), np.array(out_x).reshape(n, model.nx), np.array(out_u).reshape(n, len(model.input_names)),
+    return (np.array(out_t), np.array(out_x).reshape(n, model.nx + model.nw), np.array(out_u).reshape(n, len(model.input_names)),
             np.array(out_f, dtype=np.int64), np.array(out_d).reshape(n, model.nd))
 
 

@@ -47,6 +47,8 @@ class CompiledModel:
     constraint_rows: tuple = () # constraint name of each row
     constraint_gains: tuple = ()  # (constraint, "holonomic" | "nonholonomic", stiffness parameter, damping parameter)
     conserves_energy: bool = False
+    work_names: tuple = ()      # the work slots carried after the state (andyc.runtime.work): elements, then 'jumps'
+    untracked_work: tuple = ()  # frames moved by a link that depends on t (their driving work is not in the work)
     source: str = ""            # the model file's name
     constraint_where: tuple = ()  # (line, document path) of each row in the model file
     discrete_names: tuple = ()
@@ -62,6 +64,10 @@ class CompiledModel:
     contact_names: tuple = ()   # unilateral contacts (andyc.spec.contacts); flow index = bitmask of the closed ones
     contact_rows: tuple = ()    # the constraint row of each contact's gap
     jump_contact: tuple = ()    # per jump: the contact whose impact it is (andyc.runtime.contacts resolves it), or -1
+
+    @property
+    def nw(self) -> int:
+        return len(self.work_names)
 
     @property
     def nd(self) -> int:
@@ -194,6 +200,7 @@ def compile_integrator(model: CompiledModel, function=None, data=None) -> None:
     numerics, m = model.numerics, model.ref
     integrator = numerics.integrator
     p, u, x, d, flow, w = sample_run(model)
+    x = np.concatenate([x, np.zeros(model.nw)])      # the state and the work (andyc.runtime.work)
     log = integrator.Log(np.zeros(1), x[None, :].copy(), u[None, :].copy(), np.full(1, flow, dtype=np.int64),
                          d[None, :].copy())
     opts = integrator.options(IDEAL, False, False, 0.0, -1.0, 1e-12)
@@ -204,9 +211,14 @@ def compile_integrator(model: CompiledModel, function=None, data=None) -> None:
         return
     integrator.evaluate_energy(m, log, p, np.zeros(1))
     integrator.evaluate_frames(m, log, p, np.zeros((1, len(model.frame_names), 3)))
+    integrator.evaluate_powers(m, w.ref, log, p, np.zeros((1, model.nw)))
     integrator.evaluate_constraints(m, w.ref, log, p, np.zeros((1, model.nh)), np.zeros((1, model.nc)),
                                     np.zeros((1, model.nc)))
     numerics.dynamics.rhs_mode_into(m, w.ref, 0.0, x, u, p, d, flow, w.xdot, IDEAL)
+    if model.nw:
+        xdot = np.zeros(model.nx + model.nw)
+        numerics.dynamics.rhs_mode_into(m, w.ref, 0.0, x, u, p, d, flow, xdot, IDEAL)
+        integrator.stage_powers(m, w.ref, 0.0, x, u, p, d, flow, xdot)
     if model.nj:
         numerics.dynamics.jump(m, w.ref, 0, 0.0, x.copy(), u, p, d.copy())
     integrator.crosses(0, 1.0, -1.0)

@@ -20,6 +20,7 @@ from andyc.runtime.events import finish_jump, follow_instant_jumps
 from andyc.runtime.inputs import inputs_at
 from andyc.runtime.options import Projection
 from andyc.runtime.status import INTERRUPTED, at, diverging_constraints, ending, failure, in_jump
+from andyc.runtime.work import JumpWork, with_work
 
 MODE = {"rk4": IDEAL, "projection": IDEAL, "lagrange": LAGRANGE, "baumgarte": BAUMGARTE}
 
@@ -32,19 +33,22 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
     if abs(n_steps * dt - t_end) > 1e-9 * max(1.0, t_end):
         raise SimulationError(f"t_end = {t_end} is not a whole number of steps dt = {dt}; "
                               f"use t_end = {n_steps * dt:g} or another dt")
-    module, integrator = model.module, model.numerics.integrator
+    integrator = model.numerics.integrator
     mode = MODE[method]
     constrain = method == "projection" and model.nc > 0
     etol = projection.energy_tol if projection.energy_correction else -1.0
     do_project = constrain or etol >= 0 or (projection.normalize and bool(model.quaternions))
     rows = n_steps // every + 2             # the grid, and a last sample where a run stops between grid points
     nu = len(model.input_names)
-    log = integrator.Log(np.empty(rows), np.empty((rows, model.nx)), np.empty((rows, nu)),
+    nx = model.nx
+    x = with_work(model, x)                        # the state, then the work of each slot (andyc.runtime.work)
+    state = x[:nx]                                 # (a view: the jumps change it in place)
+    log = integrator.Log(np.empty(rows), np.empty((rows, x.shape[0])), np.empty((rows, nu)),
                          np.empty(rows, dtype=np.int64), np.empty((rows, model.nd)))
     out_t, out_x, out_u, out_f, out_d = log
     w = work(model)
     fn, data = source.function_data
-    out_t[0], out_x[0], out_u[0], out_f[0], out_d[0] = 0.0, x, inputs_at(model, source, 0.0, x, p, d, flow), flow, d
+    out_t[0], out_x[0], out_u[0], out_f[0], out_d[0] = 0.0, x, inputs_at(model, source, 0.0, state, p, d, flow), flow, d
     i, row, chunk, status, t = 0, 1, 1000, OK, 0.0
     counts = w.counts                               # steps, event trial steps, rows logged (see advance)
     counts[2] = row
@@ -55,8 +59,9 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
         return run_of(tuple(a[:n].copy() for a in log), INTERRUPTED, stats(counts, constrain))
 
     interrupts.partial = partial
-    e0 = module.energy(0.0, x, out_u[0], p, d)
-    flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, jumps, w, mode)
+    balance = JumpWork(model, x, out_u[0], p, d, t)
+    flow, message = follow_instant_jumps(model, t, state, source, p, d, flow, jumps, w, mode)
+    e0 = balance.add(x, inputs_at(model, source, t, state, p, d, flow), d)
     while i < n_steps and status == OK and message is None:
         message = interrupts.reason()
         if message is not None:
@@ -65,6 +70,7 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
         i_end = min(i + chunk, n_steps)
         tic = time.perf_counter()
         i0 = i
+        d_before = d.copy()
         w.u[:] = source.held(flow)
         opts = integrator.options(mode, do_project, constrain, e0, etol, jumps.event_tol)
         i, row, status, t, flow, k = integrator.advance(model.ref, w.ref, opts, fn, data, p, d, x, t, flow, i, i_end,
@@ -73,12 +79,13 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
             if status != OK:
                 message = in_jump(model, status, k, t)
                 break
-            flow, message = finish_jump(model, k, t, w.x_event, x, w.u, p, d, flow, jumps)
+            balance = JumpWork(model, w.x_event, w.u, p, d_before, t)
+            flow, message = finish_jump(model, k, t, w.x_event[:nx], state, w.u, p, d, flow, jumps)
             if message is None:
-                flow, message = follow_instant_jumps(model, t, x, source, p, d, flow, jumps, w, mode)
-            if message is None and source.into(model, t, x, p, d, flow, w.u) != OK:
+                flow, message = follow_instant_jumps(model, t, state, source, p, d, flow, jumps, w, mode)
+            if message is None and source.into(model, t, state, p, d, flow, w.u) != OK:
                 status = INPUT_FAILED
-            e0 = module.energy(t, x, w.u, p, d)
+            e0 = balance.add(x, w.u, d)
         elif i > i0:
             elapsed = time.perf_counter() - tic
             chunk = int(min(max(chunk * 0.25 / max(elapsed, 1e-6) * (i_end - i0) / (i - i0), 1000), 10_000_000))
@@ -86,11 +93,11 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
     if status != OK:
         why = failure(model, source, status, t, d, p)
         if status == DIVERGED:
-            why += diverging_constraints(model, t, x, w.u, p, d, flow)
+            why += diverging_constraints(model, t, state, w.u, p, d, flow)
         message = f"stopped: {why}, step {i}"
     elif message is not None and out_t[row - 1] != t:
         out_t[row], out_x[row], out_f[row], out_d[row] = t, x, flow, d
-        if source.into(model, t, x, p, d, flow, out_u[row]) != OK:
+        if source.into(model, t, state, p, d, flow, out_u[row]) != OK:
             out_u[row] = np.nan
         row += 1
     return tuple(a[:row] for a in log), ending(message, row, jumps), stats(counts, constrain)

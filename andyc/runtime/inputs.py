@@ -414,6 +414,7 @@ def _controller_callback(model, ctrl: Controller, record: int):
 
     failed, take = model.numerics.inputs.failed, model.numerics.inputs.take
     sets = np.ascontiguousarray(model.module.FLOW_SETS_INPUT)
+    nx = model.nx       # the integrators' x carries the work after the state (andyc.runtime.work): not the user's
     if ctrl.compiled is None:
         python = ctrl.function
 
@@ -432,7 +433,8 @@ def _controller_callback(model, ctrl: Controller, record: int):
                 r, ok = guarded(t, x, d, p)
             return r, ok
 
-        def inputs(t, x, d, p, flow, u, data):
+        def inputs(t, x_work, d, p, flow, u, data):
+            x = x_work[:nx]
             r, ok = call_python(t, x, d, p)
             if not ok:
                 return failed(data, record, RAISED, t, x, 0)
@@ -440,7 +442,8 @@ def _controller_callback(model, ctrl: Controller, record: int):
     elif ctrl.returns_scalar:
         control = ctrl.compiled
 
-        def inputs(t, x, d, p, flow, u, data):
+        def inputs(t, x_work, d, p, flow, u, data):
+            x = x_work[:nx]
             try:
                 r = control(t, x, d, p)
             except Exception:
@@ -451,7 +454,8 @@ def _controller_callback(model, ctrl: Controller, record: int):
     else:
         control = ctrl.compiled
 
-        def inputs(t, x, d, p, flow, u, data):
+        def inputs(t, x_work, d, p, flow, u, data):
+            x = x_work[:nx]
             try:
                 r = control(t, x, d, p)
             except Exception:

@@ -11,6 +11,7 @@ import numpy as np
 import andyc
 from andyc.errors import plural, printable
 from andyc.outputs import write_atomic
+from andyc.runtime.status import drift, largest_residual
 
 
 @dataclass
@@ -51,6 +52,9 @@ class Run:
     contact_rows: list = field(default_factory=list)   # the multiplier (row) of each contact's normal force
     andyc_version: str = andyc.__version__
     display: dict = field(default_factory=dict)      # state units, the ground, shapes: for pictures (andyc.spec.display)
+    work_names: list = field(default_factory=list)   # the elements that do work, then 'jumps' (andyc.runtime.work)
+    work: np.ndarray | None = None                   # (N, nw) the work of each, integrated with the motion
+    power: np.ndarray | None = None                  # (N, nw) the power of each at the samples ('jumps': 0)
 
     def __post_init__(self):
         n = self.time.shape[0]
@@ -72,6 +76,17 @@ class Run:
             self.residual_velocity = np.zeros((n, nc))
         if self.residual_position is None:
             self.residual_position = np.zeros((n, 0))
+        if self.work is None:
+            self.work = np.zeros((n, len(self.work_names)))
+        if self.power is None:
+            self.power = np.zeros((n, len(self.work_names)))
+
+    @property
+    def energy_balance(self) -> np.ndarray:
+        """(N,) E(t) - E(0) - W(t), W the work of every element and the energy the jumps changed: 0 but for the
+        integration's error (Braun & Goldfarb's energy law, andyc/symbolic/work.py)."""
+        total = self.work.sum(axis=1) if self.work.size else np.zeros(len(self.time))
+        return self.energy - self.energy[:1] - total
 
     @property
     def signal_names(self) -> list:
@@ -114,6 +129,10 @@ class Run:
                            f"velocity {_largest(self.residual_velocity):.3g}")
             if "initial_projection" in s:
                 constraints += f" (initial state projected from {s['initial_projection']:.3g})"
+            if self.finished:
+                clause = drift(self.method, *largest_residual(self.residual_position, self.residual_velocity,
+                                                              self.time))
+                constraints += f"; {clause}" if clause else ""
         if self.jump_names:
             counts = {}
             for name in self.event_names():
@@ -122,9 +141,16 @@ class Run:
                             + (f" ({', '.join(f'{k} {v}' for k, v in counts.items())})" if counts else "")
                             + f", ending in flow {self.flow_names[self.flow[-1]]}")
         return (f"{self.model}: {self.method}, t = 0 .. {self.time[-1]:.6g} s, {s['steps']} steps, "
-                f"{s['rhs_evaluations']} rhs evaluations, {s['wall_seconds']:.3f} s wall; energy "
-                f"{self.energy[0]:.10g} -> {self.energy[-1]:.10g} J (change {self.energy[-1] - self.energy[0]:.3g} J)"
+                f"{s['rhs_evaluations']} rhs evaluations, {s['wall_seconds']:.3f} s wall; {self._energy_summary()}"
                 f"{constraints}")
+
+    def _energy_summary(self) -> str:
+        """The energy at both ends; with elements that do work, their work and the balance's largest residual."""
+        e = f"energy {self.energy[0]:.10g} -> {self.energy[-1]:.10g} J"
+        if not self.work_names:
+            return f"{e} (change {self.energy[-1] - self.energy[0]:.3g} J)"
+        return (f"{e}, work {self.work[-1].sum():.6g} J; energy balance residual "
+                f"{_largest(self.energy_balance):.3g} J (largest |E - E0 - W|)")
 
     def attributes(self) -> dict:
         """The run's metadata as HDF5 attributes; text on one line, control characters and lone surrogates
@@ -186,6 +212,10 @@ def write_h5(run: Run, path: Path) -> None:
         f["residual/position"] = run.residual_position
         f["residual/velocity"] = run.residual_velocity
         f["energy"] = run.energy
+        f["work"] = run.work
+        f["work"].attrs["names"] = run.work_names
+        f["power"] = run.power
+        f["energy_balance"] = run.energy_balance
         for name, xyz in run.frames.items():
             f[f"frames/{name}"] = xyz
         if run.contact_names:
@@ -233,7 +263,9 @@ def read_h5(path) -> Run:
                    input_names=[str(s) for s in f["inputs"].attrs["names"]] if "inputs" in f else [],
                    input_values=f["inputs"][()] if "inputs" in f else None,
                    frame_parents=json.loads(a.get("frame_parents", "{}")), display=json.loads(a.get("display", "{}")),
-                   contact_names=contacts["names"], contact_rows=contacts["rows"])
+                   contact_names=contacts["names"], contact_rows=contacts["rows"],
+                   work_names=[str(s) for s in f["work"].attrs["names"]] if "work" in f else [],
+                   work=f["work"][()] if "work" in f else None, power=f["power"][()] if "power" in f else None)
 
 
 def write_csv(run: Run, path: Path) -> None:
@@ -246,6 +278,10 @@ def write_csv(run: Run, path: Path) -> None:
                + [f"c_{m}" for m in run.multiplier_names])
     data = [run.time[:, None], run.state, run.discrete, run.input_values, run.flow[:, None], run.energy[:, None],
             run.multipliers, run.residual_position, run.residual_velocity]
+    if run.work_names:
+        columns += ([f"power_{w}" for w in run.work_names] + [f"work_{w}" for w in run.work_names]
+                    + ["energy_balance"])
+        data += [run.power, run.work, run.energy_balance[:, None]]
     if run.contact_names:
         columns += [f"closed_{c}" for c in run.contact_names] + [f"normal_force_{c}" for c in run.contact_names]
         data += [run.contact_closed, run.normal_forces]

@@ -52,6 +52,7 @@ from andyc.runtime.methods import FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
 from andyc.runtime.options import Events, Init, Projection
 from andyc.runtime.progress import Progress
 from andyc.runtime.run import Run
+from andyc.runtime.status import lost_constraints
 
 
 def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str = "rk4", *,
@@ -99,6 +100,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     initial = consistent_initial_state(model, x, u, p, d, flow, init) if model.nc else {}
     if method in ("lagrange", "baumgarte") and model.nc:
         require_independent_rows(model, method, x, u, p, d, flow)
+    if projection.energy_correction:
+        _require_free_speed(model, x, u, p, d, flow)
     bar = Progress(f"{model.name} {method}", t_end, enabled=progress)
     interrupts = interrupts or Interrupts()
     start = time.perf_counter()
@@ -126,14 +129,34 @@ def _check_option(name: str, value, kind: type) -> None:
 
 def _energy_correction(model: CompiledModel, method: str, projection: Projection) -> Projection:
     """projection with energy_correction decided: by default on for the projection method of a model that
-    declares energy conserved; asked for elsewhere, refused."""
+    declares energy conserved. Asked for, it corrects to the energy balance E - E0 - W = 0 (W the work of every
+    element, andyc.runtime.work; 0 on a conservative model): refused for another method, and for a model whose
+    balance is not known (a frame moved by a link that depends on t)."""
     if projection.energy_correction is None:
         return dataclasses.replace(projection, energy_correction=model.conserves_energy and method == "projection")
-    if projection.energy_correction and not (model.conserves_energy and method == "projection"):
-        raise SimulationError("energy correction needs the projection method and a model that declares "
-                              "'conserves_energy: true'" + ("" if model.conserves_energy else
-                                                            f" ({model.name} does not)"))
+    if projection.energy_correction and method != "projection":
+        raise SimulationError(f"energy correction needs the projection method, not {method}; use --method projection")
+    if projection.energy_correction and model.untracked_work:
+        raise SimulationError(f"{model.source}: energy correction: the energy law E - E0 - W = 0 is not known: frame "
+                              f"'{model.untracked_work[0]}' moves by a link that depends on t, whose driving work "
+                              "andyc does not derive; run without --energy-correction")
     return projection
+
+
+def _require_free_speed(model: CompiledModel, x, u, p, d, flow) -> None:
+    """An energy correction needs a speed the constraints leave free at the start (Braun & Goldfarb eq. 6:
+    the direction N L^T v is 0 when the rows fix every speed); FILE:LINE of the first row when they do."""
+    rows = model.active_rows(flow)
+    if not rows:
+        return
+    A = np.zeros((model.nc, model.nv))
+    model.module.constraints(0.0, x, u, p, d, np.empty(model.nh), np.empty(model.nc), A, np.empty(model.nc))
+    rank = np.linalg.matrix_rank(A[rows])
+    if rank >= model.nv:
+        line, path = model.constraint_where[rows[0]]
+        raise SimulationError(f"{model.source}:{line}: {path}: the energy law has no speed to correct: the "
+                              f"{len(rows)} constraint rows active at the start fix all {model.nv} speeds (rank "
+                              f"{rank}); run without energy correction")
 
 
 @dataclass
@@ -158,7 +181,7 @@ class _Assembly:
         model, p, frame_names, fixed = self.model, self.p, self.frame_names, self.method in FIXED_STEP
         stats = {**stats, "wall_seconds": time.perf_counter() - self.start, "jumps": len(self.jumps.times),
                  **self.initial}
-        t_log, x_log, u_log, f_log, d_log = log
+        t_log, x_log, u_log, f_log, d_log = log        # x_log: the state, then the work (andyc.runtime.work)
         n = t_log.shape[0]
         energy = np.empty(n)
         integrator = model.numerics.integrator
@@ -172,12 +195,18 @@ class _Assembly:
             xyz = np.empty((n, len(model.frame_names), 3))
             integrator.evaluate_frames(model.ref, log, p, xyz)
             frames_out = {name: xyz[:, model.frame_names.index(name)] for name in frame_names}
+        power = np.empty((n, model.nw))
+        if model.nw:
+            integrator.evaluate_powers(model.ref, work(model).ref, log, p, power)
+        status = lost_constraints(self.method, status, phi, c, t_log)
         held = u_log[0] if n else self.source.held(model.initial_flow)
         return Run(model=model.name, spec_sha256=model.spec_sha256, method=self.method, dt=self.dt, nq=model.nq,
                    nv=model.nv, rtol=0.0 if fixed else self.rtol, atol=0.0 if fixed else self.atol, t_end=self.t_end,
                    parameters=dict(zip(model.parameter_names, map(float, p))),
                    inputs={n: self.source.drives.get(n, float(v)) for n, v in zip(model.input_names, held)},
-                   state_names=list(model.state_names), time=t_log, state=x_log, input_names=list(model.input_names),
+                   state_names=list(model.state_names), time=t_log, state=np.ascontiguousarray(x_log[:, :model.nx]),
+                   work_names=list(model.work_names), work=np.ascontiguousarray(x_log[:, model.nx:]), power=power,
+                   input_names=list(model.input_names),
                    input_values=u_log, energy=energy, frames=frames_out, status=status, stats=stats,
                    multiplier_names=list(model.multiplier_names), multipliers=lam, residual_position=phi,
                    residual_velocity=c, energy_correction=bool(self.energy_correction),
@@ -194,7 +223,7 @@ def _check_size(model: CompiledModel, t_end: float, dt: float, every: int) -> No
     if steps > MAX_STEPS:
         raise SimulationError(f"t_end / dt = {steps:.3g} steps, past the limit of {MAX_STEPS:.0e}; raise dt or "
                               f"shorten t_end")
-    width = 2 + model.nx + len(model.input_names) + model.nd
+    width = 2 + model.nx + model.nw + len(model.input_names) + model.nd
     size = (steps / every + 2) * width * 8
     if size > MAX_LOG_BYTES:
         raise SimulationError(f"the run would log {steps / every:.3g} samples ({size / 1e9:.3g} GB), past the "

@@ -68,6 +68,45 @@ def ending(message: str | None, samples: int, jumps) -> str:
     return f"{message}; the {samples} samples before it are kept"
 
 
+# The methods that do not correct a constraint's drift, and the residual past which a run with them has lost its
+# constraints (a closed loop whose position or velocity residual passes it is no longer the mechanism).
+DRIFTING_METHODS = ("rk4", "lagrange")
+DRIFT_BOUND = 1e-3
+
+
+def drift(method: str, residual: float, t: float) -> str:
+    """The clause that says a run of a DRIFTING_METHODS method lost its constraints (largest residual `residual`,
+    reached at t) and what to do about it; "" when it did not."""
+    if method not in DRIFTING_METHODS or not residual > DRIFT_BOUND:
+        return ""
+    return (f"the constraints drifted to a residual of {residual:.3g}{at(t)} (past {DRIFT_BOUND:g}): {method} does "
+            f"not correct the drift; use --method projection, which keeps them at round-off")
+
+
+def lost_constraints(method: str, status: str, phi, c, time) -> str:
+    """A stopped run's status with the drift clause (see `drift`) when the samples it kept had lost their
+    constraints, or when they are non-finite or the run blew up (a closed loop blowing up)."""
+    if not status.startswith("stopped") or method not in DRIFTING_METHODS or not (phi.size or c.size) or not len(time):
+        return status
+    residual, t = largest_residual(phi, c, time)
+    blew = MESSAGES[NONFINITE] in status or MESSAGES[DIVERGED] in status
+    if blew and not residual > DRIFT_BOUND:
+        return status + (f"; {method} does not correct the constraints' drift (largest residual {residual:.3g}); "
+                         "try --method projection")
+    clause = drift(method, residual, t)
+    return f"{status}; {clause}" if clause else status
+
+
+def largest_residual(phi, c, time) -> tuple[float, float]:
+    """(the largest |residual| over the samples and rows, position and velocity level, NaN rows skipped, inf
+    for a non-finite one; the time of the sample where it is)."""
+    both = np.abs(np.hstack([phi, c]))
+    both = np.where(np.isnan(both), 0.0, both)
+    row = np.max(both, axis=1) if both.shape[1] else np.zeros(len(time))
+    k = int(np.argmax(row))
+    return float(row[k]), float(time[k])
+
+
 def diverging_constraints(model, t, x, u, p, d, flow) -> str:
     """Why a state may have diverged from (t, x), the last sound state, as a clause for the message: the
     flow's constraint rows nearly dependent there (a singular pose, where the constraint forces that keep

@@ -259,7 +259,7 @@ def _check_multipliers(constraints: list, written: dict, scope: Scope):
     made = {f"{q.name}_dot": f"the rate of coordinate '{q.name}'" for q in scope.coordinates}
     made.update({s.name: f"the {'position' if s.component in 'xyz' else 'quaternion'} signal of frame "
                          f"'{s.frame}'" for s in scope.signals})
-    made.update({n: f"the run-file column '{n}'" for n in ("time", "flow", "energy")})
+    made.update({n: f"the run-file column '{n}'" for n in ("time", "flow", "energy", "energy_balance")})
     seen = {}
     for c in sorted(constraints, key=lambda c: c.where):        # in document order, by section
         given = written[c.where[0]][c.where[1]].get("multiplier")
@@ -296,25 +296,22 @@ def check_conservative(elements: Elements, constraints: list, frames: list, writ
     """
     workers = [f"damper '{x.name}'" for x in elements.dampers] + [f"{x.kind} '{x.name}'" for x in elements.loads]
     # (Rows without coordinates, or without speeds, are reported by _constraint() already.)
+    speeds = set(scope.rates.values())
+    positions = {q.q for q in scope.coordinates}
     for c in sorted(constraints, key=lambda c: c.where[1]):
-        if c.holonomic:
-            positions = {q.q for q in scope.coordinates} | set(c.quantities)
-            if any(TIME in r.free_symbols and r.free_symbols & positions for r in c.rows):
-                workers.append(f"constraint '{c.name}' (depends on t)")
+        rows = working_rows(c, positions, speeds)
+        if not rows:
             continue
-        speeds = set(scope.rates.values()) | {s for s, f in c.quantities.items() if f.kind != "position"}
+        if c.holonomic:
+            workers.append(f"constraint '{c.name}' (depends on t)")
+            continue
         texts = written[c.where[1]]["nonholonomic"]
         texts = texts if isinstance(texts, list) else [texts]
-        rest = [text for j, (r, text) in enumerate(zip(c.rows, texts))
-                if r.free_symbols & speeds and (_works(r, speeds) if j in c.nonlinear
-                                                else sp.expand(r.subs({s: 0 for s in speeds})) != 0)]
-        if rest:
-            i = texts.index(rest[0])
-            why = ("has a force whose power lam dPhi/dv v is not 0 on the motion" if i in c.nonlinear
-                   else "has a term without speeds")
-            workers.append(f"constraint '{c.name}' ({rest[0]!r} {why})")
-    workers += [f"frame '{f.name}' (its link depends on t)" for f in frames
-                if any(TIME in _free(step) for step in f.transforms)]
+        i = rows[0]
+        why = ("has a force whose power lam dPhi/dv v is not 0 on the motion" if i in c.nonlinear
+               else "has a term without speeds")
+        workers.append(f"constraint '{c.name}' ({texts[i]!r} {why})")
+    workers += [f"frame '{name}' (its link depends on t)" for name in rheonomic_frames(frames)]
     workers += [f"spring '{x.name}' (depends on t)" for x in elements.springs
                 if x.length is not None and TIME in x.length.free_symbols]
     workers += [f"potential '{x.name}' (depends on t)" for x in elements.potentials
@@ -329,6 +326,64 @@ def _works(row: sp.Expr, speeds: set) -> bool:
     """A row nonlinear in the speeds does work: A v / Phi_v depends on the speeds (see check_conservative)."""
     power = sum((sp.diff(row, s) * s for s in row.free_symbols & speeds), sp.Integer(0))
     return bool(sp.simplify(power / row).free_symbols & speeds)
+
+
+def check_energy_law(data: dict, frames: list, constraints: list, flows: list, initial_flow: int, scope: Scope):
+    """Where the model asks for the energy correction (`energy_correction: true` in its simulate: section or an
+    expectation), its law E(t) - E(0) - W(t) = 0 (Braun & Goldfarb eq. 5-6, W the work of every element,
+    andyc/symbolic/work.py) must make sense: every element's work known (no frame whose link depends on t),
+    and a speed left for the correction to move (fewer constraint rows than speeds in the initial flow)."""
+    places = [("simulate", "energy_correction")] if (data.get("simulate") or {}).get("energy_correction") else []
+    places += [("expect", i, "energy_correction") for i, e in enumerate(data.get("expect") or [])
+               if isinstance(e, dict) and e.get("energy_correction")]
+    if not places:
+        return
+    driven = rheonomic_frames(frames)
+    speeds = len(scope.coordinates) + len(scope.speeds)
+    active = set(flows[initial_flow].constraints) if flows else {c.name for c in constraints}
+    rows = sum(len(c.rows) for c in constraints if c.name in active)
+    for path in places:
+        if driven:
+            scope.report.error(path, f"the energy law E - E0 - W = 0 is not known: frame '{driven[0]}' moves by a link "
+                               "that depends on t, whose driving work andyc does not derive",
+                               "remove energy_correction, or prescribe that motion by a constraint that depends on t "
+                               "(its work is part of W)")
+        elif rows >= speeds:
+            scope.report.error(path, f"the energy law has no speed to correct: the {rows} constraint rows of the "
+                               f"initial flow fix all {speeds} speeds", "remove energy_correction")
+
+
+def check_work_names(data: dict, jumps: list, scope: Scope):
+    """A model with jumps carries the energy they change as the work slot 'jumps' (andyc/symbolic/work.py, the
+    run files' work_jumps and power_jumps): no element that does work may take that name."""
+    if not jumps:
+        return
+    for section in ("forces", "torques", "dampers", "springs", "potentials", "constraints"):
+        for i, entry in enumerate(data.get(section) or []):
+            if isinstance(entry, dict) and entry.get("name") == "jumps":
+                scope.report.error((section, i, "name"), "the name 'jumps' is taken by the work of the model's "
+                                   "jumps (the run files' work_jumps, power_jumps)", "choose another name")
+
+
+def working_rows(c: Constraint, positions: set, speeds: set) -> list[int]:
+    """The rows of constraint c whose force does work on the motion (their power -lam b is not 0): a holonomic row
+    Gamma(t, q) that depends on t (b = dGamma/dt), a nonholonomic row J v + b with a term b without speeds.
+    positions: the coordinate symbols; speeds: the speed symbols. (A row whose J alone depends on t does no work:
+    its force is normal to every allowed velocity.) A row nonlinear in the speeds works where A v / Phi_v depends
+    on the speeds (_works)."""
+    if c.holonomic:
+        positions = positions | set(c.quantities)
+        return [i for i, r in enumerate(c.rows) if TIME in r.free_symbols and r.free_symbols & positions]
+    speeds = speeds | {s for s, f in c.quantities.items() if f.kind != "position"}
+    return [i for i, r in enumerate(c.rows)
+            if r.free_symbols & speeds and (_works(r, speeds) if i in c.nonlinear
+                                            else sp.expand(r.subs({s: 0 for s in speeds})) != 0)]
+
+
+def rheonomic_frames(frames: list) -> list[str]:
+    """The frames whose link depends on t: their motion is prescribed, and the power that drives it is not
+    derived (andyc/symbolic/work.py), so the energy balance of a model with one is not complete."""
+    return [f.name for f in frames if any(TIME in _free(step) for step in f.transforms)]
 
 
 def _free(step) -> set:

@@ -20,7 +20,8 @@ import sympy as sp
 from andyc.errors import Diagnostic, SpecError
 from andyc.spec import urdf
 from andyc.spec.closed_form import build_closed_form
-from andyc.spec.constraints import FrameQuantities, build_constraints, check_conservative
+from andyc.spec.constraints import (FrameQuantities, build_constraints, check_conservative, check_energy_law,
+                                    check_work_names)
 from andyc.spec.contacts import build_contacts
 from andyc.spec.elements import build_elements
 from andyc.spec.expect import build_expect
@@ -114,6 +115,8 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
     conserves = bool(data.get("conserves_energy", False))
     if conserves:
         check_conservative(elements, constraints, frames, data.get("constraints") or [], scope)
+    check_energy_law(data, frames, constraints, flows, initial_flow, scope)
+    check_work_names(data, jumps, scope)
     gravity = (scope.vector(data["gravity"], ("gravity",), scope.parameter_names, "only parameters are allowed here")
                if "gravity" in data else sp.zeros(3, 1))
     if report.problems:

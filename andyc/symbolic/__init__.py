@@ -5,6 +5,7 @@
     constraints.py  constraint residuals, Jacobian and velocity-product term (ANDY eq. 10-12)
     hybrid.py       active rows per flow, guards, resets, impacts (ANDY eq. 16-19)
     reduce.py       bodies fixed to one moving frame merged into one
+    work.py         the power of every element that does work (the energy balance E - E0 - W)
     emitter.py      the ordered intermediate assignments;  model.py: SymbolicModel and its summary
     linearize.py    A, B by exact forward-mode derivatives;  eom.py: the equations written out for reading
 """
@@ -22,6 +23,7 @@ from andyc.symbolic.hybrid import hybrid_terms
 from andyc.symbolic.kinematics import frame_kinematics
 from andyc.symbolic.model import SymbolicModel
 from andyc.symbolic.reduce import merge_rigid_bodies
+from andyc.symbolic.work import work_slots
 
 
 def derive(spec: Spec) -> SymbolicModel:
@@ -41,6 +43,7 @@ def derive(spec: Spec) -> SymbolicModel:
     quantities = FrameQuantities(spec, kin, emit)
     constraints = constraint_terms(spec, quantities)
     hybrid = hybrid_terms(spec, quantities, constraints)
+    work_names, powers, row_work = work_slots(spec, terms, constraints)
     rates = {sym: rate for K in kin.values() for sym, rate in K.signal_rates.items()}
     return SymbolicModel(
         spec=spec, t=TIME,
@@ -50,7 +53,8 @@ def derive(spec: Spec) -> SymbolicModel:
         inputs=[s for s, _ in spec.inputs.values()],
         assignments=emit.assignments, M=M, G=G, energy=energy, power=power,
         frame_positions={f.name: kin[f.name].r for f in spec.frames if not f.internal},
-        elements=terms, constraints=constraints, hybrid=hybrid, derive_seconds=time.perf_counter() - start)
+        elements=terms, powers=powers, work_names=work_names, row_work=row_work,
+        constraints=constraints, hybrid=hybrid, derive_seconds=time.perf_counter() - start)
 
 
 __all__ = ["derive", "SymbolicModel"]

@@ -20,9 +20,9 @@ Each element states its terms as pairs (J, f): G += J^T f, and (J, W):
 M += J^T W J. The sums (eq. 8) first add the f and W of elements that share
 a Jacobian (a body and the damper at its COM; the bars of one rigid body),
 then multiply once. The energy is the kinetic energy plus gravity, spring and
-potential energy; `power` is the power of the non-conservative elements
-(forces, torques, dampers), so that dE/dt = power when potentials do not
-depend on t.
+potential energy; `power` is the power of each element that does work (forces,
+torques, dampers; springs and potentials by their explicit dependence on t: see
+work.py, which adds the constraints').
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ from andyc.errors import SpecError
 from andyc.spec.model import Spec
 from andyc.symbolic.emitter import Emitter
 from andyc.symbolic.kinematics import FrameKinematics, cross
+from andyc.symbolic.work import time_power
 
 
 @dataclass
@@ -114,9 +115,10 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
             x = emit.scalar(f"s_{s.name}_len", _norm(delta))
             dx = (a.Jv - b.Jv).T * delta / x
         stretch = x - s.rest_length
-        out.append(ElementTerms(s.name, G_direct=-s.stiffness * stretch * dx, energy=s.stiffness * stretch ** 2 / 2))
+        energy = s.stiffness * stretch ** 2 / 2
+        out.append(ElementTerms(s.name, G_direct=-s.stiffness * stretch * dx, energy=energy, power=time_power(energy)))
     for p in spec.potentials:
-        out.append(ElementTerms(p.name, G_direct=-gradient(p.energy), energy=p.energy))
+        out.append(ElementTerms(p.name, G_direct=-gradient(p.energy), energy=p.energy, power=time_power(p.energy)))
     return out
 
 

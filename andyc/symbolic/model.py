@@ -35,6 +35,9 @@ class SymbolicModel:
     power: sp.Expr            # power of the non-conservative elements
     frame_positions: dict     # frame name -> 3x1, world (user frames only)
     elements: list            # ElementTerms, per element
+    work_names: list          # the work slots the integrator carries (work.py): elements, constraints, 'jumps'
+    powers: list              # the power of each element slot (the first of work_names), written after G
+    row_work: list            # per velocity-level row: the slot of its constraint's power, or -1
     constraints: ConstraintTerms  # phi, c = A v + b, kappa (eq. 10-12); empty without constraints
     hybrid: HybridTerms       # flows, jumps (one flow, no jumps without a hybrid section)
     derive_seconds: float = 0.0

@@ -1,0 +1,68 @@
+"""The power of every element that does work on the model: the terms of the energy balance.
+
+With E the total energy (kinetic + gravity + springs + potentials) and W_i the work of element i,
+
+    dE/dt = sum_i P_i,      E(t) - E(0) - W(t) = 0,      W = sum_i W_i,  W_i(t) = int_0^t P_i dt
+
+along the motion (Braun & Goldfarb's energy-type law, Part I eq. (d), with the work as its time-dependent
+part). The elements that do work, each with its power P_i:
+
+    force F at frame f (vector in e's axes)     v_f . R_e F
+    torque T on frame f                         w_f . R_e T
+    damper on chi                               -b chi . chi     (-b |chi| chi . chi, quadratic)
+    potential V(q, t)                           dV/dt at fixed q (explicit t only)
+    spring of length x(q, t)                    k (x - x0) dx/dt at fixed q (explicit t only)
+    constraint with rows c = A v + b            lam . (A v - c) = -lam . b on the manifold c = 0
+
+The constraint's power: its force A^T lam (M dv/dt = G + A^T lam) has power v . A^T lam = lam . (c - b); a
+holonomic row Gamma(t, q) has b = dGamma/dt at fixed q, a nonholonomic row J v + b its term without
+speeds. Only the rows whose b is not 0 are elements (andyc.spec.constraints.working_rows): the others do no
+work on any allowed motion. The numerics compute it from the multipliers of the step's own constraint solve
+and the rows' A and c (the table ROW_WORK of the build), as -lam . (c - A v), so that a run whose c
+drifts from 0 still gets the b of its actual state; the elements' powers are written by the dynamics leaf
+after G (G[NV + i]), sharing its subexpressions.
+
+Not here: a frame whose link depends on t (its driving power is not derived; the balance of such a model
+includes it as an error), and the energy a jump changes (the integrator adds E+ - E- to the work `jumps`).
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from andyc.spec.constraints import working_rows
+from andyc.spec.expressions import TIME
+from andyc.spec.model import Spec
+
+JUMPS = "jumps"     # the work slot of the energy the jumps change (resets, impacts): E+ - E- at each
+
+
+def work_slots(spec: Spec, terms: list, constraints) -> tuple[list, list, list]:
+    """The work slots of the model: (names, powers, row_slot). names: every element that does work, in the
+    model's order (forces and torques, dampers, springs and potentials that depend on t: `terms`, the
+    ElementTerms), then each constraint with a working row, then 'jumps' when the model has jumps. powers: the
+    power of each element slot (the first len(powers) names), which the dynamics leaf writes after G. row_slot:
+    for each velocity-level row of `constraints`, the slot its power -lam (c - A v) goes to, or -1 (the
+    numerics compute it from the step's multipliers, A and c)."""
+    elements = [(e.name, e.power) for e in terms if e.power != 0]
+    names, powers = [n for n, _ in elements], [e for _, e in elements]
+    row_slot = [-1] * constraints.nc
+    positions = {c.q for c in spec.coordinates}
+    for c in spec.constraints:
+        working = working_rows(c, positions, set(spec.speed_symbols))
+        if not working:
+            continue
+        # A constraint's velocity-level rows, in order (holonomic constraints' rows come first in the model's).
+        rows = [i for i, name in enumerate(constraints.rows) if name == c.name]
+        for k in working:
+            row_slot[rows[k]] = len(names)
+        names.append(c.name)
+    if spec.jumps:
+        names.append(JUMPS)
+    return names, powers, row_slot
+
+
+def time_power(energy: sp.Expr) -> sp.Expr:
+    """d energy / dt at fixed q: the power an element's explicit time dependence gives (a potential V(q, t), a
+    spring whose length depends on t)."""
+    return sp.diff(energy, TIME)
