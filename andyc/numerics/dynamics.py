@@ -13,7 +13,7 @@ import numpy as np
 from .compiler import jit
 from .linalg import add_rows_transposed, cholesky, correction, solve_gram, solve_lower, solve_upper, whiten
 from .model import call
-from .status import BAUMGARTE, DEPENDENT, IDEAL, OK, SINGULAR_MASS
+from .status import BAUMGARTE, DEPENDENT, IDEAL, OK, RANK_TOL, SINGULAR_MASS
 
 
 @jit
@@ -82,20 +82,94 @@ def constraint_force(model, p, flow, mode, L, g, S):
       IDEAL      lam = (C C^T)^+ y, the least-norm force of any rank (C^T lam = C^+ y)
       LAGRANGE   lam = (C C^T)^-1 y                           (ANDY eq. 12)
       BAUMGARTE  LAGRANGE's lam - (K_s phi + K_d c)           (ANDY eq. 15)
+    In a flow where a contact slips, its normal force carries Coulomb's friction: the forces are B^T lam with
+    B != A (slip_rows, D = B L^-T), lam = (C D^T)^+ y and g <- g + D^T lam (Pfeiffer & Glocker 1996, ch. 5).
     """
     nr = constraint_system(model, flow, L, g, S)
+    if flow_slips(model, flow, nr):
+        D = slip_rows(model, p, flow, L, S, nr)
+        solve_slipping(model, S, nr, D)
+        if mode == BAUMGARTE:
+            baumgarte(model, p, flow, nr, S)
+        for i in range(model.nv):       # g += D^T lam: a slipping contact's normal force carries its friction
+            s = 0.0
+            for r in range(nr):
+                s += D[r, i] * S[model.s_y, r]
+            g[i] += s
+        return OK
     if solve_gram(model, S, nr, mode == IDEAL) < 0:
         return DEPENDENT
     if mode == BAUMGARTE:
-        call(model.constraint_gains, (p, S))
-        y0, ks, kd = model.s_y, model.s_ks, model.s_kd
-        for r in range(nr):
-            i = model.flow_rows[flow, r]
-            S[y0, r] -= S[kd, i] * S[model.s_cv, i]
-            if i < model.nh:
-                S[y0, r] -= S[ks, i] * S[model.s_phi, i]
+        baumgarte(model, p, flow, nr, S)
     add_rows_transposed(model, S, nr, 1.0, g)
     return OK
+
+
+@jit(inline="always")
+def baumgarte(model, p, flow, nr, S):
+    """lam <- lam - (K_s phi + K_d c) over the flow's rows, lam in S's y row (ANDY eq. 15)."""
+    call(model.constraint_gains, (p, S))
+    y0, ks, kd = model.s_y, model.s_ks, model.s_kd
+    for r in range(nr):
+        i = model.flow_rows[flow, r]
+        S[y0, r] -= S[kd, i] * S[model.s_cv, i]
+        if i < model.nh:
+            S[y0, r] -= S[ks, i] * S[model.s_phi, i]
+
+
+@jit(inline="always")
+def flow_slips(model, flow, nr):
+    """Whether a contact slips in `flow` (a row with friction in FLOW_SLIP): its rows then take slip_rows' solve."""
+    for r in range(nr):
+        if model.flow_slip[flow, r] != 0:
+            return True
+    return False
+
+
+@jit
+def slip_rows(model, p, flow, L, S, nr):
+    """D = B L^-T, the force directions of the flow's rows, whitened (C = A L^-T in S): B = A but for the normal
+    row of a slipping contact, whose force is its normal force plus Coulomb's friction, -sigma mu lam_n along its
+    tangent (sigma = +1 slipping forwards, -1 backwards): B_r = A_r - sigma mu J_t, J_t the contact's stick row
+    (FLOW_SLIP[flow, r] = -sigma (t + 1), t that row; mu the coefficient of jump FLOW_SLIP_MU[flow, r], the
+    slip's end, in S's e row). Only for a flow that slips (flow_slips): the others keep the symmetric solve."""
+    nv = model.nv
+    call(model.restitution, (p, S))
+    D = np.empty((nr, nv))
+    tangent = np.empty(nv)
+    for r in range(nr):
+        for i in range(nv):
+            D[r, i] = S[model.s_c + r, i]
+        code = model.flow_slip[flow, r]
+        if code == 0:
+            continue
+        row = model.s_a + abs(code) - 1
+        scale = S[model.s_e, model.flow_slip_mu[flow, r]] * (1.0 if code > 0 else -1.0)
+        for i in range(nv):             # J_t L^-T, as linalg.whiten
+            s = S[row, i]
+            for j in range(i):
+                s -= L[i, j] * tangent[j]
+            tangent[i] = s * L[i, i]
+            D[r, i] += scale * tangent[i]
+    return D
+
+
+@jit
+def solve_slipping(model, S, nr, D):
+    """y <- (C D^T)^+ y over the first nr rows (C D^T = A M^-1 B^T, not symmetric: see slip_rows), least squares."""
+    K = np.empty((nr, nr))
+    for r in range(nr):
+        for j in range(nr):
+            s = 0.0
+            for i in range(model.nv):
+                s += S[model.s_c + r, i] * D[j, i]
+            K[r, j] = s
+    y = np.empty(nr)
+    for r in range(nr):
+        y[r] = S[model.s_y, r]
+    lam = np.linalg.lstsq(K, y, RANK_TOL)[0]
+    for r in range(nr):
+        S[model.s_y, r] = lam[r]
 
 
 @jit
@@ -108,7 +182,10 @@ def multipliers(model, w, t, x, u, p, d, flow, lam):
     if status != OK:
         return status
     nr = constraint_system(model, flow, M, G, S)
-    solve_gram(model, S, nr, True)
+    if flow_slips(model, flow, nr):
+        solve_slipping(model, S, nr, slip_rows(model, p, flow, M, S, nr))
+    else:
+        solve_gram(model, S, nr, True)
     for r in range(model.nc):
         lam[r] = np.nan
     for r in range(nr):
