@@ -62,7 +62,8 @@ class CompiledModel:
     display: dict = field(default_factory=dict)  # state units, the ground, shapes (andyc.spec.display): for pictures
     contact_names: tuple = ()   # unilateral contacts (andyc.spec.contacts); flow index = their states (contact_states)
     contact_rows: tuple = ()    # the constraint row of each contact's gap
-    jump_contact: tuple = ()    # per jump: the contact whose impact it is (andyc.runtime.contacts resolves it), or -1
+    jump_contact: tuple = ()    # per jump: the contact whose impact it is (andyc.runtime.contacts resolves it), or
+    #                             SLIP_STOP (a slip's end, andyc.numerics.status), or -1
     contact_stick_rows: tuple = ()  # the stick row of each contact with friction, or -1
     jump_kinds: tuple = ()      # per jump: (kind, contact) of a contact's jump (andyc.spec.contacts), ("", -1) else
 
