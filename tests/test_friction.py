@@ -346,3 +346,23 @@ def test_a_slipping_rod_end_against_an_independent_integration(compiled, tmp_pat
     stuck = run.time > t[2]
     assert np.max(np.abs(run.slip_speeds[stuck, 0])) < 1e-12
     assert np.all(np.abs(run.friction_forces[stuck, 0]) <= 0.4 * run.normal_forces[stuck, 0])
+
+
+def test_a_slip_along_the_normal_is_reported_by_check(tmp_path):
+    """`andyc check`: a slip row parallel to the gap's (here the block's speed across the slope) is not a friction
+    direction, at the initial state; the shipped block's is tangent and passes."""
+    from tests.support.cli import invoke
+
+    good = tmp_path / "good.yaml"
+    good.write_text(BLOCK)
+    bad = tmp_path / "bad.yaml"
+    text = BLOCK.replace("slip: cos(th)*block.vx + sin(th)*block.vy", "slip: 2*cos(th)*block.vy - 2*sin(th)*block.vx")
+    bad.write_text(text)
+    result = invoke("check", str(good))
+    assert result.exit_code == 0, result.output
+    result = invoke("check", str(bad))
+    assert result.exit_code == 1
+    line = line_number(text, "    slip:")
+    assert (f"{bad}:{line}: contacts[0].slip: the slip speed of contact 'slope' is along its gap's normal at the "
+            "initial state (its row is a multiple of the gap row): it is not a tangential speed; write the speed of "
+            "the contact point along the tangent") in result.output
