@@ -366,3 +366,57 @@ def test_a_slip_along_the_normal_is_reported_by_check(tmp_path):
     assert (f"{bad}:{line}: contacts[0].slip: the slip speed of contact 'slope' is along its gap's normal at the "
             "initial state (its row is a multiple of the gap row): it is not a tangential speed; write the speed of "
             "the contact point along the tangent") in result.output
+
+
+# -- two contacts with friction ----------------------------------------------------------------------
+
+ROD_SKID = ROD_SLIDE.replace("name: rod_slide", "name: rod_skid").replace(
+    "parameters: {m: 1.0, L: 1.0, g: 9.81, mu: 0.4, phi0: 1.0, v0: 1.0}",
+    "parameters: {m: 1.0, L: 1.0, g: 9.81, mu: 0.4, h0: 0.0, e: 0.0, v0: 1.0}").replace(
+    "y: {initial: L/2*sin(phi0)}\n  phi: {initial: phi0}", "y: {initial: h0}\n  phi: {initial: 0}").replace(
+    "  - {name: foot, parent: rod, translation: [-L/2, 0, 0]}\n",
+    "  - {name: left_end, parent: rod, translation: [-L/2, 0, 0]}\n"
+    "  - {name: right_end, parent: rod, translation: [L/2, 0, 0]}\n").replace(
+    "  - {name: floor, gap: foot.y, slip: foot.vx, friction: mu, multiplier: normal}\n",
+    "  - {name: left, gap: left_end.y, slip: left_end.vx, friction: mu, restitution: e}\n"
+    "  - {name: right, gap: right_end.y, slip: right_end.vx, friction: mu, restitution: e}\n")
+
+
+@pytest.fixture(scope="module")
+def rod_skid(compiled, tmp_path_factory):
+    path = tmp_path_factory.mktemp("rod_skid") / "rod_skid.yaml"
+    path.write_text(ROD_SKID)
+    return compiled(path)
+
+
+def test_a_rod_skidding_on_two_supports_stops_on_both_at_once(rod_skid):
+    """A rod lying on the floor on its two ends, pushed at v0 = 1 (mu = 0.4): 16 modes; both ends slip forwards,
+    the rod decelerates at mu g and both slips end together at v0 / (mu g), where both ends stick (the second
+    with the first, not left slipping at zero speed), at x = v0^2 / (2 mu g), each end carrying m g / 2 and no
+    friction."""
+    assert len(rod_skid.flow_names) == 16 and rod_skid.flow_names[15] == "left_slip_neg+right_slip_neg"
+    run = andyc.simulate(rod_skid, 1.0, dt=1e-3, progress=False)
+    assert run.finished and run.contact_modes[0].tolist() == [SLIP_POS, SLIP_POS]
+    assert len(run.events["time"]) == 1 and abs(run.events["time"][0] - 1 / (0.4 * G)) < 1e-10
+    assert run.flow_names[run.events["to_flow"][0]] == "left_stick+right_stick"
+    resting = run.time > 1 / (0.4 * G)
+    assert np.all(run.contact_modes[resting] == STICK)
+    assert np.max(np.abs(run.column("x")[resting] - 1 / (2 * 0.4 * G))) < 1e-12
+    assert np.max(np.abs(run.friction_forces[resting])) < 1e-12
+    assert np.allclose(run.normal_forces[resting], G / 2, rtol=0, atol=1e-10)
+    assert np.max(np.abs(run.column("phi"))) < 1e-12
+
+
+@pytest.mark.parametrize("vx", [1.0, 5.0])
+def test_a_rod_falling_flat_while_moving_takes_both_impacts_with_friction(rod_skid, vx):
+    """Falling flat from 0.5 m at horizontal speed vx onto both ends (e = 0): the normal impulses m v / 2 each
+    (v = sqrt(2 g h0)); stopping the slide needs m vx in all, inside the cones iff vx <= mu v: then it sticks,
+    else each end takes mu m v / 2 and it slides on at vx - mu v, level and slipping forwards."""
+    run = andyc.simulate(rod_skid, 0.4, dt=1e-3, parameters={"h0": 0.5, "v0": vx}, progress=False)
+    assert run.finished and run.event_names()[0] == "left_impact_0"
+    v = math.sqrt(2 * G * 0.5)
+    after = run.events["state_after"][0]                 # x, y, phi, x', y', phi'
+    assert after[3] == pytest.approx(max(0.0, vx - 0.4 * v), abs=1e-12)
+    assert abs(after[4]) < 1e-12 and abs(after[5]) < 1e-12
+    mode = "stick" if vx <= 0.4 * v else "slip_pos"
+    assert run.flow_names[run.events["to_flow"][0]] == f"left_{mode}+right_{mode}"

@@ -33,8 +33,8 @@ contact then closes sticking if its slip speed after is at most REST_SPEED, else
 
 resolve_stop decides where a slip ends (its slip speed crossing zero): the contact sticks if the friction force
 it needs there is inside the cone, |lam_t| <= mu lam_n; otherwise it slips the other way (lam_t > mu lam_n: the
-other forces push it backwards). Only that contact's state changes (the others keep theirs; with two contacts
-slipping together this is not the full complementarity problem of the accelerations).
+other forces push it backwards). The other contacts whose slip is zero then too stop with it, each deciding by
+its own cone; the rest keep their states (this is not the full complementarity problem of the accelerations).
 
 initial_mode picks the mode a run starts in: the contacts touching at rest, less those that would pull, each
 with friction sticking if it does not slip and the friction it needs is inside the cone, else slipping.
@@ -163,20 +163,27 @@ def _cone_state(lam_t: float, lam_n: float, mu: float) -> int:
 
 
 def resolve_stop(model, t, x, u, p, d, k: int, flow: int) -> int:
-    """After jump k, a contact's slip ending (its slip speed crossing zero) into `flow`, where it sticks: its slip
-    speed (and every active row's velocity residual, a rounding at the located event) set to zero by the least
-    M-norm change of x's speeds, in place; the flow it lands in (sticking, or slipping the other way)."""
-    i = model.jump_kinds[k][1]
+    """After jump k, a contact's slip ending (its slip speed crossing zero) into `flow`, where it sticks: with it
+    every other contact slipping at a slip speed of at most REST_SPEED then (two ends of one rod on the floor stop
+    together), their slip speeds (and every active row's velocity residual, a rounding at the located event) set
+    to zero by the least M-norm change of x's speeds, in place. Returns the flow it lands in: each of them
+    sticking, or slipping the other way (_cone_state)."""
     nq, nv = model.nq, model.nv
     M, _, c, A = _terms(model, t, x, u, p, d)
+    states, stick = model.contact_states(flow), model.contact_stick_rows
+    stopping = [model.jump_kinds[k][1]] + [i for i, s in enumerate(states)
+                                           if s > STICK and abs(c[stick[i]]) <= REST_SPEED]
+    for i in stopping:
+        states[i] = STICK
+    flow = model.contact_flow(states)
     R = model.active_rows(flow)
     Minv = np.linalg.inv(M)
     J = A[R]
     x[nq:nq + nv] -= Minv @ J.T @ np.linalg.lstsq(J @ Minv @ J.T, c[R], rcond=None)[0]
     lam = model.module.multipliers(t, x, u, p, d, flow)
-    states = model.contact_states(flow)
-    states[i] = _cone_state(lam[model.contact_stick_rows[i]], lam[model.contact_rows[i]],
-                            friction_coefficients(model, p)[i])
+    mu = friction_coefficients(model, p)
+    for i in stopping:
+        states[i] = _cone_state(lam[stick[i]], lam[model.contact_rows[i]], mu[i])
     return model.contact_flow(states)
 
 
