@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 import andyc
-from andyc.errors import SpecError
+from andyc.errors import SimulationError, SpecError
 from andyc.runtime.run import read_h5
 
 G = 9.81
@@ -318,15 +318,19 @@ def rod_slide_reference(state, sigma, t0, t1, mu=0.4, m=1.0, L=1.0):
     return sol.sol, (lambda s: solve(s)[1]), (sol.t_events[0][0] if len(sol.t_events[0]) else None)
 
 
-def test_a_slipping_rod_end_against_an_independent_integration(compiled, tmp_path_factory):
+@pytest.fixture(scope="module")
+def rod_slide(compiled, tmp_path_factory):
+    path = tmp_path_factory.mktemp("rod_slide") / "rod_slide.yaml"
+    path.write_text(ROD_SLIDE)
+    return compiled(path)
+
+
+def test_a_slipping_rod_end_against_an_independent_integration(rod_slide):
     """A rod leaning at 1 rad, its lower end pushed along the floor at 1 m/s (mu = 0.4): it slides forwards, the
     friction's moment lowering its normal force (4.05 N against 5.23 N frictionless at the start); the slip ends,
     the stick is refused (the cone too narrow) and it slides backwards, then sticks. Each phase, and each slip's
     end, against rod_slide_reference."""
-    path = tmp_path_factory.mktemp("rod_slide") / "rod_slide.yaml"
-    path.write_text(ROD_SLIDE)
-    model = compiled(path)
-    run = andyc.simulate(model, 0.2, dt=1e-3, method="DOP853", rtol=1e-13, atol=1e-13, progress=False)
+    run = andyc.simulate(rod_slide, 0.2, dt=1e-3, method="DOP853", rtol=1e-13, atol=1e-13, progress=False)
     assert run.finished and run.event_names() == ["floor_stop_2", "floor_stop_3"]
     assert [run.flow_names[f] for f in run.events["to_flow"]] == ["floor_slip_neg", "floor_stick"]
     t = np.concatenate([[0.0], run.events["time"]])
@@ -420,3 +424,26 @@ def test_a_rod_falling_flat_while_moving_takes_both_impacts_with_friction(rod_sk
     assert abs(after[4]) < 1e-12 and abs(after[5]) < 1e-12
     mode = "stick" if vx <= 0.4 * v else "slip_pos"
     assert run.flow_names[run.events["to_flow"][0]] == f"left_{mode}+right_{mode}"
+
+
+@pytest.mark.parametrize("v0", [-1.0, 1.0])
+def test_painleves_paradox_is_refused(rod_slide, v0):
+    """The rod at 0.6 rad with mu = 3, its end slipping backwards (v0 = -1): A_n M^-1 (A_n + mu J_t)^T =
+    1 + 3 cos phi (cos phi - mu sin phi) = -1.15 < 0, so no normal force is consistent (Painleve's paradox): the
+    run refuses to start rather than open the contact and let the end sink. Slipping forwards (+1) it is
+    consistent (1 + 3 cos phi (cos phi + mu sin phi) > 0) and the run goes on."""
+    model, phi = rod_slide, 0.6
+    k = 1 + 3 * math.cos(phi) * (math.cos(phi) + math.copysign(3.0, v0) * math.sin(phi))
+    assert (k < 0) == (v0 < 0)
+    parameters = {"mu": 3.0, "phi0": phi, "v0": v0}
+    if v0 < 0:
+        with pytest.raises(SimulationError, match="contact 'floor' at the start: a slipping contact's normal "
+                           "force has no consistent value .Painleve's paradox"):
+            andyc.simulate(model, 0.1, dt=1e-3, parameters=parameters, progress=False)
+        # started slipping by hand (flow0), the compiled right-hand side refuses it: the run stops at once
+        run = andyc.simulate(model, 0.1, dt=1e-3, parameters=parameters, flow0=3, progress=False)
+        assert run.status.startswith("stopped: a slipping contact's normal force has no consistent value")
+        assert run.status.endswith("at t = 0 s, step 0; the 1 samples before it are kept")
+    else:
+        run = andyc.simulate(model, 0.1, dt=1e-3, parameters=parameters, progress=False)
+        assert run.finished and run.contact_modes[0, 0] == SLIP_POS and run.normal_forces[0, 0] > 0

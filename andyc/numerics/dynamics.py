@@ -13,7 +13,7 @@ import numpy as np
 from .compiler import jit
 from .linalg import add_rows_transposed, cholesky, correction, solve_gram, solve_lower, solve_upper, whiten
 from .model import call
-from .status import BAUMGARTE, DEPENDENT, IDEAL, OK, RANK_TOL, SINGULAR_MASS
+from .status import BAUMGARTE, DEPENDENT, IDEAL, OK, PAINLEVE, RANK_TOL, SINGULAR_MASS
 
 
 @jit
@@ -88,7 +88,8 @@ def constraint_force(model, p, flow, mode, L, g, S):
     nr = constraint_system(model, flow, L, g, S)
     if flow_slips(model, flow, nr):
         D = slip_rows(model, p, flow, L, S, nr)
-        solve_slipping(model, S, nr, D)
+        if not solve_slipping(model, flow, S, nr, D):
+            return PAINLEVE
         if mode == BAUMGARTE:
             baumgarte(model, p, flow, nr, S)
         for i in range(model.nv):       # g += D^T lam: a slipping contact's normal force carries its friction
@@ -155,8 +156,10 @@ def slip_rows(model, p, flow, L, S, nr):
 
 
 @jit
-def solve_slipping(model, S, nr, D):
-    """y <- (C D^T)^+ y over the first nr rows (C D^T = A M^-1 B^T, not symmetric: see slip_rows), least squares."""
+def solve_slipping(model, flow, S, nr, D):
+    """y <- (C D^T)^+ y over the first nr rows (C D^T = A M^-1 B^T, not symmetric: see slip_rows), least squares.
+    False when a slipping contact's own entry A_n M^-1 B_n^T is not positive: its normal force would pull it open
+    (Painleve's paradox: no consistent force; Pfeiffer & Glocker 1996, ch. 5)."""
     K = np.empty((nr, nr))
     for r in range(nr):
         for j in range(nr):
@@ -170,6 +173,10 @@ def solve_slipping(model, S, nr, D):
     lam = np.linalg.lstsq(K, y, RANK_TOL)[0]
     for r in range(nr):
         S[model.s_y, r] = lam[r]
+    for r in range(nr):
+        if model.flow_slip[flow, r] != 0 and not K[r, r] > 0.0:
+            return False
+    return True
 
 
 @jit
@@ -183,7 +190,7 @@ def multipliers(model, w, t, x, u, p, d, flow, lam):
         return status
     nr = constraint_system(model, flow, M, G, S)
     if flow_slips(model, flow, nr):
-        solve_slipping(model, S, nr, slip_rows(model, p, flow, M, S, nr))
+        solve_slipping(model, flow, S, nr, slip_rows(model, p, flow, M, S, nr))
     else:
         solve_gram(model, S, nr, True)
     for r in range(model.nc):

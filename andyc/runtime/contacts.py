@@ -46,7 +46,8 @@ from itertools import product
 
 import numpy as np
 
-from andyc.numerics.status import REST_SPEED
+from andyc.errors import SimulationError
+from andyc.numerics.status import MESSAGES, PAINLEVE, REST_SPEED
 
 SIMULTANEOUS = 1e-9     # s: an open contact takes part when its gap closes within this time at its speed
 TOUCHING = 1e-12        # a contact whose gap is at most this at the start, at rest, starts closed
@@ -203,6 +204,8 @@ def initial_mode(model, t, x, u, p, d) -> int:
         lam = model.module.multipliers(t, x, u, p, d, flow)
         force, worst = min((lam[r], i) for i, r in enumerate(rows) if states[i])
         if force < 0.0:
+            if states[worst] > STICK:
+                _painleve(model, t, x, u, p, d, worst, states[worst], mu[worst])
             states[worst] = 0
             continue
         cone = [_cone_state(lam[stick[i]], lam[rows[i]], mu[i]) if s == STICK and stick[i] >= 0 else s
@@ -211,6 +214,17 @@ def initial_mode(model, t, x, u, p, d) -> int:
             break
         states = cone
     return model.contact_flow(states)
+
+
+def _painleve(model, t, x, u, p, d, i: int, state: int, mu: float) -> None:
+    """SimulationError if contact i, slipping (state), has A_n M^-1 (A_n - sigma mu J_t)^T <= 0: its negative
+    normal force is then no reason to open it (open, it would close faster: Painleve's paradox, no consistent
+    mode; numerics.dynamics.solve_slipping refuses the same during a run)."""
+    M, _, _, A = _terms(model, t, x, u, p, d)
+    normal, tangent = A[model.contact_rows[i]], A[model.contact_stick_rows[i]]
+    sigma = 1.0 if state == SLIP_POS else -1.0
+    if not normal @ np.linalg.solve(M, normal - sigma * mu * tangent) > 0.0:
+        raise SimulationError(f"contact '{model.contact_names[i]}' at the start: {MESSAGES[PAINLEVE]}")
 
 
 def slip_speeds(model, t, x, u, p, d) -> np.ndarray:
