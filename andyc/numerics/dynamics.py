@@ -83,19 +83,19 @@ def constraint_force(model, p, flow, mode, L, g, S):
       LAGRANGE   lam = (C C^T)^-1 y                           (ANDY eq. 12)
       BAUMGARTE  LAGRANGE's lam - (K_s phi + K_d c)           (ANDY eq. 15)
     In a flow where a contact slips, its normal force carries Coulomb's friction: the forces are B^T lam with
-    B != A (slip_rows, D = B L^-T), lam = (C D^T)^+ y and g <- g + D^T lam (Pfeiffer & Glocker 1996, ch. 5).
+    B != A (slip_rows: D = B L^-T), lam = (C D^T)^+ y and g <- g + D^T lam (Pfeiffer & Glocker 1996, ch. 5).
     """
     nr = constraint_system(model, flow, L, g, S)
     if flow_slips(model, flow, nr):
-        D = slip_rows(model, p, flow, L, S, nr)
-        if not solve_slipping(model, flow, S, nr, D):
+        slip_rows(model, p, flow, L, S, nr)
+        if not solve_slipping(model, flow, S, nr):
             return PAINLEVE
         if mode == BAUMGARTE:
             baumgarte(model, p, flow, nr, S)
         for i in range(model.nv):       # g += D^T lam: a slipping contact's normal force carries its friction
             s = 0.0
             for r in range(nr):
-                s += D[r, i] * S[model.s_y, r]
+                s += S[model.s_w + r, i] * S[model.s_y, r]
             g[i] += s
         return OK
     if solve_gram(model, S, nr, mode == IDEAL) < 0:
@@ -129,50 +129,58 @@ def flow_slips(model, flow, nr):
 
 @jit
 def slip_rows(model, p, flow, L, S, nr):
-    """D = B L^-T, the force directions of the flow's rows, whitened (C = A L^-T in S): B = A but for the normal
-    row of a slipping contact, whose force is its normal force plus Coulomb's friction, -sigma mu lam_n along its
-    tangent (sigma = +1 slipping forwards, -1 backwards): B_r = A_r - sigma mu J_t, J_t the contact's stick row
+    """D = B L^-T into S's W block (its first nr rows; the symmetric solve's Gram matrix, unused in a flow that
+    slips), the force directions of the flow's rows, whitened (C = A L^-T in S): B = A but for the normal row of a
+    slipping contact, whose force is its normal force plus Coulomb's friction, -sigma mu lam_n along its tangent
+    (sigma = +1 slipping forwards, -1 backwards): B_r = A_r - sigma mu J_t, J_t the contact's stick row
     (FLOW_SLIP[flow, r] = -sigma (t + 1), t that row; mu the coefficient of jump FLOW_SLIP_MU[flow, r], the
     slip's end, in S's e row). Only for a flow that slips (flow_slips): the others keep the symmetric solve."""
-    nv = model.nv
+    nv, w0, c0 = model.nv, model.s_w, model.s_c
     call(model.restitution, (p, S))
-    D = np.empty((nr, nv))
-    tangent = np.empty(nv)
     for r in range(nr):
-        for i in range(nv):
-            D[r, i] = S[model.s_c + r, i]
         code = model.flow_slip[flow, r]
         if code == 0:
+            for i in range(nv):
+                S[w0 + r, i] = S[c0 + r, i]
             continue
         row = model.s_a + abs(code) - 1
-        scale = S[model.s_e, model.flow_slip_mu[flow, r]] * (1.0 if code > 0 else -1.0)
         for i in range(nv):             # J_t L^-T, as linalg.whiten
             s = S[row, i]
             for j in range(i):
-                s -= L[i, j] * tangent[j]
-            tangent[i] = s * L[i, i]
-            D[r, i] += scale * tangent[i]
-    return D
+                s -= L[i, j] * S[w0 + r, j]
+            S[w0 + r, i] = s * L[i, i]
+        scale = S[model.s_e, model.flow_slip_mu[flow, r]] * (1.0 if code > 0 else -1.0)
+        for i in range(nv):
+            S[w0 + r, i] = S[c0 + r, i] + scale * S[w0 + r, i]
 
 
 @jit
-def solve_slipping(model, flow, S, nr, D):
-    """y <- (C D^T)^+ y over the first nr rows (C D^T = A M^-1 B^T, not symmetric: see slip_rows), least squares.
-    False when a slipping contact's own entry A_n M^-1 B_n^T is not positive: its normal force would pull it open
-    (Painleve's paradox: no consistent force; Pfeiffer & Glocker 1996, ch. 5)."""
+def solve_slipping(model, flow, S, nr):
+    """y <- (C D^T)^+ y over the first nr rows (C D^T = A M^-1 B^T, not symmetric: D from slip_rows in S's W
+    block), least squares (one row: a division). False when a slipping contact's own entry A_n M^-1 B_n^T is not
+    positive: its normal force would pull it open (Painleve's paradox: no consistent force; Pfeiffer & Glocker
+    1996, ch. 5)."""
+    nv, w0, c0, y0 = model.nv, model.s_w, model.s_c, model.s_y
+    if nr == 1:
+        k = 0.0
+        for i in range(nv):
+            k += S[c0, i] * S[w0, i]
+        if k != 0.0:
+            S[y0, 0] /= k
+        return k > 0.0
     K = np.empty((nr, nr))
     for r in range(nr):
         for j in range(nr):
             s = 0.0
-            for i in range(model.nv):
-                s += S[model.s_c + r, i] * D[j, i]
+            for i in range(nv):
+                s += S[c0 + r, i] * S[w0 + j, i]
             K[r, j] = s
     y = np.empty(nr)
     for r in range(nr):
-        y[r] = S[model.s_y, r]
+        y[r] = S[y0, r]
     lam = np.linalg.lstsq(K, y, RANK_TOL)[0]
     for r in range(nr):
-        S[model.s_y, r] = lam[r]
+        S[y0, r] = lam[r]
     for r in range(nr):
         if model.flow_slip[flow, r] != 0 and not K[r, r] > 0.0:
             return False
@@ -190,7 +198,8 @@ def multipliers(model, w, t, x, u, p, d, flow, lam):
         return status
     nr = constraint_system(model, flow, M, G, S)
     if flow_slips(model, flow, nr):
-        solve_slipping(model, flow, S, nr, slip_rows(model, p, flow, M, S, nr))
+        slip_rows(model, p, flow, M, S, nr)
+        solve_slipping(model, flow, S, nr)
     else:
         solve_gram(model, S, nr, True)
     for r in range(model.nc):
