@@ -16,7 +16,8 @@ The design, and why:
   whose target the runtime decides (andyc.runtime.contacts: every contact touching at that instant
   takes its impulse together, from a small complementarity problem, and those left at rest close),
   and for each closed contact a liftoff jump (`<contact>_liftoff`, guard: the normal force, falling)
-  to the mode without it. With more than one contact, a jump's name ends in its mode's bitmask.
+  to the mode without it. A jump that leaves more than one flow (any with more than one contact, a
+  liftoff or slip end with friction) has its name end in its source flow's index (`left_impact_2`).
 - The impact jumps carry no compiled impact map (the runtime's solves all touching contacts at once);
   their `restitution` is the contact's e, which the runtime reads from the restitution leaf.
 
@@ -34,8 +35,8 @@ sticks if the friction it needs is inside the cone, else slips the other way) an
 restitution slot, unused: it has no impact map) is mu, which the slipping flow's force reads.
 
 Jumps, flows and rows are ordinary Spec objects: the symbolic stage and code generation treat them as
-a hand-written hybrid automaton; only the tables CONTACT_* and JUMP_CONTACT tell the runtime which
-jumps are contacts'.
+a hand-written hybrid automaton; only the tables CONTACT_*, JUMP_CONTACT and JUMP_KINDS tell the runtime
+which jumps are contacts', and FLOW_SLIP* the numerics which rows slip (andyc.codegen.generate).
 """
 
 from __future__ import annotations
