@@ -37,6 +37,17 @@ def contacts_benchmark(tmp: Path) -> None:
         run = _best_run(model, t_end, dt, **options)
         print(f"  {label}: {run.stats['jumps']} jumps, {_steps_per_second(run):.3g} steps/s "
               f"({run.stats['wall_seconds'] * 1e3:.1f} ms)")
+    # Friction (planar Coulomb): a slipping contact's force is solved non-symmetrically (numerics.dynamics.slip_rows),
+    # a sticking one by the symmetric solve of one more row; the same block slipping and sticking.
+    rolling = andyc.compile_model(ROOT / "models" / "ball_rolling.yaml", build)[0]
+    block = andyc.compile_model(ROOT / "models" / "block_incline.yaml", build)[0]
+    run = _best_run(rolling, 1.0, 1e-3)
+    print(f"  ball with friction, sliding then rolling, 1 s: {run.stats['jumps']} jumps, "
+          f"{_steps_per_second(run):.3g} steps/s")
+    slipping = _best_run(block, 5.0, 1e-3, parameters={"mu": 0.3})
+    sticking = _best_run(block, 5.0, 1e-3, parameters={"mu": 0.7})
+    print(f"  block on the incline, 5 s: slipping {_steps_per_second(slipping):.3g} steps/s, sticking "
+          f"{_steps_per_second(sticking):.3g} steps/s")
     # The same 4 s of bouncing (the same impacts, before the accumulation point): the hand-written jump's
     # compiled impact against the contact's impact solved from Python (andyc.runtime.contacts); and that solve
     # alone, timed on the first impact's state.

@@ -5,6 +5,7 @@ with its constraints, every jump an edge with its guard and direction as written
 automaton has 6 flows and 6 jumps, a cycle. The drawing has a labelled artist per node and edge, and the
 command writes SVG/PNG, refuses other suffixes (exit 2) and reports a bad model (exit 1)."""
 
+import itertools
 import re
 from pathlib import Path
 
@@ -80,24 +81,43 @@ def _contact_modes(graph) -> tuple:
 
 
 def _contact_modes_of_file(data) -> tuple:
-    """The automaton a model's contacts: stand for, read from the file: one flow per set of closed contacts
-    (named by them, 'open' for none; the model's own constraints active in each), and from each flow an
-    impact of every open contact (its gap falling through zero; the impact solver picks the mode after) and
-    a liftoff of every closed one (its normal force, the multiplier, falling through zero) to the flow
-    without it."""
+    """The automaton a model's contacts: stand for, read from the file: one flow per combination of the contacts'
+    states (open or closed; with friction open, stick, slip_pos or slip_neg), named by the closed ones ('open' for
+    none; the model's own constraints active in each, and a sticking contact's stick row), and from each flow an
+    impact of every open contact (its gap falling through zero; the impact solver picks the mode after), a liftoff
+    of every closed one (its normal force, the multiplier, falling through zero) to the flow without it, and with
+    friction: from stick a slip each way (mu lam_n +- lam_t falling through zero), from a slip its stop (the slip
+    speed through zero, falling forwards, rising backwards) to stick."""
     contacts = data["contacts"]
     own = {c["name"] for c in data.get("constraints") or []}
+    suffix = ["", "_stick", "_slip_pos", "_slip_neg"]
+    choices = [range(4) if "friction" in c else range(2) for c in contacts]
     nodes, edges = set(), set()
-    for mask in range(2 ** len(contacts)):
-        closed = [c["name"] for k, c in enumerate(contacts) if mask >> k & 1]
-        name = "+".join(closed) or "open"
-        nodes.add((name, frozenset(own | set(closed)), mask == 0))
+
+    def name_of(states):
+        return "+".join(c["name"] + (suffix[s] if "friction" in c else "")
+                        for c, s in zip(contacts, states) if s) or "open"
+
+    for states in itertools.product(*choices):
+        name = name_of(states)
+        rows = {c["name"] for c, s in zip(contacts, states) if s}
+        rows |= {c["name"] + "_stick" for c, s in zip(contacts, states) if s == 1 and "friction" in c}
+        nodes.add((name, frozenset(own | rows), not any(states)))
         for k, c in enumerate(contacts):
-            if mask >> k & 1:
-                rest = "+".join(n for n in closed if n != c["name"]) or "open"
-                edges.add((name, rest, c.get("multiplier", f"lambda_{c['name']}"), "falling"))
-            else:
+            other = lambda state: name_of(states[:k] + (state,) + states[k + 1:])     # noqa: E731
+            normal = c.get("multiplier", f"lambda_{c['name']}")
+            if states[k] == 0:
                 edges.add((name, name, str(c["gap"]), "falling"))
+                continue
+            edges.add((name, other(0), normal, "falling"))
+            if "friction" not in c:
+                continue
+            friction = c.get("friction_multiplier", f"friction_{c['name']}")
+            if states[k] == 1:
+                edges.add((name, other(2), f"{c['friction']}*{normal} + {friction}", "falling"))
+                edges.add((name, other(3), f"{c['friction']}*{normal} - {friction}", "falling"))
+            else:
+                edges.add((name, other(1), str(c["slip"]), "falling" if states[k] == 2 else "rising"))
     return nodes, edges
 
 

@@ -14,8 +14,8 @@ from PIL import Image
 import andyc
 from andyc.plot import figure_for, plot_run, plot_sticks, snapshot_indices, stick_edges, stick_plane, sticks_figure
 from tests.support.cli import invoke, run_python
-from tests.support.runs import (constrained_run, contact_run, hybrid_run, inputs_run, make_run, plain_run,
-                                planar_run, quaternion_run, spatial_run)
+from tests.support.runs import (constrained_run, contact_run, friction_contact_run, hybrid_run, inputs_run, make_run,
+                                plain_run, planar_run, quaternion_run, spatial_run)
 
 
 # -- what a figure holds --------------------------------------------------------------------------------
@@ -305,6 +305,20 @@ def test_compass_gait_through_andyc_plot(compiled, tmp_path):
     assert result.exit_code == 0, result.output
     with Image.open(tmp_path / "r.gif") as im:
         assert im.format == "GIF" and im.n_frames == 6
+
+
+def test_a_contact_with_friction_adds_its_friction_force_dashed():
+    """Friction (issue 21): the contacts panel draws the friction force along +tangent, dashed in the contact's
+    colour: -mu lam_n = -4.905 N while it slips forwards (t < 1), the stick row's multiplier, 0.25 N, once it sticks."""
+    run = friction_contact_run()
+    assert run.contact_modes[:, 0].tolist() == np.where(run.time >= 1.0, 1, 2).tolist()
+    fig = figure_for(run)
+    (ax,) = [a for a in fig.axes if a.get_gid() == "contacts"]
+    normal, friction = ax.get_lines()
+    np.testing.assert_array_equal(normal.get_ydata(), np.full(len(run.time), 9.81))
+    np.testing.assert_allclose(friction.get_ydata(), np.where(run.time >= 1.0, 0.25, -4.905), rtol=0, atol=1e-15)
+    assert friction.get_linestyle() == "--" and friction.get_color() == normal.get_color()
+    assert ax.get_ylabel() == "contacts: normal and friction force, N"
 
 
 def test_a_run_with_contacts_gets_their_normal_forces_and_closed_spans():

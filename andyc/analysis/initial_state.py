@@ -7,7 +7,8 @@ At the model's initial state (its initial values at the parameter defaults, t = 
   init "check" (the default; the model's simulate: section may say otherwise) refuses;
 - the guards of the jumps out of the initial flow whose enabling conditions hold: a guard already past zero
   (falling: g < 0; rising: g > 0) starts the run on the wrong side of its surface (the runtime would take
-  the jump at once, or never until the guard comes back).
+  the jump at once, or never until the guard comes back);
+- a contact's slip speed along its gap's normal (andyc.spec.contacts: a friction direction that is not tangent).
 
 The values are those of the symbolic model, evaluated exactly as its linearization does
 (andyc.symbolic.linearize.values_at): the same numbers the compiled module computes, to round-off.
@@ -24,6 +25,7 @@ from andyc.symbolic.model import SymbolicModel
 
 # A guard within this of zero is on its surface, not past it (the runtime's instant check decides then).
 GUARD_ROUND_OFF = 1e-12
+PARALLEL = 1e-9         # a slip row whose angle with its gap row has |cos| within this of 1 is along the normal
 
 
 def initial_problems(model: SymbolicModel, init: str = "check", tol: float = 1e-6) -> list[Diagnostic]:
@@ -65,4 +67,26 @@ def initial_problems(model: SymbolicModel, init: str = "check", tol: float = 1e-
                     f"{'falls' if j.direction == FALLING else 'rises'} to zero",
                     "fix the initial values so that the guard starts on its far side, or start in another "
                     "flow (hybrid: initial:)"))
+    return out + _slip_along_normal(model, x, u, p, d)
+
+
+def _slip_along_normal(model: SymbolicModel, x, u, p, d) -> list[Diagnostic]:
+    """A contact with friction whose slip row is a multiple of its gap's (|cos| within PARALLEL of 1, or no row at
+    all) at the initial state: its `slip` is not a tangential speed (sticking would hold the gap twice: dependent
+    rows), e.g. `slip: block.vy` for `gap: block.y`."""
+    C, out = model.constraints, []
+    for c in model.spec.contacts:
+        if not c.stick:
+            continue
+        n, t = C.rows.index(c.constraint), C.rows.index(c.stick)
+        values = values_at(model, list(C.A[n, :]) + list(C.A[t, :]), x, u, p, d)
+        normal, tangent = values[:C.A.shape[1]], values[C.A.shape[1]:]
+        size = np.linalg.norm(normal) * np.linalg.norm(tangent)
+        cos = abs(normal @ tangent) / size if size > 0 else 1.0
+        if cos > 1.0 - PARALLEL:
+            out.append(model.spec.source.diag(
+                c.where + ("slip",), f"the slip speed of contact '{c.name}' is along its gap's normal at the initial "
+                f"state (its row is {'zero' if size == 0 else 'a multiple of the gap row'}): it is not a tangential "
+                f"speed", "write the speed of the contact point along the tangent, perpendicular to the normal: "
+                "e.g. slip: block.vx for gap: block.y"))
     return out

@@ -30,7 +30,7 @@ DOCS = {
     "frame_positions": "Origins of FRAMES in world coordinates into out (len(FRAMES), 3).",
     "constraint_gains": "Soft-constraint gains K_s and K_d of each row (ANDY eq. 13-15), for the baumgarte method, "
                         "into S.",
-    "restitution": "Coefficient of restitution of each jump's impact, into S.",
+    "restitution": "Coefficient of restitution of each jump's impact (a contact's slip end: its friction mu), into S.",
     "guard": "The guard of jump k: it happens where this crosses zero in JUMP_DIRECTION[k]; lam: the multipliers of "
              "its source flow (read when JUMP_MULTIPLIERS[k]).",
     "guard_rate": "d/dt of the guard of jump k, given xdot.",

@@ -17,7 +17,7 @@ from .dynamics import enabled_value, guard_value, multipliers, rhs_mode_into
 from .inputs import callbacks
 from .integrator import crosses, update_inputs  # noqa: F401  (crosses: for the module's users)
 from .model import Work, call
-from .status import IDEAL, OK
+from .status import IDEAL, MESSAGES, OK
 
 
 @jit
@@ -137,8 +137,9 @@ class Functions:
         u = self.driven(t, x, u, p, d, flow)
         p, u, d, flow = self._args(u, p, d, flow)
         xdot = np.empty(self.sizes["nx"])
-        if rhs_mode_into(self.model, self.work.ref, float(t), x, u, p, d, flow, xdot, IDEAL) != OK:
-            raise FloatingPointError(f"the mass matrix is not positive definite at t = {t}")
+        status = rhs_mode_into(self.model, self.work.ref, float(t), x, u, p, d, flow, xdot, IDEAL)
+        if status != OK:
+            raise FloatingPointError(f"{MESSAGES[status]} at t = {t}")
         return xdot
 
     def multipliers(self, t, x, u=None, p=None, d=None, flow=None):

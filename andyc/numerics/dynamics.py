@@ -13,7 +13,7 @@ import numpy as np
 from .compiler import jit
 from .linalg import add_rows_transposed, cholesky, correction, solve_gram, solve_lower, solve_upper, whiten
 from .model import call
-from .status import BAUMGARTE, DEPENDENT, IDEAL, OK, SINGULAR_MASS
+from .status import BAUMGARTE, DEPENDENT, IDEAL, OK, PAINLEVE, RANK_TOL, SINGULAR_MASS
 
 
 @jit
@@ -82,20 +82,109 @@ def constraint_force(model, p, flow, mode, L, g, S):
       IDEAL      lam = (C C^T)^+ y, the least-norm force of any rank (C^T lam = C^+ y)
       LAGRANGE   lam = (C C^T)^-1 y                           (ANDY eq. 12)
       BAUMGARTE  LAGRANGE's lam - (K_s phi + K_d c)           (ANDY eq. 15)
+    In a flow where a contact slips, its normal force carries Coulomb's friction: the forces are B^T lam with
+    B != A (slip_rows: D = B L^-T), lam = (C D^T)^+ y and g <- g + D^T lam (Pfeiffer & Glocker 1996, ch. 5).
     """
     nr = constraint_system(model, flow, L, g, S)
+    if flow_slips(model, flow, nr):
+        slip_rows(model, p, flow, L, S, nr)
+        if not solve_slipping(model, flow, S, nr):
+            return PAINLEVE
+        if mode == BAUMGARTE:
+            baumgarte(model, p, flow, nr, S)
+        for i in range(model.nv):       # g += D^T lam: a slipping contact's normal force carries its friction
+            s = 0.0
+            for r in range(nr):
+                s += S[model.s_w + r, i] * S[model.s_y, r]
+            g[i] += s
+        return OK
     if solve_gram(model, S, nr, mode == IDEAL) < 0:
         return DEPENDENT
     if mode == BAUMGARTE:
-        call(model.constraint_gains, (p, S))
-        y0, ks, kd = model.s_y, model.s_ks, model.s_kd
-        for r in range(nr):
-            i = model.flow_rows[flow, r]
-            S[y0, r] -= S[kd, i] * S[model.s_cv, i]
-            if i < model.nh:
-                S[y0, r] -= S[ks, i] * S[model.s_phi, i]
+        baumgarte(model, p, flow, nr, S)
     add_rows_transposed(model, S, nr, 1.0, g)
     return OK
+
+
+@jit(inline="always")
+def baumgarte(model, p, flow, nr, S):
+    """lam <- lam - (K_s phi + K_d c) over the flow's rows, lam in S's y row (ANDY eq. 15)."""
+    call(model.constraint_gains, (p, S))
+    y0, ks, kd = model.s_y, model.s_ks, model.s_kd
+    for r in range(nr):
+        i = model.flow_rows[flow, r]
+        S[y0, r] -= S[kd, i] * S[model.s_cv, i]
+        if i < model.nh:
+            S[y0, r] -= S[ks, i] * S[model.s_phi, i]
+
+
+@jit(inline="always")
+def flow_slips(model, flow, nr):
+    """Whether a contact slips in `flow` (a row with friction in FLOW_SLIP): its rows then take slip_rows' solve."""
+    for r in range(nr):
+        if model.flow_slip[flow, r] != 0:
+            return True
+    return False
+
+
+@jit
+def slip_rows(model, p, flow, L, S, nr):
+    """D = B L^-T into S's W block (its first nr rows; the symmetric solve's Gram matrix, unused in a flow that
+    slips), the force directions of the flow's rows, whitened (C = A L^-T in S): B = A but for the normal row of a
+    slipping contact, whose force is its normal force plus Coulomb's friction, -sigma mu lam_n along its tangent
+    (sigma = +1 slipping forwards, -1 backwards): B_r = A_r - sigma mu J_t, J_t the contact's stick row
+    (FLOW_SLIP[flow, r] = -sigma (t + 1), t that row; mu the coefficient of jump FLOW_SLIP_MU[flow, r], the
+    slip's end, in S's e row). Only for a flow that slips (flow_slips): the others keep the symmetric solve."""
+    nv, w0, c0 = model.nv, model.s_w, model.s_c
+    call(model.restitution, (p, S))
+    for r in range(nr):
+        code = model.flow_slip[flow, r]
+        if code == 0:
+            for i in range(nv):
+                S[w0 + r, i] = S[c0 + r, i]
+            continue
+        row = model.s_a + abs(code) - 1
+        for i in range(nv):             # J_t L^-T, as linalg.whiten
+            s = S[row, i]
+            for j in range(i):
+                s -= L[i, j] * S[w0 + r, j]
+            S[w0 + r, i] = s * L[i, i]
+        scale = S[model.s_e, model.flow_slip_mu[flow, r]] * (1.0 if code > 0 else -1.0)
+        for i in range(nv):
+            S[w0 + r, i] = S[c0 + r, i] + scale * S[w0 + r, i]
+
+
+@jit
+def solve_slipping(model, flow, S, nr):
+    """y <- (C D^T)^+ y over the first nr rows (C D^T = A M^-1 B^T, not symmetric: D from slip_rows in S's W
+    block), least squares (one row: a division). False when a slipping contact's own entry A_n M^-1 B_n^T is not
+    positive: its normal force would pull it open (Painleve's paradox: no consistent force; Pfeiffer & Glocker
+    1996, ch. 5)."""
+    nv, w0, c0, y0 = model.nv, model.s_w, model.s_c, model.s_y
+    if nr == 1:
+        k = 0.0
+        for i in range(nv):
+            k += S[c0, i] * S[w0, i]
+        if k != 0.0:
+            S[y0, 0] /= k
+        return k > 0.0
+    K = np.empty((nr, nr))
+    for r in range(nr):
+        for j in range(nr):
+            s = 0.0
+            for i in range(nv):
+                s += S[c0 + r, i] * S[w0 + j, i]
+            K[r, j] = s
+    y = np.empty(nr)
+    for r in range(nr):
+        y[r] = S[y0, r]
+    lam = np.linalg.lstsq(K, y, RANK_TOL)[0]
+    for r in range(nr):
+        S[y0, r] = lam[r]
+    for r in range(nr):
+        if model.flow_slip[flow, r] != 0 and not K[r, r] > 0.0:
+            return False
+    return True
 
 
 @jit
@@ -108,7 +197,11 @@ def multipliers(model, w, t, x, u, p, d, flow, lam):
     if status != OK:
         return status
     nr = constraint_system(model, flow, M, G, S)
-    solve_gram(model, S, nr, True)
+    if flow_slips(model, flow, nr):
+        slip_rows(model, p, flow, M, S, nr)
+        solve_slipping(model, flow, S, nr)
+    else:
+        solve_gram(model, S, nr, True)
     for r in range(model.nc):
         lam[r] = np.nan
     for r in range(nr):

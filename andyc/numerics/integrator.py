@@ -30,7 +30,8 @@ from collections import namedtuple
 from .compiler import jit
 from .dynamics import enabled_value, guard_value, jump, multipliers, project, rhs_mode_into
 from .model import borrowed, call
-from .status import DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, REST_SPEED, RISING
+from .status import (DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, REST_SPEED, RISING,
+                     SLIP_STOP)
 
 Options = namedtuple("Options", "mode project constrain e0 energy_tol event_tol")
 Options.__doc__ = """How a run integrates: mode (IDEAL, LAGRANGE or BAUMGARTE: how constraint forces are found),
@@ -280,7 +281,9 @@ def instant(model, w, mode, inputs, data, t, x, p, d, flow):
     dg/dt <= 0, or g = 0 and dg/dt < 0; rising mirrored; either: g = 0 and dg/dt != 0) and its
     enabling condition holds. A guard past zero but moving back, such as a bouncing ball's height just
     after the bounce, does not. A contact's impact (JUMP_CONTACT) needs dg/dt < -REST_SPEED: a gap a
-    rounding below zero, at rest to a rounding, right after its liftoff, is not closing. w.u is left at the
+    rounding below zero, at rest to a rounding, right after its liftoff, is not closing. A slip's end
+    (JUMP_CONTACT = SLIP_STOP) needs its slip speed to reverse faster than REST_SPEED (per second): a slip that
+    began at the edge of the friction cone starts with a rate that is a rounding from zero. w.u is left at the
     inputs at (t, x); -2 when they fail.
     """
     u, xdot = w.u, w.xdot
@@ -310,6 +313,8 @@ def instant(model, w, mode, inputs, data, t, x, p, d, flow):
                 moving = rate < -REST_SPEED
         else:
             moving = rate > 0.0 or (g > 0.0 and rate == 0.0)
+        if model.jump_contact[k] == SLIP_STOP:  # a slip just begun at the cone's edge: its rate is a rounding
+            moving = rate * direction > REST_SPEED
         if moving and enabled_value(model, w, k, t, x, u, p, d) >= 0.0:
             return k
     return -1

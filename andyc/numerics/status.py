@@ -2,7 +2,7 @@
 status messages in one table). Plain Python: no Numba, no NumPy."""
 
 # What a compiled function returns.
-OK, NONFINITE, SINGULAR_MASS, DEPENDENT, INPUT_FAILED, DIVERGED = 0, 1, 2, 3, 4, 5
+OK, NONFINITE, SINGULAR_MASS, DEPENDENT, INPUT_FAILED, DIVERGED, PAINLEVE = 0, 1, 2, 3, 4, 5, 6
 MESSAGES = {
     NONFINITE: "the state became non-finite (NaN or Inf)",
     SINGULAR_MASS: "the mass matrix is not positive definite",
@@ -11,6 +11,9 @@ MESSAGES = {
     INPUT_FAILED: "the inputs failed",
     DIVERGED: "the solution diverges: within one step the state grew past 1000 times its largest value so far "
               "(a step far too large for the dynamics, or a singular mass matrix or constraint)",
+    PAINLEVE: "a slipping contact's normal force has no consistent value (Painleve's paradox: with its friction, "
+              "pushing would pull the contact open faster, A_n M^-1 (A_n - sigma mu J_t)^T <= 0); rigid contact with "
+              "Coulomb friction has no solution here: lower mu, or change the contact's geometry",
 }
 
 # How the constraint forces of a flow are found (see dynamics.constraint_force).
@@ -26,3 +29,5 @@ RAISED, WRONG_SHAPE = 1.0, 2.0
 GROWTH_LIMIT = 1e3  # a step that grows the state past this factor of its largest so far: DIVERGED
 RANK_TOL = 1e-8     # singular values below RANK_TOL * the largest count as zero (redundant rows, singular poses)
 REST_SPEED = 1e-9   # a contact approaching slower than this takes no impact; one this slow after an impact closes
+SLIP_STOP = -2      # JUMP_CONTACT of a contact's slip ending (andyc.spec.contacts): not an impact, and at once
+#                     (integrator.instant) only when its slip speed reverses faster than a rounding

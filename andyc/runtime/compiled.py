@@ -21,6 +21,7 @@ import numpy as np
 
 from andyc.errors import SimulationError
 from andyc.numerics.status import IDEAL
+from andyc.spec.contacts import flow_of, radices, states_of
 
 @dataclass(frozen=True)
 class CompiledModel:
@@ -61,9 +62,25 @@ class CompiledModel:
     closed_form_where: tuple = ()  # (line, document path) of each state's closed form in the model file
     simulate: dict = field(default_factory=dict)  # andyc sim's options the model gives (its simulate: section)
     display: dict = field(default_factory=dict)  # state units, the ground, shapes (andyc.spec.display): for pictures
-    contact_names: tuple = ()   # unilateral contacts (andyc.spec.contacts); flow index = bitmask of the closed ones
+    contact_names: tuple = ()   # unilateral contacts (andyc.spec.contacts); flow index = their states (contact_states)
     contact_rows: tuple = ()    # the constraint row of each contact's gap
-    jump_contact: tuple = ()    # per jump: the contact whose impact it is (andyc.runtime.contacts resolves it), or -1
+    jump_contact: tuple = ()    # per jump: the contact whose impact it is (andyc.runtime.contacts resolves it), or
+    #                             SLIP_STOP (a slip's end, andyc.numerics.status), or -1
+    contact_stick_rows: tuple = ()  # the stick row of each contact with friction, or -1
+    jump_kinds: tuple = ()      # per jump: (kind, contact) of a contact's jump (andyc.spec.contacts), ("", -1) else
+
+    @property
+    def contact_radix(self) -> list:
+        """The number of states of each contact: 2 (open, closed), 4 with friction (open, stick, slip +, slip -)."""
+        return radices([r >= 0 for r in self.contact_stick_rows] if self.contact_stick_rows
+                       else [False] * len(self.contact_names))
+
+    def contact_states(self, flow: int) -> list:
+        """Each contact's state in `flow` (andyc.spec.contacts: 0 open, 1 closed or sticking, 2 / 3 slipping)."""
+        return states_of(int(flow), self.contact_radix)
+
+    def contact_flow(self, states: list) -> int:
+        return flow_of(states, self.contact_radix)
 
     @property
     def nw(self) -> int:

@@ -24,80 +24,218 @@ rebound too slow to matter); the others are open. When the jump times accumulate
 test, the same that stops a hand-written bouncing ball), the impact is solved plastic (e = 0 for every
 contact), so the contacts close and the run goes on from the accumulation point: the ball comes to rest.
 
-initial_mode picks the mode a run starts in: the contacts touching at rest, less those that would pull.
+With friction (andyc.spec.contacts: planar Coulomb, a stick row J_t, the slip speed s = J_t v), each touching
+contact with friction takes part in one of four ways: no impulse, a sticking impulse (its stick row too:
+s+ = 0, |Lam_t| <= mu Lam_n), or a sliding one forwards or backwards (the impulse along B = A_n - sigma mu J_t,
+s+ sigma >= 0): Newton's law in the normal direction, Coulomb's on the tangential impulse (Glocker & Pfeiffer's
+Newton-Coulomb impact, planar; the cases are enumerated as the active sets are, sticking before sliding). The
+contact then closes sticking if its slip speed after is at most REST_SPEED, else slipping its way.
+
+resolve_stop decides where a slip ends (its slip speed crossing zero): the contact sticks if the friction force
+it needs there is inside the cone, |lam_t| <= mu lam_n; otherwise it slips the other way (lam_t > mu lam_n: the
+other forces push it backwards). The other contacts whose slip is zero then too stop with it, each deciding by
+its own cone; the rest keep their states (this is not the full complementarity problem of the accelerations).
+
+initial_mode picks the mode a run starts in: the contacts touching at rest, less those that would pull, each
+with friction sticking if it does not slip and the friction it needs is inside the cone, else slipping.
 """
 
 from __future__ import annotations
 
-from itertools import combinations
+from itertools import product
 
 import numpy as np
 
-from andyc.numerics.status import REST_SPEED
+from andyc.errors import SimulationError
+from andyc.numerics.status import MESSAGES, PAINLEVE, REST_SPEED
 
 SIMULTANEOUS = 1e-9     # s: an open contact takes part when its gap closes within this time at its speed
 TOUCHING = 1e-12        # a contact whose gap is at most this at the start, at rest, starts closed
+STICK, SLIP_POS, SLIP_NEG = 1, 2, 3     # a contact's states beside open (0), as andyc.spec.contacts
+
+
+def friction_coefficients(model, p) -> np.ndarray:
+    """mu of each contact (NaN without friction): the coefficient of its slip's end jumps (andyc.spec.contacts)."""
+    mu = np.full(len(model.contact_names), np.nan)
+    if any(r >= 0 for r in model.contact_stick_rows):
+        values = model.module.restitutions(p)
+        for k, (kind, i) in enumerate(model.jump_kinds):
+            if kind == "stop":
+                mu[i] = values[k]
+    return mu
+
+
+def _terms(model, t, x, u, p, d):
+    M = model.module.mass_matrix(t, x, u, p, d)
+    phi, c, A = np.empty(model.nh), np.empty(model.nc), np.empty((model.nc, model.nv))
+    model.module.constraints(t, x, u, p, d, phi, c, A, np.empty(model.nc))
+    return M, phi, c, A
 
 
 def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool) -> int:
-    """Apply the impulses of the contacts touching at (t, x) to x's speeds, in place; the new flow (the bitmask
-    of the contacts closed after). plastic: e = 0 for every contact (the impact times accumulate)."""
-    module, nq, nv = model.module, model.nq, model.nv
-    M = module.mass_matrix(t, x, u, p, d)
-    phi, c, A, kappa = np.empty(model.nh), np.empty(model.nc), np.empty((model.nc, nv)), np.empty(model.nc)
-    module.constraints(t, x, u, p, d, phi, c, A, kappa)
+    """Apply the impulses of the contacts touching at (t, x) to x's speeds, in place; the new flow (the states of
+    the contacts after). plastic: e = 0 for every contact (the impact times accumulate)."""
+    nq, nv = model.nq, model.nv
+    M, phi, c, A = _terms(model, t, x, u, p, d)
     e = np.zeros(len(model.contact_names))
     if not plastic:
-        for k, restitution in enumerate(module.restitutions(p)):
+        for k, restitution in enumerate(model.module.restitutions(p)):
             if model.jump_contact[k] >= 0:
                 e[model.jump_contact[k]] = restitution
+    mu = friction_coefficients(model, p)
+    stick = list(model.contact_stick_rows) or [-1] * len(model.contact_names)
+    states = model.contact_states(flow)
     rows = list(model.contact_rows)
-    contact_row = set(rows)
+    contact_row = set(rows) | {r for r in stick if r >= 0}
     bilateral = [r for r in model.active_rows(flow) if r not in contact_row]
     touching = [i for i, r in enumerate(rows)
-                if flow >> i & 1 or (c[r] < -REST_SPEED and phi[r] <= SIMULTANEOUS * -c[r])]
-    scale = max(1.0, float(np.max(np.abs(c[rows + bilateral])))) if rows + bilateral else 1.0
+                if states[i] or (c[r] < -REST_SPEED and phi[r] <= SIMULTANEOUS * -c[r])]
+    used = rows + bilateral + [r for r in stick if r >= 0]
+    scale = max(1.0, float(np.max(np.abs(c[used])))) if used else 1.0
     tol = 1e-10 * scale
     Minv = np.linalg.inv(M)
+    # each touching contact: 0 no impulse, 1 active (sticking, with friction), 2 / 3 sliding forwards / backwards
+    choices = [range(4) if stick[i] >= 0 else range(2) for i in touching]
+    cases = sorted(product(*choices), key=lambda case: (sum(o > 0 for o in case), sum(o > 1 for o in case), case))
     best = None
-    for size in range(len(touching) + 1):
-        for active in combinations(touching, size):
-            R = bilateral + [rows[i] for i in active]
-            J = A[R]
-            target = np.concatenate([np.zeros(len(bilateral)), [-e[i] * c[rows[i]] for i in active]])
-            lam = np.linalg.lstsq(J @ Minv @ J.T, target - c[R], rcond=None)[0] if R else np.zeros(0)
-            dv = Minv @ J.T @ lam if R else np.zeros(nv)
-            after = c + A @ dv
-            ok = all(lam[len(bilateral) + n] >= -tol for n in range(size))
-            ok = ok and all(after[rows[i]] >= -e[i] * c[rows[i]] - tol for i in touching if i not in active)
-            if ok:
-                best = (dv, after)
+    for case in cases:
+        R, B, target = list(bilateral), [A[r] for r in bilateral], [0.0] * len(bilateral)
+        for i, o in zip(touching, case):
+            r = rows[i]
+            if o == 0:
+                continue
+            R.append(r)
+            target.append(-e[i] * c[r])
+            if o == 1:
+                B.append(A[r])
+                if stick[i] >= 0:
+                    R.append(stick[i])
+                    B.append(A[stick[i]])
+                    target.append(0.0)
+            else:
+                B.append(A[r] - (1.0 if o == SLIP_POS else -1.0) * mu[i] * A[stick[i]])
+        if R:
+            B = np.array(B)
+            lam = np.linalg.lstsq(A[R] @ Minv @ B.T, np.array(target) - c[R], rcond=None)[0]
+            dv = Minv @ B.T @ lam
+        else:
+            lam, dv = np.zeros(0), np.zeros(nv)
+        after = c + A @ dv
+        impulse = dict(zip(R, lam))
+        ok = True
+        for i, o in zip(touching, case):
+            r = rows[i]
+            if o == 0:
+                ok = after[r] >= -e[i] * c[r] - tol
+            elif impulse[r] < -tol:
+                ok = False
+            elif o == 1 and stick[i] >= 0:
+                ok = abs(impulse[stick[i]]) <= mu[i] * impulse[r] + tol
+            elif o == SLIP_POS:
+                ok = after[stick[i]] >= -tol
+            elif o == SLIP_NEG:
+                ok = after[stick[i]] <= tol
+            if not ok:
                 break
-        if best is not None:
+        if ok:
+            best = (dv, after)
             break
     if best is None:                # (W is positive semi-definite: a solution exists; this is a safeguard)
         raise FloatingPointError(f"no consistent contact impulses at t = {t}")
     dv, after = best
     x[nq:nq + nv] += dv
-    mask = 0
+    states = [0] * len(rows)
     for i in touching:
         if after[rows[i]] <= REST_SPEED:
-            mask |= 1 << i
-    return mask
+            states[i] = 1 if stick[i] < 0 else _slip_state(after[stick[i]])
+    return model.contact_flow(states)
+
+
+def _slip_state(slip: float) -> int:
+    """A closing contact with friction: sticking at (almost) no slip, else slipping its way."""
+    return STICK if abs(slip) <= REST_SPEED else SLIP_POS if slip > 0 else SLIP_NEG
+
+
+def _cone_state(lam_t: float, lam_n: float, mu: float) -> int:
+    """Where a contact that would stick goes: it sticks if the friction it needs is inside the cone; past its
+    edge it slips the way the other forces push it (lam_t > mu lam_n: backwards)."""
+    tol = 1e-12 * max(1.0, abs(lam_n))
+    return SLIP_NEG if lam_t > mu * lam_n + tol else SLIP_POS if lam_t < -mu * lam_n - tol else STICK
+
+
+def resolve_stop(model, t, x, u, p, d, k: int, flow: int) -> int:
+    """After jump k, a contact's slip ending (its slip speed crossing zero) into `flow`, where it sticks: with it
+    every other contact slipping at a slip speed of at most REST_SPEED then (two ends of one rod on the floor stop
+    together), their slip speeds (and every active row's velocity residual, a rounding at the located event) set
+    to zero by the least M-norm change of x's speeds, in place. Returns the flow it lands in: each of them
+    sticking, or slipping the other way (_cone_state)."""
+    nq, nv = model.nq, model.nv
+    M, _, c, A = _terms(model, t, x, u, p, d)
+    states, stick = model.contact_states(flow), model.contact_stick_rows
+    stopping = [model.jump_kinds[k][1]] + [i for i, s in enumerate(states)
+                                           if s > STICK and abs(c[stick[i]]) <= REST_SPEED]
+    for i in stopping:
+        states[i] = STICK
+    flow = model.contact_flow(states)
+    R = model.active_rows(flow)
+    Minv = np.linalg.inv(M)
+    J = A[R]
+    x[nq:nq + nv] -= Minv @ J.T @ np.linalg.lstsq(J @ Minv @ J.T, c[R], rcond=None)[0]
+    lam = model.module.multipliers(t, x, u, p, d, flow)
+    mu = friction_coefficients(model, p)
+    for i in stopping:
+        states[i] = _cone_state(lam[stick[i]], lam[model.contact_rows[i]], mu[i])
+    return model.contact_flow(states)
 
 
 def initial_mode(model, t, x, u, p, d) -> int:
-    """The flow a run starts in (the bitmask of the closed contacts): the contacts touching (|gap| <= TOUCHING)
-    at rest (|normal speed| <= REST_SPEED), less those whose normal force in that mode is negative, the most
-    negative first, one at a time (dropping one changes the others' forces)."""
-    phi, c = np.empty(model.nh), np.empty(model.nc)
-    model.module.constraints(t, x, u, p, d, phi, c, np.empty((model.nc, model.nv)), np.empty(model.nc))
+    """The flow a run starts in: the contacts touching (|gap| <= TOUCHING) at rest (|normal speed| <= REST_SPEED),
+    less those whose normal force in that mode is negative, the most negative first, one at a time (dropping one
+    changes the others' forces); each with friction slipping its way if its slip speed exceeds REST_SPEED, else
+    sticking if the friction it needs is inside the cone (else slipping, _cone_state)."""
+    _, phi, c, _ = _terms(model, t, x, u, p, d)
     rows = model.contact_rows
-    mask = sum(1 << i for i, r in enumerate(rows) if abs(phi[r]) <= TOUCHING and abs(c[r]) <= REST_SPEED)
-    while mask:
-        lam = model.module.multipliers(t, x, u, p, d, mask)
-        force, worst = min((lam[r], i) for i, r in enumerate(rows) if mask >> i & 1)
-        if force >= 0.0:
+    stick = list(model.contact_stick_rows) or [-1] * len(rows)
+    mu = friction_coefficients(model, p)
+    states = [int(abs(phi[r]) <= TOUCHING and abs(c[r]) <= REST_SPEED) for r in rows]
+    states = [s if not s or stick[i] < 0 else _slip_state(c[stick[i]]) for i, s in enumerate(states)]
+    while any(states):
+        flow = model.contact_flow(states)
+        lam = model.module.multipliers(t, x, u, p, d, flow)
+        force, worst = min((lam[r], i) for i, r in enumerate(rows) if states[i])
+        if force < 0.0:
+            if states[worst] > STICK:
+                _painleve(model, t, x, u, p, d, worst, states[worst], mu[worst])
+            states[worst] = 0
+            continue
+        cone = [_cone_state(lam[stick[i]], lam[rows[i]], mu[i]) if s == STICK and stick[i] >= 0 else s
+                for i, s in enumerate(states)]
+        if cone == states:
             break
-        mask &= ~(1 << worst)
-    return mask
+        states = cone
+    return model.contact_flow(states)
+
+
+def _painleve(model, t, x, u, p, d, i: int, state: int, mu: float) -> None:
+    """SimulationError if contact i, slipping (state), has A_n M^-1 (A_n - sigma mu J_t)^T <= 0: its negative
+    normal force is then no reason to open it (open, it would close faster: Painleve's paradox, no consistent
+    mode; numerics.dynamics.solve_slipping refuses the same during a run)."""
+    M, _, _, A = _terms(model, t, x, u, p, d)
+    normal, tangent = A[model.contact_rows[i]], A[model.contact_stick_rows[i]]
+    sigma = 1.0 if state == SLIP_POS else -1.0
+    if not normal @ np.linalg.solve(M, normal - sigma * mu * tangent) > 0.0:
+        raise SimulationError(f"contact '{model.contact_names[i]}' at the start: {MESSAGES[PAINLEVE]}")
+
+
+def slip_speeds(model, t, x, u, p, d) -> np.ndarray:
+    """(N, contacts) each contact's slip speed (its stick row's velocity residual J_t v + b) at the logged samples
+    t (N,), x, u, d (N, ...); NaN for the contacts without friction."""
+    out = np.full((len(t), len(model.contact_names)), np.nan)
+    rows = [(i, r) for i, r in enumerate(model.contact_stick_rows) if r >= 0]
+    if rows:
+        phi, c, A, kappa = np.empty(model.nh), np.empty(model.nc), np.empty((model.nc, model.nv)), np.empty(model.nc)
+        for n in range(len(t)):
+            model.module.constraints(t[n], x[n], u[n], p, d[n], phi, c, A, kappa)
+            for i, r in rows:
+                out[n, i] = c[r]
+    return out

@@ -15,7 +15,7 @@ import numpy as np
 
 from andyc.errors import SimulationError
 from andyc.numerics.status import OK
-from andyc.runtime.contacts import resolve_impact
+from andyc.runtime.contacts import resolve_impact, resolve_stop
 from andyc.runtime.inputs import USER_ERRORS, InputSource, raised
 from andyc.runtime.options import Events
 from andyc.runtime.status import ZENO, at, in_jump
@@ -127,6 +127,11 @@ def finish_jump(model, k, t, x_before, x, u, p, d, flow: int, jumps: EventLog) -
             flow = resolve_impact(model, t, x, u, p, d, flow, jumps.zeno(t) is not None)
         except (FloatingPointError, np.linalg.LinAlgError) as exc:
             return flow, f"stopped: contact impact in jump '{model.jump_names[k]}': {exc}" + at(t)
+    elif model.jump_kinds and model.jump_kinds[k][0] == "stop":        # a slip ends: stick, or slip back
+        try:
+            flow = resolve_stop(model, t, x, u, p, d, k, flow)
+        except (FloatingPointError, np.linalg.LinAlgError) as exc:
+            return flow, f"stopped: contact stick in jump '{model.jump_names[k]}': {exc}" + at(t)
     message = user_jump(model, k, t, x, u, p, d) or jumps.record(t, k, x_before, x, d, flow)
     return flow, message
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -12,6 +13,7 @@ import andyc
 from andyc.errors import plural, printable
 from andyc.outputs import write_atomic
 from andyc.runtime.status import drift, largest_residual
+from andyc.spec.contacts import radices
 
 
 @dataclass
@@ -48,8 +50,11 @@ class Run:
     frame_parents: dict = field(default_factory=dict)  # logged frame -> its parent frame (stick figures)
     input_names: list = field(default_factory=list)
     input_values: np.ndarray | None = None           # (N, nu) the inputs at each sample
-    contact_names: list = field(default_factory=list)  # unilateral contacts; flow = the bitmask of the closed ones
+    contact_names: list = field(default_factory=list)  # unilateral contacts; flow = their states (contact_modes)
     contact_rows: list = field(default_factory=list)   # the multiplier (row) of each contact's normal force
+    contact_stick_rows: list = field(default_factory=list)  # the multiplier (row) of its friction force, or -1
+    contact_mu: list = field(default_factory=list)     # its friction coefficient (NaN without friction)
+    slip_speeds: np.ndarray | None = None              # (N, contacts) each contact's slip speed (NaN without friction)
     andyc_version: str = andyc.__version__
     display: dict = field(default_factory=dict)      # state units, the ground, shapes: for pictures (andyc.spec.display)
     work_names: list = field(default_factory=list)   # the elements that do work, then 'jumps' (andyc.runtime.work)
@@ -80,6 +85,11 @@ class Run:
             self.work = np.zeros((n, len(self.work_names)))
         if self.power is None:
             self.power = np.zeros((n, len(self.work_names)))
+        k = len(self.contact_names)
+        self.contact_stick_rows = list(self.contact_stick_rows) or [-1] * k
+        self.contact_mu = list(self.contact_mu) or [math.nan] * k
+        if self.slip_speeds is None:
+            self.slip_speeds = np.full((n, k), np.nan)
 
     @property
     def energy_balance(self) -> np.ndarray:
@@ -102,16 +112,44 @@ class Run:
         return self.state[:, self.state_names.index(name)]
 
     @property
-    def contact_closed(self) -> np.ndarray:
-        """(N, contacts) 1 where a contact is closed (the sample's flow is the bitmask of the closed ones)."""
-        return np.array([(self.flow >> i) & 1 for i in range(len(self.contact_names))], dtype=np.int8).T.reshape(
+    def contact_modes(self) -> np.ndarray:
+        """(N, contacts) each contact's state: 0 open, 1 closed (sticking, with friction), 2 slipping forwards
+        (slip speed > 0), 3 backwards; the flow index is these in mixed radix (andyc.spec.contacts)."""
+        radix = radices([r >= 0 for r in self.contact_stick_rows])
+        place = np.cumprod([1] + radix[:-1]).astype(np.int64)
+        return ((self.flow[:, None] // place[None, :]) % np.array(radix, dtype=np.int64)).astype(np.int8).reshape(
             len(self.time), len(self.contact_names))
+
+    @property
+    def contact_closed(self) -> np.ndarray:
+        """(N, contacts) 1 where a contact is closed (sticking or slipping)."""
+        return (self.contact_modes > 0).astype(np.int8)
 
     @property
     def normal_forces(self) -> np.ndarray:
         """(N, contacts) each contact's normal force (its multiplier, >= 0 while it pushes), 0 where it is open."""
         lam = self.multipliers[:, list(self.contact_rows)] if self.contact_rows else np.zeros((len(self.time), 0))
         return np.where(self.contact_closed == 1, lam, 0.0)
+
+    @property
+    def friction_forces(self) -> np.ndarray:
+        """(N, contacts) each contact's friction force along +tangent (the direction of positive slip): its stick
+        row's multiplier while it sticks, -mu lam_n slipping forwards, +mu lam_n backwards; 0 open or frictionless."""
+        modes, normal = self.contact_modes, self.normal_forces
+        out = np.zeros(modes.shape)
+        for i, row in enumerate(self.contact_stick_rows):
+            if row < 0:
+                continue
+            mu = self.contact_mu[i]
+            out[:, i] = np.where(modes[:, i] == 1, self.multipliers[:, row], 0.0)
+            out[:, i] += np.where(modes[:, i] == 2, -mu * normal[:, i], 0.0) + np.where(modes[:, i] == 3,
+                                                                                         mu * normal[:, i], 0.0)
+        return out
+
+    @property
+    def frictional(self) -> list:
+        """The indices of the contacts with friction."""
+        return [i for i, r in enumerate(self.contact_stick_rows) if r >= 0]
 
     def event_names(self) -> list:
         """Name of the jump of each event."""
@@ -165,7 +203,9 @@ class Run:
                 "energy_correction": self.energy_correction, "flow_names": json.dumps(self.flow_names),
                 "jump_names": json.dumps(self.jump_names), "frame_parents": json.dumps(self.frame_parents),
                 "display": json.dumps(self.display),
-                **({"contacts": json.dumps({"names": self.contact_names, "rows": self.contact_rows})}
+                **({"contacts": json.dumps({"names": self.contact_names, "rows": self.contact_rows,
+                                            "stick_rows": self.contact_stick_rows,
+                                            "mu": [None if math.isnan(m) else m for m in self.contact_mu]})}
                    if self.contact_names else {})}
 
     def save(self, path) -> Path:
@@ -222,6 +262,10 @@ def write_h5(run: Run, path: Path) -> None:
             f["contacts/closed"] = run.contact_closed
             f["contacts/normal_force"] = run.normal_forces
             f["contacts"].attrs["names"] = run.contact_names
+            if run.frictional:      # modes 0 open, 1 closed / stick, 2 / 3 slipping forwards / backwards
+                f["contacts/mode"] = run.contact_modes
+                f["contacts/friction_force"] = run.friction_forces
+                f["contacts/slip_speed"] = run.slip_speeds
         ev = run.events
         table = np.zeros(len(ev["time"]), dtype=[("time", "f8"), ("jump", h5py.string_dtype()),
                                                  ("from_flow", "i4"), ("to_flow", "i4")])
@@ -265,7 +309,10 @@ def read_h5(path) -> Run:
                    frame_parents=json.loads(a.get("frame_parents", "{}")), display=json.loads(a.get("display", "{}")),
                    contact_names=contacts["names"], contact_rows=contacts["rows"],
                    work_names=[str(s) for s in f["work"].attrs["names"]] if "work" in f else [],
-                   work=f["work"][()] if "work" in f else None, power=f["power"][()] if "power" in f else None)
+                   work=f["work"][()] if "work" in f else None, power=f["power"][()] if "power" in f else None,
+                   contact_stick_rows=contacts.get("stick_rows", []),
+                   contact_mu=[math.nan if m is None else m for m in contacts.get("mu", [])],
+                   slip_speeds=f["contacts/slip_speed"][()] if "contacts/slip_speed" in f else None)
 
 
 def write_csv(run: Run, path: Path) -> None:
@@ -285,6 +332,12 @@ def write_csv(run: Run, path: Path) -> None:
     if run.contact_names:
         columns += [f"closed_{c}" for c in run.contact_names] + [f"normal_force_{c}" for c in run.contact_names]
         data += [run.contact_closed, run.normal_forces]
+        friction = run.frictional
+        if friction:
+            names = [run.contact_names[i] for i in friction]
+            columns += ([f"mode_{c}" for c in names] + [f"friction_force_{c}" for c in names]
+                        + [f"slip_speed_{c}" for c in names])
+            data += [run.contact_modes[:, friction], run.friction_forces[:, friction], run.slip_speeds[:, friction]]
     for name, xyz in run.frames.items():
         columns += [f"{name}.x", f"{name}.y", f"{name}.z"]
         data.append(xyz)

@@ -42,7 +42,7 @@ import numpy as np
 from andyc.errors import SimulationError
 from andyc.runtime.adaptive import run_adaptive
 from andyc.runtime.compiled import CompiledModel, compile_integrator, work
-from andyc.runtime.contacts import initial_mode
+from andyc.runtime.contacts import friction_coefficients, initial_mode, slip_speeds
 from andyc.runtime.events import EventLog
 from andyc.runtime.fixed_step import run_fixed_step
 from andyc.runtime.initial import consistent_initial_state, initial_state, require_independent_rows
@@ -190,6 +190,7 @@ class _Assembly:
         phi, c, lam = np.empty((n, model.nh)), np.empty((n, model.nc)), np.empty((n, model.nc))
         if model.nc:
             integrator.evaluate_constraints(model.ref, work(model).ref, log, p, phi, c, lam)
+        slip = slip_speeds(model, t_log, x_log, u_log, p, d_log) if model.contact_names else None
         frames_out = {}
         if frame_names:
             xyz = np.empty((n, len(model.frame_names), 3))
@@ -214,7 +215,9 @@ class _Assembly:
                    discrete=d_log, events=self.jumps.table(), jump_names=list(model.jump_names),
                    frame_parents={name: model.frame_parents[model.frame_names.index(name)] for name in frame_names},
                    display=model.display, contact_names=list(model.contact_names),
-                   contact_rows=list(model.contact_rows))
+                   contact_rows=list(model.contact_rows), contact_stick_rows=list(model.contact_stick_rows),
+                   contact_mu=list(friction_coefficients(model, p)) if model.contact_names else [],
+                   slip_speeds=slip)
 
 
 def _check_size(model: CompiledModel, t_end: float, dt: float, every: int) -> None:

@@ -91,15 +91,20 @@ def build_constraints(written: list, scope: Scope, quantities: FrameQuantities,
     ones first (DESIGN.md run layout; a contact's row is holonomic); multiplier names checked."""
     constraints = [_constraint(("constraints", i), c, scope, quantities) for i, c in enumerate(written)]
     constraints += [_constraint(("contacts", i), c, scope, quantities) for i, c in enumerate(contacts)]
+    # A contact with friction: its stick row, the slip speed = 0 (nonholonomic), active while it sticks.
+    constraints += [_constraint(("contacts", i), {"name": f"{c['name']}_stick", "slip": c["slip"],
+                                                  "multiplier": c.get("friction_multiplier", f"friction_{c['name']}")},
+                                scope, quantities) for i, c in enumerate(contacts) if "slip" in c]
     constraints.sort(key=lambda c: not c.holonomic)
     _check_multipliers(constraints, {"constraints": written, "contacts": contacts}, scope)
     return constraints
 
 
 def _constraint(where: tuple, c: dict, scope: Scope, quantities: FrameQuantities) -> Constraint:
-    """A constraint, or a contact's gap row (key `gap`: holonomic, one row)."""
+    """A constraint, or a contact's gap row (key `gap`: holonomic, one row) or stick row (key `slip`: its slip speed,
+    nonholonomic, one row)."""
     holonomic = "holonomic" in c or "gap" in c
-    key = "gap" if "gap" in c else "holonomic" if holonomic else "nonholonomic"
+    key = "gap" if "gap" in c else "slip" if "slip" in c else "holonomic" if holonomic else "nonholonomic"
     texts = c[key] if isinstance(c[key], list) else [c[key]]
     paths = [where + (key, j) for j in range(len(texts))] if isinstance(c[key], list) else [where + (key,)]
     in_frame = c.get("in", "world")
@@ -153,6 +158,16 @@ def _constraint(where: tuple, c: dict, scope: Scope, quantities: FrameQuantities
                                    "position", "a holonomic constraint is Gamma(t, q) = 0; use coordinates or F.x, "
                                    "F.y, F.z")
         if not holonomic:
+            if key == "slip":                       # a contact's slip speed: linear in the speeds
+                if not free & velocities:
+                    scope.report.error(path, f"the slip speed {text!r} uses no speed or velocity",
+                                       "a contact's slip is the speed of its contact point along the tangent, "
+                                       "linear in the speeds (e.g. slip: block.vx, or x_dot + r*th_dot for a disk)")
+                elif any(sp.diff(value, a, b) != 0 for a in free & velocities for b in free & velocities):
+                    scope.report.error(path, f"in {text!r}: the slip speed is not linear in the speeds and "
+                                       "velocities", "a contact's slip is J(q, t) speeds + b(q, t); speeds and "
+                                       "velocities may not be squared, multiplied together or inside functions")
+                continue
             kind = _nonholonomic_row(value, text, path, velocities, scope)
             if kind is None:                        # reported: no later check looks at the row again
                 parsed[j] = sp.Integer(0)
@@ -262,13 +277,15 @@ def _check_multipliers(constraints: list, written: dict, scope: Scope):
     made.update({n: f"the run-file column '{n}'" for n in ("time", "flow", "energy", "energy_balance")})
     seen = {}
     for c in sorted(constraints, key=lambda c: c.where):        # in document order, by section
-        given = written[c.where[0]][c.where[1]].get("multiplier")
+        key = "friction_multiplier" if c.row_where[0][-1] == "slip" else "multiplier"   # a contact's stick row
+        given = written[c.where[0]][c.where[1]].get(key)
         for j, name in enumerate(c.multipliers):
             if given is None:         # lambda_<constraint>: point at the name it comes from
                 path, what = c.where + ("name",), f"the default multiplier name '{name}' of constraint '{c.name}'"
-                fix = f"name the multiplier: add 'multiplier: <name>' to constraint '{c.name}'"
+                fix = (f"name the multiplier: add 'multiplier: <name>' to constraint '{c.name}'" if key == "multiplier"
+                       else "name the friction force: add 'friction_multiplier: <name>' to its contact")
             else:
-                path = c.where + ("multiplier",) + ((j,) if isinstance(given, list) else ())
+                path = c.where + (key,) + ((j,) if isinstance(given, list) else ())
                 what, fix = f"the multiplier name '{name}'", "choose another name"
             if name in seen:
                 first = "earlier in this constraint" if seen[name] == c.name else f"in constraint '{seen[name]}'"

@@ -16,13 +16,27 @@ The design, and why:
   whose target the runtime decides (andyc.runtime.contacts: every contact touching at that instant
   takes its impulse together, from a small complementarity problem, and those left at rest close),
   and for each closed contact a liftoff jump (`<contact>_liftoff`, guard: the normal force, falling)
-  to the mode without it. With more than one contact, a jump's name ends in its mode's bitmask.
+  to the mode without it. A jump that leaves more than one flow (any with more than one contact, a
+  liftoff or slip end with friction) has its name end in its source flow's index (`left_impact_2`).
 - The impact jumps carry no compiled impact map (the runtime's solves all touching contacts at once);
   their `restitution` is the contact's e, which the runtime reads from the restitution leaf.
 
+Coulomb friction, planar (a contact with `friction: mu` and `slip:`, the speed of its contact point along its
+tangent, linear in the speeds): its stick row (`<contact>_stick`, slip = 0, nonholonomic; its multiplier
+`friction_<contact>`, the friction force along +tangent) and four states instead of two: open, stick (gap and
+stick rows active), slip forwards and slip backwards (gap row active; its normal force lam_n carries the
+friction -sigma mu lam_n along the tangent, sigma = +1 forwards: andyc.numerics.dynamics.slip_rows). A flow is
+then the contacts' states in mixed radix (2 per contact without friction, 4 with: flow_of, states_of; with no
+friction the bitmask as before), at most MAX_MODES flows. Their jumps: stick -> slip forwards where lam_t reaches
+-mu lam_n (`<contact>_slip_pos`, guard mu lam_n + lam_t, falling), backwards where it reaches +mu lam_n
+(`<contact>_slip_neg`, guard mu lam_n - lam_t, falling); slip -> stick where the slip speed crosses zero
+(`<contact>_stop`, guard the slip, falling forwards, rising backwards), whose target the runtime decides (it
+sticks if the friction it needs is inside the cone, else slips the other way) and whose coefficient (the
+restitution slot, unused: it has no impact map) is mu, which the slipping flow's force reads.
+
 Jumps, flows and rows are ordinary Spec objects: the symbolic stage and code generation treat them as
-a hand-written hybrid automaton; only the tables CONTACT_* and JUMP_CONTACT tell the runtime which
-jumps are contacts'.
+a hand-written hybrid automaton; only the tables CONTACT_*, JUMP_CONTACT and JUMP_KINDS tell the runtime
+which jumps are contacts', and FLOW_SLIP* the numerics which rows slip (andyc.codegen.generate).
 """
 
 from __future__ import annotations
@@ -31,11 +45,15 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from andyc.spec.expressions import TIME
 from andyc.spec.hybrid import multiplier_symbols, restitution
-from andyc.spec.model import FALLING, Flow, Jump
+from andyc.spec.model import FALLING, RISING, Flow, Jump
 from andyc.spec.scope import Scope
 
-IMPACT, LIFTOFF = "impact", "liftoff"
+IMPACT, LIFTOFF, SLIP, STOP = "impact", "liftoff", "slip", "stop"
+OPEN, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3      # a contact's state (without friction: 0 open, 1 closed)
+STATE_SUFFIX = {STICK: "_stick", SLIP_POS: "_slip_pos", SLIP_NEG: "_slip_neg"}
+MAX_MODES = 16                                     # flows: 4 contacts without friction, 2 with
 
 
 @dataclass(frozen=True)
@@ -45,16 +63,42 @@ class Contact:
     multiplier: str             # the normal force's name
     restitution: sp.Expr        # e, an expression of parameters
     where: tuple
+    friction: sp.Expr | None = None     # mu, an expression of parameters; None: frictionless
+    stick: str | None = None    # the name of its stick row (slip speed = 0), with friction
+    friction_multiplier: str | None = None  # the friction force's name (the stick row's multiplier)
 
 
-def mode_name(mask: int, names: list) -> str:
-    """The flow of the contacts closed in `mask` (bit i: contact i)."""
-    closed = [n for i, n in enumerate(names) if mask >> i & 1]
+def radices(frictional: list) -> list:
+    """The number of states of each contact (4 with friction, 2 without), from a flag per contact."""
+    return [4 if f else 2 for f in frictional]
+
+
+def states_of(flow: int, radix: list) -> list:
+    """Each contact's state in `flow` (the flow index is the states in mixed radix, contact 0 the lowest digit)."""
+    states = []
+    for r in radix:
+        states.append(flow % r)
+        flow //= r
+    return states
+
+
+def flow_of(states: list, radix: list) -> int:
+    flow, place = 0, 1
+    for s, r in zip(states, radix):
+        flow += s * place
+        place *= r
+    return flow
+
+
+def mode_name(states: list, contacts: list) -> str:
+    """The flow of the contacts' states: `open` (none closed) or the closed contacts (`left+right`), with their
+    friction state (`block_stick`, `block_slip_pos`, `block_slip_neg`)."""
+    closed = [c.name + (STATE_SUFFIX[s] if c.friction is not None else "") for c, s in zip(contacts, states) if s]
     return "+".join(closed) if closed else "open"
 
 
 def build_contacts(written: list, constraints: list, has_hybrid: bool, scope: Scope) -> tuple[list, list, list]:
-    """(contacts, flows, jumps) of the `contacts:` section; `constraints` hold their gap rows (built by
+    """(contacts, flows, jumps) of the `contacts:` section; `constraints` hold their gap and stick rows (built by
     andyc.spec.constraints with the model's own). A model with contacts has no hand-written hybrid section."""
     if not written:
         return [], [], []
@@ -71,34 +115,89 @@ def build_contacts(written: list, constraints: list, has_hybrid: bool, scope: Sc
                                "contact is closed", "choose another name")
         e = restitution(c.get("restitution", 0), where + ("restitution",), scope)
         row = by_name[c["name"]]
-        contacts.append(Contact(c["name"], c["name"], row.multipliers[0], e, where))
-    names = [c.name for c in contacts]
-    contact_rows = set(names)
+        mu = stick = None
+        if "friction" in c and "slip" not in c:
+            scope.report.error(where + ("friction",), "a contact with friction needs its slip speed",
+                               "add 'slip:', the speed of the contact point along the tangent (e.g. block.vx)")
+        elif "slip" in c and "friction" not in c:
+            scope.report.error(where + ("slip",), "'slip' without 'friction' has no effect",
+                               "add 'friction: mu' (Coulomb's coefficient), or remove 'slip'")
+        elif "friction" in c:
+            mu, stick = _friction(c["friction"], where + ("friction",), scope), f"{c['name']}_stick"
+        contacts.append(Contact(c["name"], c["name"], row.multipliers[0], e, where, mu, stick,
+                                by_name[stick].multipliers[0] if stick in by_name else None))
+    radix = radices([c.friction is not None for c in contacts])
+    n_flows = flow_of([r - 1 for r in radix], radix) + 1
+    if n_flows > MAX_MODES:
+        scope.report.error(("contacts",), f"{len(contacts)} contacts, {sum(r == 4 for r in radix)} with friction, "
+                           f"make {n_flows} modes, more than {MAX_MODES}", "with friction, give at most 2 contacts "
+                           "(each has 4 modes: open, stick, slip forwards, slip backwards); without, at most 4")
+        return contacts, [], []
+    contact_rows = {c.name for c in contacts} | {c.stick for c in contacts if c.stick}
     bilateral = tuple(c.name for c in constraints if c.name not in contact_rows)
     lams = multiplier_symbols(constraints)
-    flows, jumps = [], []
-    n = len(contacts)
-    for mask in range(2 ** n):
-        closed = {names[i] for i in range(n) if mask >> i & 1}
-        active = tuple(c.name for c in constraints if c.name in closed or c.name in bilateral)
-        flows.append(Flow(mode_name(mask, names), active, {}, ("contacts",)))
-    for mask in range(2 ** n):
-        suffix = "" if n == 1 else f"_{mask}"
+    all_states = [states_of(k, radix) for k in range(n_flows)]
+    names = [mode_name(states, contacts) for states in all_states]
+    jumps, slips = [], {k: [] for k in range(n_flows)}
+    single = len(contacts) == 1
+
+    def add(name, kind, k, target, guard, direction, i, coefficient=sp.Integer(0), quantities=None, used=None,
+            text=None):
+        suffix = "" if single and (kind != LIFTOFF or radix[i] == 2) and kind != STOP else f"_{k}"
+        jumps.append(Jump(f"{name}{suffix}", names[k], names[target], guard, direction, (), "none", coefficient,
+                          (), (), len(jumps), dict(quantities or {}), contacts[i].where, text, used or {}, i, kind))
+        return jumps[-1].name
+
+    for k, states in enumerate(all_states):
         for i, c in enumerate(contacts):
+            s, w = states[i], written[i]
+            other = lambda state: flow_of(states[:i] + [state] + states[i + 1:], radix)   # noqa: E731
             row = by_name[c.constraint]
-            if mask >> i & 1:
-                symbol, _ = lams[c.multiplier]
-                jumps.append(Jump(f"{c.name}_liftoff{suffix}", flows[mask].name, flows[mask & ~(1 << i)].name,
-                                  symbol, FALLING, (), "none", sp.Integer(0), (), (), len(jumps), {}, c.where,
-                                  _text(c.multiplier, "none"), {symbol: c.multiplier}, i,
-                                  LIFTOFF))
+            if s == OPEN:
+                add(f"{c.name}_impact", IMPACT, k, k, row.rows[0], FALLING, i, c.restitution, row.quantities,
+                    text=_text(w["gap"], {"restitution": w.get("restitution", 0)}))
+                continue
+            n_sym = lams[c.multiplier][0]
+            add(f"{c.name}_liftoff", LIFTOFF, k, other(OPEN), n_sym, FALLING, i, used={n_sym: c.multiplier},
+                text=_text(c.multiplier, "none"))
+            if c.friction is None:
+                continue
+            t_sym = lams[c.friction_multiplier][0]
+            used = {n_sym: c.multiplier, t_sym: c.friction_multiplier}
+            if s == STICK:
+                add(f"{c.name}_slip_pos", SLIP, k, other(SLIP_POS), c.friction * n_sym + t_sym, FALLING, i,
+                    used=used, text=_text(f"{w['friction']}*{c.multiplier} + {c.friction_multiplier}", "none"))
+                add(f"{c.name}_slip_neg", SLIP, k, other(SLIP_NEG), c.friction * n_sym - t_sym, FALLING, i,
+                    used=used, text=_text(f"{w['friction']}*{c.multiplier} - {c.friction_multiplier}", "none"))
             else:
-                jumps.append(Jump(f"{c.name}_impact{suffix}", flows[mask].name, flows[mask].name,
-                                  row.rows[0], FALLING, (), "none", c.restitution, (), (), len(jumps),
-                                  dict(row.quantities), c.where,
-                                  _text(written[i]["gap"], {"restitution": written[i].get("restitution", 0)}), {},
-                                  i, IMPACT))
+                stick = by_name[c.stick]
+                stop = add(f"{c.name}_stop", STOP, k, other(STICK), stick.rows[0],
+                           FALLING if s == SLIP_POS else RISING, i, c.friction, stick.quantities,
+                           text=_text(w["slip"], "none"))
+                slips[k].append((c.constraint, c.stick, 1 if s == SLIP_POS else -1, stop))
+    flows = []
+    for k, states in enumerate(all_states):
+        closed = {c.name for c, s in zip(contacts, states) if s} | {c.stick for c, s in zip(contacts, states)
+                                                                     if s == STICK and c.stick}
+        active = tuple(c.name for c in constraints if c.name in closed or c.name in bilateral)
+        flows.append(Flow(names[k], active, {}, ("contacts",), tuple(slips[k])))
     return contacts, flows, jumps
+
+
+def _friction(value, path, scope: Scope) -> sp.Expr:
+    """Coulomb's coefficient: a constant expression of parameters, >= 0 at their defaults."""
+    before = len(scope.report.problems)
+    mu_expr, mu = scope.constant(value, path, allow_time=True)
+    if len(scope.report.problems) > before:
+        pass
+    elif TIME in mu_expr.free_symbols:
+        scope.report.error(path, f"the friction coefficient {value!r} depends on t",
+                           "give a constant >= 0: a number or an expression of parameters")
+    elif mu < 0:
+        shown = f"{mu:g}" if mu_expr.is_number else f"{value} = {mu:g}"
+        scope.report.error(path, f"the friction coefficient is {shown}, negative",
+                           "give Coulomb's coefficient mu >= 0 (0: frictionless sliding)")
+    return mu_expr
 
 
 def _text(guard, impact) -> dict:

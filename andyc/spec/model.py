@@ -189,6 +189,8 @@ class Flow:
     constraints: tuple          # names, in the order of Spec.constraints
     inputs: dict                # input name -> expression of parameters
     where: tuple
+    slip: tuple = ()            # of (normal row, stick row, sigma +1/-1, the jump whose coefficient is mu): contacts
+    #                             slipping in this flow, forwards or backwards along their tangent (andyc.spec.contacts)
 
 
 @dataclass(frozen=True)
@@ -218,7 +220,7 @@ class Jump:
     text: dict = field(default_factory=dict)        # guard, enabled, reset, impact as the model file writes them
     multipliers: dict = field(default_factory=dict)  # multiplier symbol -> its name, used by guard or enabled
     contact: int = -1           # the contact whose impact (CONTACT_IMPACT) or liftoff this is (andyc.spec.contacts)
-    kind: str = ""              # "impact" | "liftoff" for a contact's jump, "" for the user's
+    kind: str = ""              # "impact" | "liftoff" | "slip" | "stop" for a contact's jump, "" for the user's
 
 
 @dataclass

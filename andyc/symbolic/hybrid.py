@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from andyc.numerics.status import SLIP_STOP
 from andyc.spec.model import Spec
 from andyc.symbolic.constraints import ConstraintTerms, FrameQuantities
 
@@ -37,7 +38,7 @@ class JumpTerms:
     impact_rows: list           # velocity-level constraint rows that take the impact
     restitution: sp.Expr        # e, of parameters
     uses_multipliers: bool = False  # guard or enabled read the source flow's multipliers (HybridTerms.multipliers)
-    contact: int = -1           # the contact whose impact this is (the runtime resolves it), or -1
+    contact: int = -1           # the contact whose impact this is (the runtime resolves it), SLIP_STOP, or -1
 
 
 @dataclass
@@ -64,7 +65,8 @@ def hybrid_terms(spec: Spec, quantities: FrameQuantities, constraints: Constrain
         jumps.append(JumpTerms(
             j.name, flow_index[j.source], flow_index[j.target], j.direction, j.priority, j.guard, rate, enabled,
             list(j.resets), [r for r, name in enumerate(constraints.rows) if name in j.impact_constraints],
-            j.restitution, bool(j.multipliers), j.contact if j.kind == "impact" else -1))
+            j.restitution, bool(j.multipliers),
+            j.contact if j.kind == "impact" else SLIP_STOP if j.kind == "stop" else -1))
     return HybridTerms(
         flows=[f.name for f in spec.flows], initial=spec.initial_flow,
         flow_rows=[[r for r, name in enumerate(constraints.rows) if name in f.constraints] for f in spec.flows],

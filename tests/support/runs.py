@@ -85,6 +85,23 @@ def contact_run(n=41) -> Run:
                     contact_names=["ground"], contact_rows=[0])
 
 
+def friction_contact_run(n=41) -> Run:
+    """A block sliding on the ground with friction mu = 0.5 (issue 21): slipping forwards (flow 2) until t = 1, then
+    sticking (flow 1); multipliers normal force 9.81 and friction (the stick row's, 0.25 while it sticks, NaN while
+    it slips: the run reports -mu lam_n = -4.905 then)."""
+    t = np.linspace(0.0, 2.0, n)
+    sticking = t >= 1.0
+    x = np.where(sticking, 0.5, t - 0.5 * t ** 2)
+    return make_run(["x", "x_dot"], 1, 1, np.column_stack([x, np.gradient(x, t)]),
+                    flow=np.where(sticking, 1, 2).astype(np.int64),
+                    flow_names=["open", "floor_stick", "floor_slip_pos", "floor_slip_neg"], jump_names=["floor_stop"],
+                    multiplier_names=["normal", "friction"],
+                    multipliers=np.column_stack([np.full(n, 9.81), np.where(sticking, 0.25, np.nan)]),
+                    residual_position=np.zeros((n, 1)), residual_velocity=np.zeros((n, 2)),
+                    contact_names=["floor"], contact_rows=[0], contact_stick_rows=[1], contact_mu=[0.5],
+                    slip_speeds=np.where(sticking, 0.0, 1.0 - t)[:, None])
+
+
 def inputs_run(n=40, changing=True) -> Run:
     """Inputs u (a ramp, or constant) and v (constant)."""
     t = np.linspace(0.0, 2.0, n)
