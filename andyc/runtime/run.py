@@ -51,6 +51,8 @@ class Run:
     contact_rows: list = field(default_factory=list)   # the multiplier (row) of each contact's normal force
     andyc_version: str = andyc.__version__
     display: dict = field(default_factory=dict)      # state units, the ground, shapes: for pictures (andyc.spec.display)
+    sensitivities: dict | None = None   # simulate(sensitivities=True): "x0" dx(T)/dx0 (nx, nx), "p" dx(T)/dp
+                                        # (nx, np), "time" dT/d(x0, p) (andyc.runtime.sensitivities)
 
     def __post_init__(self):
         n = self.time.shape[0]
@@ -200,6 +202,9 @@ def write_h5(run: Run, path: Path) -> None:
         f.create_dataset("events", data=table, maxshape=(None,))
         for key in ("state_before", "state_after", "discrete_after"):
             f[f"event_states/{key}"] = ev[key]
+        if run.sensitivities is not None:       # dx(T)/dx0, dx(T)/dp, dT/d(x0, p)
+            for key, value in run.sensitivities.items():
+                f[f"sensitivities/{key}"] = value
 
 
 def read_h5(path) -> Run:
@@ -233,7 +238,9 @@ def read_h5(path) -> Run:
                    input_names=[str(s) for s in f["inputs"].attrs["names"]] if "inputs" in f else [],
                    input_values=f["inputs"][()] if "inputs" in f else None,
                    frame_parents=json.loads(a.get("frame_parents", "{}")), display=json.loads(a.get("display", "{}")),
-                   contact_names=contacts["names"], contact_rows=contacts["rows"])
+                   contact_names=contacts["names"], contact_rows=contacts["rows"],
+                   sensitivities={k: f["sensitivities"][k][()] for k in f["sensitivities"]}
+                   if "sensitivities" in f else None)
 
 
 def write_csv(run: Run, path: Path) -> None:

@@ -1,0 +1,237 @@
+"""Exact sensitivities of a fixed-step RK4 run: dx(T)/dx0 and dx(T)/dp, through its jumps.
+
+The run's trajectory is the compiled loop's own (andyc.runtime.fixed_step, stepping one grid step per call
+here); beside it this module carries the tangent T = d(x, d, p, t)/dz, z = (x0, p), through the same discrete
+map, with the exact first derivatives of the model's functions (<name>_derivatives.py,
+andyc.codegen.derivatives). x0 and the initial discrete states are held: dx(T)/dp is at fixed x0.
+
+Steps. The RK4 step x' = x + h/6 (K1 + 2 K2 + 2 K3 + K4), K_i = f(t + c_i h, x + c_i h K_(i-1)), differentiated
+stage by stage (the variational equations integrated by the same stages; forward mode of the step):
+
+    dK_i = F(stage i) [dx + c_i (dh K_(i-1) + h dK_(i-1)); dd; dp; dt + c_i dh],
+    dx' = dx + dh (K1 + 2 K2 + 2 K3 + K4)/6 + h/6 (dK1 + 2 dK2 + 2 dK3 + dK4),
+
+F = df/d(x, d, p, t) from M dv/dt = G (+ A^T lam in a constrained flow: the saddle-point system
+[[M, -A^T], [A, 0]] differentiated as in andyc.symbolic.linearize). On a whole grid step dh = dt = 0; the
+step that follows a jump starts at the jump's time t_e and ends on the grid, so it has dt = dt_e, dh = -dt_e.
+
+Jumps: the saltation matrix of the discrete map. The loop locates the guard's zero on the step as the
+step length tau with g(t + tau, Phi(x, tau)) = 0, Phi the RK4 step (andyc_numerics/integrator.py: locate).
+With Phi_tau its derivative in tau (the extra tangent column dh = 1 above) and the implicit function theorem,
+
+    dtau = -(g_w dPhi) / (g_x Phi_tau + g_t),                 w = (x, d, p), dPhi the step's tangent at fixed tau,
+    dw_e = dPhi + Phi_tau dtau,  dt_e = dt + dtau,
+    dw+ = I_w (R_w dw_e + R_t dt_e) + I_t dt_e,                 R the resets, I the impact map (after them)
+
+and the remainder of the step (length t_(i+1) - t_e) is differentiated as above. As h -> 0 (Phi_tau -> f-,
+the remainder's dh-column -> f+) this is the classical saltation matrix (Aizerman & Gantmacher 1958; Mueller
+1995; Hiskens & Pai 2000, eq. 13):  Xi = D + (f+ - D f- - R_t) g_w / (g_w f- + g_t),  D = d(I o R)/dw.
+The impact I: v+ solves [[M, -J^T], [J, 0]] [v+; L] = [M v; J v - (1 + e) c] (c = J v + b the impact rows'
+velocity residual; ANDY eq. 19), differentiated the same way.
+
+Accuracy. This is the exact derivative of the discrete map with tau the exact root of g(Phi(x, tau)); the loop
+stops its root finding at a bracket of width event_tol (andyc.Events.tol, 1e-12 s), so the map it computes
+differs from that one by about |f| event_tol in x, and its finite differences carry that error divided by
+their step; the derivative itself is exact to round-off. When the run ends at a jump (stop_after), the end
+time is the jump's: dT/dz (Run.sensitivity_time) is dt_e, and dx(T)/dz the state just after it.
+
+Not handled (refused with a message by `check`): the projection method (its projection's Jacobian is not
+derived), lagrange and baumgarte, the adaptive methods, nonholonomic or quaternion signals, inputs driven by
+expressions, tables or controllers, guards that read multipliers, contacts, and jumps that happen at once
+after another (their saltation is degenerate). The user's functions in <name>_jumps.py are taken to change
+nothing (they are not differentiated).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+
+import numpy as np
+
+from andyc.errors import SimulationError
+
+_C = (0.0, 0.5, 0.5, 1.0)
+_B = (1.0, 2.0, 2.0, 1.0)
+
+
+def load_derivatives(model):
+    """The build's <name>_derivatives.py (andyc.pipeline.build_derivatives), imported; SimulationError when it is
+    missing or of another build."""
+    path = model.path.with_name(f"{model.name}_derivatives.py")
+    key = getattr(model.module, "BUILD_KEY", None)
+    if not path.exists():
+        raise SimulationError(f"{model.name}: sensitivities need the model's derivatives, {path.name}, beside its "
+                              f"build; write them with andyc.build_derivatives(MODEL_FILE, BUILD_DIR) (andyc sim "
+                              f"--sensitivities does)")
+    name = f"{model.module.__name__}_derivatives"
+    module = sys.modules.get(name)
+    if module is None or getattr(module, "__file__", None) != str(path):
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        sys.modules[name] = module
+    if module.BUILD_KEY != key:
+        raise SimulationError(f"{model.name}: {path} is of another build of the model; write it again with "
+                              f"andyc.build_derivatives(MODEL_FILE, BUILD_DIR)")
+    return module
+
+
+def check(model, method: str, source, controller) -> None:
+    """Refuse, with the reason, a run whose sensitivities this module does not compute (see the docstring)."""
+    why = None
+    m = model.module
+    if method != "rk4":
+        why = (f"method '{method}': sensitivities follow the rk4 method only so far (the projection method's "
+               f"Jacobian is not derived yet); use --method rk4")
+    elif model.ns:
+        why = "the model has nonholonomic or quaternion signals, which sensitivities do not handle yet"
+    elif controller is not None or source.drives or model.input_expressions:
+        why = "inputs driven by expressions, tables or a controller are not differentiated; hold the inputs"
+    elif model.input_names and np.any(np.asarray(m.FLOW_SETS_INPUT)):
+        why = "a flow sets inputs (of the parameters), which are not differentiated"
+    elif model.contact_names:
+        why = "contacts (their impacts are solved as a complementarity problem) are not differentiated"
+    elif model.nj and np.any(np.asarray(m.JUMP_MULTIPLIERS)):
+        why = "a guard or condition reads multipliers, whose derivatives are not derived"
+    if why is not None:
+        raise SimulationError(f"{model.name}: cannot compute sensitivities: {why}")
+
+
+class Tangent:
+    """The tangent T = d(x, d, p, t)/dz of a run, z = (x0, p), carried step by step (see the module docstring)."""
+
+    def __init__(self, model, derivatives, p, u):
+        self.model, self.D, self.p, self.u = model, derivatives, np.asarray(p, float), np.asarray(u, float)
+        nx, nd, npar = model.nx, model.nd, len(p)
+        self.nx, self.nd, self.nw = nx, nd, nx + nd + npar + 1
+        self.ncol = nx + npar
+        T = np.zeros((self.nw, self.ncol))
+        T[:nx, :nx] = np.eye(nx)
+        T[nx + nd:nx + nd + npar, nx:] = np.eye(npar)
+        self.T = T
+        m = model.module
+        self.flow_rows = [[int(r) for r in m.FLOW_ROWS[f] if r >= 0] for f in range(model.nf)]
+        self.impact_rows = [[int(r) for r in m.IMPACT_ROWS[k] if r >= 0] for k in range(model.nj)]
+        self.jumps = 0
+
+    # -- the flow -------------------------------------------------------------------------------------------
+    def rates(self, t, x, d, flow):
+        """f(t, x) and F = df/dW (nx, NW) in `flow`."""
+        nq, nv = self.model.nq, self.model.nv
+        M, dM, G, dG, A, dA, kappa, dkappa, _, _ = self.D.flow_terms(t, x, self.u, self.p, d)
+        rows = self.flow_rows[flow]
+        if rows:
+            A, dA, kappa, dkappa = A[rows], dA[rows], kappa[rows], dkappa[rows]
+            m = len(rows)
+            saddle = np.block([[M, -A.T], [A, np.zeros((m, m))]])
+            a_lam = _solve(saddle, np.concatenate([G, -kappa]))
+            a, lam = a_lam[:nv], a_lam[nv:]
+            rhs = np.concatenate([dG - np.einsum("ijk,j->ik", dM, a) + np.einsum("rik,r->ik", dA, lam),
+                                  -np.einsum("rjk,j->rk", dA, a) - dkappa])
+            da = _solve(saddle, rhs)[:nv]
+        else:
+            a = np.linalg.solve(M, G)
+            da = np.linalg.solve(M, dG - np.einsum("ijk,j->ik", dM, a))
+        f = np.concatenate([x[nq:nq + nq], a])
+        F = np.zeros((self.nx, self.nw))
+        F[np.arange(nq), nq + np.arange(nq)] = 1.0
+        F[nq:] = da
+        return f, F
+
+    def step(self, t, h, x, d, flow, T, dh):
+        """The RK4 step of size h from (t, x) and its tangent: T (NW, k) at the start, dh (k,) the tangent of h.
+        Returns (x', T')."""
+        nx = self.nx
+        K, dK = [], []
+        for s, c in enumerate(_C):
+            if s == 0:
+                xs, dxs = x, T[:nx]
+            else:
+                xs = x + c * h * K[-1]
+                dxs = T[:nx] + c * (np.outer(K[-1], dh) + h * dK[-1])
+            f, F = self.rates(t + c * h, xs, d, flow)
+            Ts = np.vstack([dxs, T[nx:-1], (T[-1] + c * dh)[None]])
+            K.append(f)
+            dK.append(F @ Ts)
+        xk = sum(b * k for b, k in zip(_B, K)) / 6.0
+        out = T.copy()
+        out[:nx] = T[:nx] + np.outer(xk, dh) + h / 6.0 * sum(b * k for b, k in zip(_B, dK))
+        out[-1] = T[-1] + dh
+        return x + h * xk, out
+
+    # -- the driver's calls ---------------------------------------------------------------------------------
+    def advance(self, t0, x0, d0, flow0, t, t_grid, k, x_event, d_after):
+        """After one call of the compiled loop from (t0, x0, d0) in flow0: it reached t (the grid point t_grid,
+        or a jump k >= 0 at t, x_event the state just before it, d_after the discrete states after it)."""
+        T = self.T
+        if k < 0:
+            h = t_grid - t0
+            if h > 1e-14 * max(1.0, abs(t_grid)):
+                self.T = self.step(t0, h, x0, d0, flow0, T, -T[-1])[1]
+            else:
+                self.T = T.copy()
+            self.T[-1] = 0.0
+            return
+        self.jumps += 1
+        tau = t - t0
+        Te = np.hstack([T, np.zeros((self.nw, 1))])
+        xe, Te = self.step(t0, tau, x0, d0, flow0, Te, np.concatenate([np.zeros(self.ncol), [1.0]]))
+        x_event = np.asarray(x_event, float)
+        g, dg = self.D.guard_terms(k, t, x_event, self.u, self.p, d0)
+        rate = dg @ Te[:, -1]
+        if rate == 0.0:
+            raise SimulationError(f"{self.model.name}: jump '{self.model.jump_names[k]}' at t = {t:.12g}: the guard "
+                                  f"touches zero without crossing it (dg/dt = 0), where the jump time has no "
+                                  f"derivative")
+        dtau = -(dg @ Te[:, :-1]) / rate
+        T = Te[:, :-1] + np.outer(Te[:, -1], dtau)
+        self.T = self.jump(k, t, x_event, d0, T)
+
+    def jump(self, k, t, x, d, T):
+        """The tangent through jump k's resets, then its impact, at (t, x, d) just before it."""
+        nx = self.nx
+        w = np.concatenate([x, d])
+        idx, r, dr = self.D.reset_terms(k, t, x, self.u, self.p, d)
+        if len(idx):
+            R = np.eye(self.nw)
+            R[idx] = dr
+            T = R @ T
+            w[idx] = r
+        x, d = w[:nx], w[nx:]
+        rows = self.impact_rows[k]
+        if rows:
+            T = self._impact(k, t, x, d, rows) @ T
+        return T
+
+    def _impact(self, k, t, x, d, rows):
+        """The Jacobian (NW, NW) of jump k's impact map at (t, x, d) (see the module docstring)."""
+        nq, nv = self.model.nq, self.model.nv
+        M, dM, _, _, A, dA, _, _, c, dc = self.D.flow_terms(t, x, self.u, self.p, d)
+        J, dJ, c, dc = A[rows], dA[rows], c[rows], dc[rows]
+        e, de = self.D.restitution_terms(k, t, x, self.u, self.p, d)
+        v = x[nq:nq + nv]
+        m = len(rows)
+        saddle = np.block([[M, -J.T], [J, np.zeros((m, m))]])
+        sol = _solve(saddle, np.concatenate([M @ v, J @ v - (1.0 + e) * c]))
+        vp, lam = sol[:nv], sol[nv:]
+        dv = np.zeros((nv, self.nw))
+        dv[:, nq:nq + nv] = np.eye(nv)
+        rhs = np.concatenate([np.einsum("ijk,j->ik", dM, v - vp) + np.einsum("rik,r->ik", dJ, lam) + M @ dv,
+                              np.einsum("rjk,j->rk", dJ, v - vp) + J @ dv - (1.0 + e) * dc - np.outer(c, de)])
+        out = np.eye(self.nw)
+        out[nq:nq + nv] = _solve(saddle, rhs)[:nv]
+        return out
+
+    def result(self) -> dict:
+        """dx/dx0 (nx, nx), dx/dp (nx, np) and dt/dz (nx + np,) at the run's end."""
+        nx = self.nx
+        return {"x0": self.T[:nx, :nx].copy(), "p": self.T[:nx, nx:].copy(), "time": self.T[-1].copy()}
+
+
+def _solve(a, b):
+    """a^-1 b, least squares when a is singular (redundant rows)."""
+    try:
+        return np.linalg.solve(a, b)
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(a, b, rcond=None)[0]
