@@ -64,7 +64,8 @@ def test_compass_gait_through_heel_strikes(compiled, shipped_build):
     fx, fp, ft = _central_differences(model, 3.0, run.state[0], run.discrete[0], model.parameters(None), events)
     assert _relative(S["x0"], fx) < 1e-7
     assert _relative(S["p"], fp) < 1e-7
-    assert np.max(np.abs(S["time"] - ft)) < 1e-7 * np.max(np.abs(ft))
+    time = np.delete(S["time"], np.arange(model.nx, model.nx + model.nd))     # (x0, p) of (x0, d0, p)
+    assert np.max(np.abs(time - ft)) < 1e-7 * np.max(np.abs(ft))
     # the saltation matters: the same derivative without the jumps' time shifts would be far off
     assert np.max(np.abs(S["time"])) > 0.1
 

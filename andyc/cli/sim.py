@@ -151,7 +151,7 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
     if run.sensitivities is not None:
         h5 = [o for o in outs if Path(o).suffix.lower() != ".csv"]
         report.say(f"sensitivities: dx(T)/dx0 ({model.nx} x {model.nx}), dx(T)/dp ({model.nx} x "
-                   f"{len(model.parameter_names)}) and dT/d(x0, p) in " + (", ".join(f"{o}:/sensitivities" for o in h5)
+                   f"{len(model.parameter_names)}) and dT/d(x0, d0, p) in " + (", ".join(f"{o}:/sensitivities" for o in h5)
                                                                             or "no file")
                    + ("; a CSV run file does not hold them" if len(h5) < len(outs) else ""))
     report.results.append({"file": file, "ok": run.finished, "summary": run.summary(), "outputs": list(outs),

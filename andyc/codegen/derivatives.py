@@ -6,7 +6,8 @@ the time; andyc.symbolic.sensitivities.variables), from the symbolic forward mod
 andyc.symbolic.sensitivities:
 
     flow_terms(t, x, u, p, d)          M, dM (NV, NV, NW); G, dG; the constraint rows' A, dA (NC, NV, NW),
-                                       kappa, dkappa, c, dc (as the leaves `dynamics` and `constraints_into`)
+                                       kappa, dkappa, c, dc, and the holonomic rows' phi, dphi (NH, NW) (as the
+                                       leaves `dynamics` and `constraints_into`)
     guard_terms(k, t, x, u, p, d)      jump k's guard g and dg (NW,)
     reset_terms(k, t, x, u, p, d)      jump k's resets: the index in W of each target, its value, its gradient
     restitution_terms(k, t, x, u, p, d)   the restitution e of jump k's impact and de (NW,)
@@ -51,7 +52,8 @@ def render(model: SymbolicModel, key: str) -> str:
                   + [(f"G[{i}]", model.G[i]) for i in range(n)]
                   + [(f"A[{r}, {j}]", cons.A[r, j]) for r in range(cons.nc) for j in range(n)]
                   + [(f"kappa[{r}]", e) for r, e in enumerate(cons.kappa)]
-                  + [(f"c[{r}]", e) for r, e in enumerate(cons.c)])
+                  + [(f"c[{r}]", e) for r, e in enumerate(cons.c)]
+                  + [(f"phi[{r}]", e) for r, e in enumerate(cons.phi)])
     nq = len(model.q)
     index = {**{c.name: i for i, c in enumerate(model.spec.coordinates)},
              **{name: nq + i for i, name in enumerate(model.spec.speed_names)},
@@ -74,7 +76,8 @@ def render(model: SymbolicModel, key: str) -> str:
              f"    A, dA = np.zeros(({cons.nc}, {n})), np.zeros(({cons.nc}, {n}, NW))",
              f"    kappa, dkappa = np.zeros({cons.nc}), np.zeros(({cons.nc}, NW))",
              f"    c, dc = np.zeros({cons.nc}), np.zeros(({cons.nc}, NW))",
-             *body(flow_items, None), "    return M, dM, G, dG, A, dA, kappa, dkappa, c, dc", "", ""]
+             f"    phi, dphi = np.zeros({cons.nh}), np.zeros(({cons.nh}, NW))",
+             *body(flow_items, None), "    return M, dM, G, dG, A, dA, kappa, dkappa, c, dc, phi, dphi", "", ""]
     for name, make in (("guard_terms", lambda j: [("g", j.guard)]),
                        ("restitution_terms", lambda j: [("e", j.restitution)])):
         out = name[:1] if name == "guard_terms" else "e"

@@ -51,8 +51,9 @@ class Run:
     contact_rows: list = field(default_factory=list)   # the multiplier (row) of each contact's normal force
     andyc_version: str = andyc.__version__
     display: dict = field(default_factory=dict)      # state units, the ground, shapes: for pictures (andyc.spec.display)
-    sensitivities: dict | None = None   # simulate(sensitivities=True): "x0" dx(T)/dx0 (nx, nx), "p" dx(T)/dp
-                                        # (nx, np), "time" dT/d(x0, p) (andyc.runtime.sensitivities)
+    sensitivities: dict | None = None   # simulate(sensitivities=True): "x0" dx(T)/dx0 (nx, nx), "d0" dx(T)/dd0,
+                                        # "p" dx(T)/dp (nx, np), "time" dT/dz, "discrete" dd(T)/dz, z = (x0, d0, p)
+                                        # (andyc.runtime.sensitivities)
 
     def __post_init__(self):
         n = self.time.shape[0]
@@ -202,7 +203,7 @@ def write_h5(run: Run, path: Path) -> None:
         f.create_dataset("events", data=table, maxshape=(None,))
         for key in ("state_before", "state_after", "discrete_after"):
             f[f"event_states/{key}"] = ev[key]
-        if run.sensitivities is not None:       # dx(T)/dx0, dx(T)/dp, dT/d(x0, p)
+        if run.sensitivities is not None:       # dx(T)/dx0, dx(T)/dd0, dx(T)/dp, dT/dz, dd(T)/dz
             for key, value in run.sensitivities.items():
                 f[f"sensitivities/{key}"] = value
 

@@ -1,9 +1,9 @@
 """Exact sensitivities of a fixed-step RK4 run: dx(T)/dx0 and dx(T)/dp, through its jumps.
 
 The run's trajectory is the compiled loop's own (andyc.runtime.fixed_step, stepping one grid step per call
-here); beside it this module carries the tangent T = d(x, d, p, t)/dz, z = (x0, p), through the same discrete
+here); beside it this module carries the tangent T = d(x, d, p, t)/dz, z = (x0, d0, p), through the same discrete
 map, with the exact first derivatives of the model's functions (<name>_derivatives.py,
-andyc.codegen.derivatives). x0 and the initial discrete states are held: dx(T)/dp is at fixed x0.
+andyc.codegen.derivatives). dx(T)/dp is at fixed x0 and d0.
 
 Steps. The RK4 step x' = x + h/6 (K1 + 2 K2 + 2 K3 + K4), K_i = f(t + c_i h, x + c_i h K_(i-1)), differentiated
 stage by stage (the variational equations integrated by the same stages; forward mode of the step):
@@ -99,66 +99,77 @@ def check(model, method: str, source, controller) -> None:
 
 
 class Tangent:
-    """The tangent T = d(x, d, p, t)/dz of a run, z = (x0, p), carried step by step (see the module docstring)."""
+    """The tangent T = d(x, d, p, t)/dz of a run, z = (x0, d0, p), carried step by step (see the module docstring)."""
 
     def __init__(self, model, derivatives, p, u):
         self.model, self.D, self.p, self.u = model, derivatives, np.asarray(p, float), np.asarray(u, float)
         nx, nd, npar = model.nx, model.nd, len(p)
         self.nx, self.nd, self.nw = nx, nd, nx + nd + npar + 1
-        self.ncol = nx + npar
+        self.ncol = nx + nd + npar
         T = np.zeros((self.nw, self.ncol))
-        T[:nx, :nx] = np.eye(nx)
-        T[nx + nd:nx + nd + npar, nx:] = np.eye(npar)
+        T[:-1, :] = np.eye(self.ncol)
         self.T = T
         m = model.module
         self.flow_rows = [[int(r) for r in m.FLOW_ROWS[f] if r >= 0] for f in range(model.nf)]
         self.impact_rows = [[int(r) for r in m.IMPACT_ROWS[k] if r >= 0] for k in range(model.nj)]
         self.jumps = 0
+        self._F = np.zeros((nx, self.nw))       # df/dW's fixed part: dq/dt = v
+        self._F[np.arange(model.nq), model.nq + np.arange(model.nq)] = 1.0
+        self.before_jump = None     # d(x, d)/dz just before the latest jump (after its time shift, before its map)
 
     # -- the flow -------------------------------------------------------------------------------------------
     def rates(self, t, x, d, flow):
         """f(t, x) and F = df/dW (nx, NW) in `flow`."""
         nq, nv = self.model.nq, self.model.nv
-        M, dM, G, dG, A, dA, kappa, dkappa, _, _ = self.D.flow_terms(t, x, self.u, self.p, d)
+        M, dM, G, dG, A, dA, kappa, dkappa, _, _, _, _ = self.D.flow_terms(t, x, self.u, self.p, d)
         rows = self.flow_rows[flow]
         if rows:
             A, dA, kappa, dkappa = A[rows], dA[rows], kappa[rows], dkappa[rows]
-            m = len(rows)
-            saddle = np.block([[M, -A.T], [A, np.zeros((m, m))]])
+            saddle = self._saddle(M, A)
             a_lam = _solve(saddle, np.concatenate([G, -kappa]))
             a, lam = a_lam[:nv], a_lam[nv:]
-            rhs = np.concatenate([dG - np.einsum("ijk,j->ik", dM, a) + np.einsum("rik,r->ik", dA, lam),
-                                  -np.einsum("rjk,j->rk", dA, a) - dkappa])
+            rhs = np.concatenate([dG - a @ dM + np.tensordot(lam, dA, (0, 0)), -(a @ dA) - dkappa])
             da = _solve(saddle, rhs)[:nv]
         else:
             a = np.linalg.solve(M, G)
-            da = np.linalg.solve(M, dG - np.einsum("ijk,j->ik", dM, a))
+            da = np.linalg.solve(M, dG - a @ dM)
         f = np.concatenate([x[nq:nq + nq], a])
-        F = np.zeros((self.nx, self.nw))
-        F[np.arange(nq), nq + np.arange(nq)] = 1.0
+        F = self._F.copy()
         F[nq:] = da
         return f, F
+
+    @staticmethod
+    def _saddle(M, A):
+        """[[M, -A^T], [A, 0]]."""
+        n, m = M.shape[0], A.shape[0]
+        out = np.zeros((n + m, n + m))
+        out[:n, :n] = M
+        out[:n, n:] = -A.T
+        out[n:, :n] = A
+        return out
 
     def step(self, t, h, x, d, flow, T, dh):
         """The RK4 step of size h from (t, x) and its tangent: T (NW, k) at the start, dh (k,) the tangent of h.
         Returns (x', T')."""
         nx = self.nx
-        K, dK = [], []
+        Ts = T.copy()                   # the stage's tangent: d, p rows as at the start
+        sum_k, sum_dk = np.zeros(nx), np.zeros((nx, T.shape[1]))
+        k = dk = None
         for s, c in enumerate(_C):
             if s == 0:
-                xs, dxs = x, T[:nx]
+                xs = x
             else:
-                xs = x + c * h * K[-1]
-                dxs = T[:nx] + c * (np.outer(K[-1], dh) + h * dK[-1])
-            f, F = self.rates(t + c * h, xs, d, flow)
-            Ts = np.vstack([dxs, T[nx:-1], (T[-1] + c * dh)[None]])
-            K.append(f)
-            dK.append(F @ Ts)
-        xk = sum(b * k for b, k in zip(_B, K)) / 6.0
+                xs = x + c * h * k
+                Ts[:nx] = T[:nx] + c * (np.outer(k, dh) + h * dk)
+                Ts[-1] = T[-1] + c * dh
+            k, F = self.rates(t + c * h, xs, d, flow)
+            dk = F @ Ts
+            sum_k += _B[s] * k
+            sum_dk += _B[s] * dk
         out = T.copy()
-        out[:nx] = T[:nx] + np.outer(xk, dh) + h / 6.0 * sum(b * k for b, k in zip(_B, dK))
+        out[:nx] = T[:nx] + np.outer(sum_k / 6.0, dh) + h / 6.0 * sum_dk
         out[-1] = T[-1] + dh
-        return x + h * xk, out
+        return x + h / 6.0 * sum_k, out
 
     # -- the driver's calls ---------------------------------------------------------------------------------
     def advance(self, t0, x0, d0, flow0, t, t_grid, k, x_event, d_after):
@@ -186,6 +197,7 @@ class Tangent:
                                   f"derivative")
         dtau = -(dg @ Te[:, :-1]) / rate
         T = Te[:, :-1] + np.outer(Te[:, -1], dtau)
+        self.before_jump = T[:-1 - len(self.p)].copy()     # d(x, d)/dz just before it
         self.T = self.jump(k, t, x_event, d0, T)
 
     def jump(self, k, t, x, d, T):
@@ -207,26 +219,31 @@ class Tangent:
     def _impact(self, k, t, x, d, rows):
         """The Jacobian (NW, NW) of jump k's impact map at (t, x, d) (see the module docstring)."""
         nq, nv = self.model.nq, self.model.nv
-        M, dM, _, _, A, dA, _, _, c, dc = self.D.flow_terms(t, x, self.u, self.p, d)
+        M, dM, _, _, A, dA, _, _, c, dc, _, _ = self.D.flow_terms(t, x, self.u, self.p, d)
         J, dJ, c, dc = A[rows], dA[rows], c[rows], dc[rows]
         e, de = self.D.restitution_terms(k, t, x, self.u, self.p, d)
         v = x[nq:nq + nv]
-        m = len(rows)
-        saddle = np.block([[M, -J.T], [J, np.zeros((m, m))]])
+        saddle = self._saddle(M, J)
         sol = _solve(saddle, np.concatenate([M @ v, J @ v - (1.0 + e) * c]))
         vp, lam = sol[:nv], sol[nv:]
         dv = np.zeros((nv, self.nw))
         dv[:, nq:nq + nv] = np.eye(nv)
-        rhs = np.concatenate([np.einsum("ijk,j->ik", dM, v - vp) + np.einsum("rik,r->ik", dJ, lam) + M @ dv,
-                              np.einsum("rjk,j->rk", dJ, v - vp) + J @ dv - (1.0 + e) * dc - np.outer(c, de)])
+        rhs = np.concatenate([(v - vp) @ dM + np.tensordot(lam, dJ, (0, 0)) + M @ dv,
+                              (v - vp) @ dJ + J @ dv - (1.0 + e) * dc - np.outer(c, de)])
         out = np.eye(self.nw)
         out[nq:nq + nv] = _solve(saddle, rhs)[:nv]
         return out
 
     def result(self) -> dict:
-        """dx/dx0 (nx, nx), dx/dp (nx, np) and dt/dz (nx + np,) at the run's end."""
-        nx = self.nx
-        return {"x0": self.T[:nx, :nx].copy(), "p": self.T[:nx, nx:].copy(), "time": self.T[-1].copy()}
+        """At the run's end: dx/dx0 (nx, nx), dx/dd0 (nx, nd), dx/dp (nx, np); the time's dt/dz (nx + nd + np,)
+        and the discrete states' dd/dz (nd, nx + nd + np), z = (x0, d0, p); after a jump, "before_jump":
+        d(x, d)/dz of the state just before the latest one (nx + nd, nx + nd + np)."""
+        nx, nd, T = self.nx, self.nd, self.T
+        out = {"x0": T[:nx, :nx].copy(), "d0": T[:nx, nx:nx + nd].copy(), "p": T[:nx, nx + nd:].copy(),
+               "time": T[-1].copy(), "discrete": T[nx:nx + nd].copy()}
+        if self.before_jump is not None:
+            out["before_jump"] = self.before_jump
+        return out
 
 
 def _solve(a, b):

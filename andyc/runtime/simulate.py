@@ -79,8 +79,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     normalize, energy_correction, energy_tol). See andyc.runtime.options.
 
     sensitivities: also compute the exact derivatives of the run's end state, Run.sensitivities: "x0" dx(T)/dx0,
-    "p" dx(T)/dp (x0 and the initial discrete states held) and "time" dT/d(x0, p) (nonzero when the run ends
-    at a jump, stop_after), through the same RK4 steps and the saltation matrix of each jump
+    "d0" dx(T)/dd0, "p" dx(T)/dp (x0 and d0 held), "time" dT/d(x0, d0, p) (nonzero when the run ends
+    at a jump, stop_after) and "discrete" dd(T)/d(x0, d0, p), through the same RK4 steps and the saltation matrix of each jump
     (andyc.runtime.sensitivities: the rk4 method; needs the build's derivatives, andyc.build_derivatives).
     """
     _check_option("events", events, Events)
