@@ -10,7 +10,8 @@ from andyc.runtime.run import read_h5
 from tests.support import MODELS
 from tests.support.cli import invoke
 
-EPS = 1e-7      # central differences: truncation ~ EPS^2, round-off ~ 1e-16 / EPS; both far below 1e-7
+EPS = 1e-6      # central differences at EPS and 2 EPS, extrapolated (Richardson): truncation ~ EPS^4, round-off
+                # ~ 1e-16 / EPS times the map's growth; both far below 1e-7
 
 
 def _derivatives(compiled, shipped_build, name):
@@ -20,21 +21,22 @@ def _derivatives(compiled, shipped_build, name):
 
 
 def _central_differences(model, t_end, x0, d0, p0, events):
-    """dx(T)/dx0 and dx(T)/dp, and dT/d(x0, p), by central differences of plain rk4 runs."""
+    """dx(T)/dx0 and dx(T)/dp, and dT/d(x0, p), by central differences of plain rk4 runs (extrapolated)."""
     def end(x, p):
         run = andyc.simulate(model, t_end, 1e-3, "rk4", x0=x, d0=d0, parameters=dict(zip(model.parameter_names, p)),
                              events=events, init=andyc.Init("as-is"), progress=False)
-        return run.state[-1], run.time[-1]
+        return np.append(run.state[-1], run.time[-1])
 
     z0 = np.concatenate([x0, p0])
     nx = len(x0)
-    dx, dt = np.zeros((nx, len(z0))), np.zeros(len(z0))
+    out = np.zeros((nx + 1, len(z0)))
     for j in range(len(z0)):
         e = np.zeros(len(z0))
         e[j] = EPS * max(1.0, abs(z0[j]))
-        (xa, ta), (xb, tb) = end(*np.split(z0 + e, [nx])), end(*np.split(z0 - e, [nx]))
-        dx[:, j], dt[j] = (xa - xb) / (2 * e[j]), (ta - tb) / (2 * e[j])
-    return dx[:, :nx], dx[:, nx:], dt
+        d1, d2 = ((end(*np.split(z0 + s * e, [nx])) - end(*np.split(z0 - s * e, [nx]))) / (2 * s * e[j])
+                  for s in (1, 2))
+        out[:, j] = (4 * d1 - d2) / 3
+    return out[:nx, :nx], out[:nx, nx:], out[nx]
 
 
 def _relative(a, b):
