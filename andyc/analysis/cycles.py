@@ -59,6 +59,7 @@ class Cycle:
     history: list = field(default_factory=list)  # the residual |B^T (P(y) - y)|_inf at each iterate
     basis: np.ndarray | None = None   # B: the section's coordinates in y = (x, d)
     symmetries: np.ndarray | None = None   # the symmetry directions left out, (len(y), k)
+    before: np.ndarray | None = None  # y = (x, d) just before the jump: the iterate on the section
 
     def as_dict(self) -> dict:
         mult = self.multipliers
@@ -88,43 +89,37 @@ def find_cycle(model, section: str, period: int = 1, parameters: dict | None = N
     if period < 1:
         raise CycleError(f"--period must be at least 1, got {period}")
     k = model.jump_names.index(section)
-    source, target = int(model.module.JUMP_SOURCE[k]), int(model.module.JUMP_TARGET[k])
+    source = int(model.module.JUMP_SOURCE[k])
     p = model.parameters(parameters)
     params = dict(zip(model.parameter_names, map(float, p)))
     nx, nd = model.nx, model.nd
     result = Cycle(model.name, section, period, params, False, "", np.zeros(nx), np.zeros(nd),
                    list(model.state_names), list(model.discrete_names))
     derivatives = load_derivatives(model)
-    held = np.asarray(model.input_defaults, float)
-    events = andyc.Events(tol=event_tol, stop_after={section: period})
     first = andyc.simulate(model, t_max, dt, "rk4", parameters=params, x0=x0, d0=d0, progress=False,
-                           sensitivities=True, init=andyc.Init("project"),
+                           init=andyc.Init("project"),
                            events=andyc.Events(tol=event_tol, stop_after={section: 1}))
     if not (first.finished and first.events["jump"].size and first.events["jump"][-1] == k):
         result.message = (f"the run from the initial state did not reach jump '{section}' within t_max = {t_max:g} s "
                           f"({first.status})")
         return result
     y = _before_last_jump(first, nd)
+    Q = PoincareMap(model, derivatives, k, p, period, dt, t_max, event_tol)
     for iteration in range(max_iterations + 1):
-        x, d = y[:nx].copy(), y[nx:].copy()
-        DJ = Tangent(model, derivatives, p, held).jump(k, 0.0, x, d, np.eye(nx + nd + len(p) + 1))[:nx + nd, :nx + nd]
-        _apply_jump(model, k, x, held, p, d)
-        result.state, result.discrete = x.copy(), d.copy()
-        run = andyc.simulate(model, t_max, dt, "rk4", parameters=params, x0=x, d0=d, flow0=target, progress=False,
-                             sensitivities=True, init=andyc.Init("as-is"), events=events)
-        if not (run.finished and run.events["jump"].size and run.events["jump"][-1] == k):
+        image = Q(y)
+        result.state, result.discrete, result.before = image.after[:nx], image.after[nx:], y
+        if image.y is None:
             result.message = (f"iteration {iteration}: the run from the iterate did not come back to jump '{section}' "
-                              f"{period} time(s) within t_max = {t_max:g} s ({run.status})")
+                              f"{period} time(s) within t_max = {t_max:g} s ({image.status})")
             return result
-        Qy = _before_last_jump(run, nd)
-        DQ = run.sensitivities["before_jump"][:, :nx + nd] @ DJ
+        Qy, DQ = image.y, image.jacobian
         B, sym = section_basis(model, derivatives, source, k, p, y)
         reduced = B.T @ DQ @ B
         residual = B.T @ (Qy - y)
         r = float(np.max(np.abs(residual), initial=0.0))
         result.history.append(r)
         result.basis, result.symmetries = B, sym
-        result.period = float(run.events["time"][-1])
+        result.period = image.time
         result.multipliers = _sorted(np.linalg.eigvals(reduced))
         if progress is not None:
             progress(iteration, r)
@@ -139,6 +134,47 @@ def find_cycle(model, section: str, period: int = 1, parameters: dict | None = N
     result.message = (f"no convergence in {max_iterations} Newton steps: the residual went "
                       f"{', '.join(f'{h:.3g}' for h in result.history)}")
     return result
+
+
+@dataclass
+class Image:
+    """Q(y): `y` (None when the run did not come back), its Jacobian DQ (None when not asked for), the state
+    `after` J at y (the start of the run), the run's `time` and `status`."""
+    y: np.ndarray | None
+    jacobian: np.ndarray | None
+    after: np.ndarray
+    time: float
+    status: str
+
+
+class PoincareMap:
+    """Q of jump k, period N (see the module docstring): Q(y) -> Image, with DQ when jacobian=True (then the
+    run carries its sensitivities; without, it is the plain compiled loop)."""
+
+    def __init__(self, model, derivatives, k: int, p, period: int, dt: float, t_max: float, event_tol: float):
+        self.model, self.derivatives, self.k, self.p = model, derivatives, k, np.asarray(p, float)
+        self.params = dict(zip(model.parameter_names, map(float, p)))
+        self.target = int(model.module.JUMP_TARGET[k])
+        self.dt, self.t_max = dt, t_max
+        self.events = andyc.Events(tol=event_tol, stop_after={model.jump_names[k]: period})
+
+    def __call__(self, y, jacobian: bool = True) -> Image:
+        model, k, p = self.model, self.k, self.p
+        nx, nd = model.nx, model.nd
+        held = np.asarray(model.input_defaults, float)
+        x, d = y[:nx].copy(), y[nx:].copy()
+        DJ = None
+        if jacobian:
+            DJ = Tangent(model, self.derivatives, p, held).jump(k, 0.0, x, d, np.eye(nx + nd + len(p) + 1))
+        _apply_jump(model, k, x, held, p, d)
+        after = np.concatenate([x, d])
+        run = andyc.simulate(model, self.t_max, self.dt, "rk4", parameters=self.params, x0=x, d0=d,
+                             flow0=self.target, progress=False, sensitivities=jacobian, init=andyc.Init("as-is"),
+                             events=self.events)
+        if not (run.finished and run.events["jump"].size and run.events["jump"][-1] == k):
+            return Image(None, None, after, float(run.time[-1]), run.status)
+        DQ = run.sensitivities["before_jump"][:, :nx + nd] @ DJ[:nx + nd, :nx + nd] if jacobian else None
+        return Image(_before_last_jump(run, nd), DQ, after, float(run.events["time"][-1]), run.status)
 
 
 def _before_last_jump(run, nd: int) -> np.ndarray:

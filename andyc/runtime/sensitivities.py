@@ -51,8 +51,6 @@ import numpy as np
 
 from andyc.errors import SimulationError
 
-_C = (0.0, 0.5, 0.5, 1.0)
-_B = (1.0, 2.0, 2.0, 1.0)
 
 
 def load_derivatives(model):
@@ -110,33 +108,15 @@ class Tangent:
         T[:-1, :] = np.eye(self.ncol)
         self.T = T
         m = model.module
-        self.flow_rows = [[int(r) for r in m.FLOW_ROWS[f] if r >= 0] for f in range(model.nf)]
+        self.flow_rows = [np.array([r for r in m.FLOW_ROWS[f] if r >= 0], dtype=np.int64) for f in range(model.nf)]
         self.impact_rows = [[int(r) for r in m.IMPACT_ROWS[k] if r >= 0] for k in range(model.nj)]
         self.jumps = 0
-        self._F = np.zeros((nx, self.nw))       # df/dW's fixed part: dq/dt = v
-        self._F[np.arange(model.nq), model.nq + np.arange(model.nq)] = 1.0
         self.before_jump = None     # d(x, d)/dz just before the latest jump (after its time shift, before its map)
 
     # -- the flow -------------------------------------------------------------------------------------------
     def rates(self, t, x, d, flow):
-        """f(t, x) and F = df/dW (nx, NW) in `flow`."""
-        nq, nv = self.model.nq, self.model.nv
-        M, dM, G, dG, A, dA, kappa, dkappa, _, _, _, _ = self.D.flow_terms(t, x, self.u, self.p, d)
-        rows = self.flow_rows[flow]
-        if rows:
-            A, dA, kappa, dkappa = A[rows], dA[rows], kappa[rows], dkappa[rows]
-            saddle = self._saddle(M, A)
-            a_lam = _solve(saddle, np.concatenate([G, -kappa]))
-            a, lam = a_lam[:nv], a_lam[nv:]
-            rhs = np.concatenate([dG - a @ dM + np.tensordot(lam, dA, (0, 0)), -(a @ dA) - dkappa])
-            da = _solve(saddle, rhs)[:nv]
-        else:
-            a = np.linalg.solve(M, G)
-            da = np.linalg.solve(M, dG - a @ dM)
-        f = np.concatenate([x[nq:nq + nq], a])
-        F = self._F.copy()
-        F[nq:] = da
-        return f, F
+        """f(t, x) and F = df/dW (nx, NW) in `flow` (the build's compiled `rates`)."""
+        return self.D.rates(t, x, self.u, self.p, d, self.flow_rows[flow], self.model.nq)
 
     @staticmethod
     def _saddle(M, A):
@@ -151,25 +131,7 @@ class Tangent:
     def step(self, t, h, x, d, flow, T, dh):
         """The RK4 step of size h from (t, x) and its tangent: T (NW, k) at the start, dh (k,) the tangent of h.
         Returns (x', T')."""
-        nx = self.nx
-        Ts = T.copy()                   # the stage's tangent: d, p rows as at the start
-        sum_k, sum_dk = np.zeros(nx), np.zeros((nx, T.shape[1]))
-        k = dk = None
-        for s, c in enumerate(_C):
-            if s == 0:
-                xs = x
-            else:
-                xs = x + c * h * k
-                Ts[:nx] = T[:nx] + c * (np.outer(k, dh) + h * dk)
-                Ts[-1] = T[-1] + c * dh
-            k, F = self.rates(t + c * h, xs, d, flow)
-            dk = F @ Ts
-            sum_k += _B[s] * k
-            sum_dk += _B[s] * dk
-        out = T.copy()
-        out[:nx] = T[:nx] + np.outer(sum_k / 6.0, dh) + h / 6.0 * sum_dk
-        out[-1] = T[-1] + dh
-        return x + h / 6.0 * sum_k, out
+        return self.D.rk4_tangent(t, h, x, self.u, self.p, d, self.flow_rows[flow], T, dh, self.model.nq)
 
     # -- the driver's calls ---------------------------------------------------------------------------------
     def advance(self, t0, x0, d0, flow0, t, t_grid, k, x_event, d_after):
