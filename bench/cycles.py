@@ -29,7 +29,15 @@ def _difference_step(Q, B, y, eps=1e-6):
     return np.linalg.solve(B.T @ J - np.eye(B.shape[1]), -B.T @ (Qy - y))
 
 
-def cycles_benchmark(tmp: Path, name: str = "compass_gait", section: str = "strike2", repeats: int = 5) -> None:
+WALKERS = (("compass_gait", "strike2"), ("passive_walker", "strike_outer_foot"))
+
+
+def cycles_benchmark(tmp: Path, repeats: int = 5) -> None:
+    for name, section in WALKERS:
+        walker_benchmark(tmp, name, section, repeats)
+
+
+def walker_benchmark(tmp: Path, name: str, section: str, repeats: int) -> None:
     path = ROOT / "models" / f"{name}.yaml"
     model = andyc.compile_model(path, tmp / "cycles_build")[0]
     andyc.build_derivatives(path, tmp / "cycles_build")

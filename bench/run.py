@@ -471,8 +471,8 @@ def main(argv=None):
             if "cycles" in only:
                 from cycles import cycles_benchmark
 
-                section("cycles (issue 22): one Newton step of andyc cycle on the compass gait, exact Jacobian "
-                        "against finite differences")
+                section("cycles (issue 22): one Newton step of andyc cycle on the walkers, exact Jacobian against "
+                        "finite differences")
                 cycles_benchmark(tmp)
             if "urdf" in only:
                 urdf_benchmark(tmp)
