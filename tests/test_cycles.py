@@ -122,3 +122,15 @@ def test_compass_gait_cycle(compiled, shipped_build):
     step_eigenvalues = np.linalg.eigvals(J)
     assert np.max(np.abs(np.sort_complex(step_eigenvalues ** 2) - mult)) < 1e-8
     assert np.max(np.abs(np.sort_complex(step_eigenvalues) - np.sort_complex(EIGENVALUES))) < 1e-5
+
+
+def test_rimless_wheel_period_two(compiled, shipped_build):
+    """--period 2: the same orbit, the section passed twice: the period doubles, the multiplier squares."""
+    model = compiled("rimless_wheel")
+    andyc.build_derivatives(MODELS / "rimless_wheel.yaml", shipped_build)
+    w, multiplier, step = wheel_closed_form()
+    cycle = find_cycle(model, "next_spoke", period=2)
+    assert cycle.converged, cycle.message
+    assert abs(math.hypot(cycle.state[2], cycle.state[3]) - w) < 1e-12
+    assert abs(cycle.multipliers[0] - multiplier ** 2) < 1e-12
+    assert abs(cycle.period - 2 * step) < 2e-9

@@ -82,8 +82,9 @@ def check(model, method: str, source, controller) -> None:
     if method != "rk4":
         why = (f"method '{method}': sensitivities follow the rk4 method only so far (the projection method's "
                f"Jacobian is not derived yet); use --method rk4")
-    elif model.ns:
-        why = "the model has nonholonomic or quaternion signals, which sensitivities do not handle yet"
+    elif model.ns or model.nv != model.nq:
+        why = ("the model has nonholonomic or quaternion signals or quasi-velocities, which sensitivities do not "
+               "handle yet")
     elif controller is not None or source.drives or model.input_expressions:
         why = "inputs driven by expressions, tables or a controller are not differentiated; hold the inputs"
     elif model.input_names and np.any(np.asarray(m.FLOW_SETS_INPUT)):
