@@ -22,8 +22,9 @@ Working on the guard surface, which the model defines, rather than on the set of
 as the jump map's image), keeps the phase fixed, so the fixed point is isolated there. The Floquet multipliers
 are the eigenvalues of B^T DQ B at the fixed point: those of the Poincaré map on the section (the trivial ones
 of the flow direction and of the symmetries are left out), the same as the post-jump map's, to which J
-conjugates it. See Hiskens & Pai 2000 (trajectory sensitivities, the saltation matrix) and Grizzle, Abba &
-Plestan 2001 (Poincaré maps of walkers).
+conjugates it. See Hiskens & Pai, "Trajectory sensitivity analysis of hybrid systems" (IEEE Trans. Circuits
+and Systems I 47(2), 2000) and Grizzle, Abba & Plestan, "Asymptotically stable walking for biped robots:
+analysis via systems with impulse effects" (IEEE Trans. Automatic Control 46(1), 2001).
 """
 
 from __future__ import annotations

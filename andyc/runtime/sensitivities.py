@@ -2,8 +2,10 @@
 
 The run's trajectory is the compiled loop's own (andyc.runtime.fixed_step, stepping one grid step per call
 here); beside it this module carries the tangent T = d(x, d, p, t)/dz, z = (x0, d0, p), through the same discrete
-map, with the exact first derivatives of the model's functions (<name>_derivatives.py,
-andyc.codegen.derivatives). dx(T)/dp is at fixed x0 and d0.
+map, with the exact first derivatives of the model's functions and the RK4 tangent step, compiled beside them
+(<name>_derivatives.py, andyc.codegen.derivatives); the jumps' Jacobians are assembled here, in NumPy.
+dx(T)/dp is at fixed x0 and d0. The active constraint rows must be independent (a saddle-point system solves
+for the accelerations' derivatives).
 
 Steps. The RK4 step x' = x + h/6 (K1 + 2 K2 + 2 K3 + K4), K_i = f(t + c_i h, x + c_i h K_(i-1)), differentiated
 stage by stage (the variational equations integrated by the same stages; forward mode of the step):
@@ -24,8 +26,15 @@ With Phi_tau its derivative in tau (the extra tangent column dh = 1 above) and t
     dw+ = I_w (R_w dw_e + R_t dt_e) + I_t dt_e,                 R the resets, I the impact map (after them)
 
 and the remainder of the step (length t_(i+1) - t_e) is differentiated as above. As h -> 0 (Phi_tau -> f-,
-the remainder's dh-column -> f+) this is the classical saltation matrix (Aizerman & Gantmacher 1958; Mueller
-1995; Hiskens & Pai 2000, eq. 13):  Xi = D + (f+ - D f- - R_t) g_w / (g_w f- + g_t),  D = d(I o R)/dw.
+the remainder's dh-column -> f+) this is the classical saltation matrix
+
+    Xi = D_w + (f+ - D_w f- - D_t) g_w / (g_w f- + g_t),      D = I o R, the whole jump map,
+
+(M. A. Aizerman & F. R. Gantmacher, "On the stability of periodic motions", J. Appl. Math. Mech. 22, 1958;
+P. C. Mueller, "Calculation of Lyapunov exponents for dynamic systems with discontinuities", Chaos, Solitons &
+Fractals 5, 1995; I. A. Hiskens & M. A. Pai, "Trajectory sensitivity analysis of hybrid systems", IEEE Trans.
+Circuits and Systems I 47(2), 2000).
+
 The impact I: v+ solves [[M, -J^T], [J, 0]] [v+; L] = [M v; J v - (1 + e) c] (c = J v + b the impact rows'
 velocity residual; ANDY eq. 19), differentiated the same way.
 
@@ -33,7 +42,7 @@ Accuracy. This is the exact derivative of the discrete map with tau the exact ro
 stops its root finding at a bracket of width event_tol (andyc.Events.tol, 1e-12 s), so the map it computes
 differs from that one by about |f| event_tol in x, and its finite differences carry that error divided by
 their step; the derivative itself is exact to round-off. When the run ends at a jump (stop_after), the end
-time is the jump's: dT/dz (Run.sensitivity_time) is dt_e, and dx(T)/dz the state just after it.
+time is the jump's: dT/dz (Run.sensitivities["time"]) is dt_e, and dx(T)/dz the state just after it.
 
 Not handled (refused with a message by `check`): the projection method (its projection's Jacobian is not
 derived), lagrange and baumgarte, the adaptive methods, nonholonomic or quaternion signals, inputs driven by
