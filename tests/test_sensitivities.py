@@ -72,6 +72,19 @@ def test_compass_gait_through_heel_strikes(compiled, shipped_build):
     assert np.max(np.abs(S["time"])) > 0.1
 
 
+def test_bouncing_ball_restitution(compiled, shipped_build):
+    """Three bounces with e = 0.8: the impact's Jacobian with a restitution, and its derivative in e."""
+    model = _derivatives(compiled, shipped_build, "bouncing_ball")
+    events = andyc.Events(tol=1e-15)
+    run = andyc.simulate(model, 1.9, 1e-3, "rk4", sensitivities=True, events=events, progress=False)
+    assert len(run.events["time"]) == 3
+    S = run.sensitivities
+    fx, fp, _ = _central_differences(model, 1.9, run.state[0], run.discrete[0], model.parameters(None), events)
+    assert _relative(S["x0"], fx) < 1e-7
+    assert _relative(S["p"], fp) < 1e-7
+    assert abs(S["p"][1, model.parameter_names.index("e")]) > 1.0      # e matters, and is differentiated
+
+
 def test_run_file_and_refusals(compiled, shipped_build, tmp_path):
     """andyc sim --sensitivities writes /sensitivities into the HDF5 run file (the CSV says it does not hold
     them); the projection method is refused with the reason (its projection's Jacobian is not derived)."""

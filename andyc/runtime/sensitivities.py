@@ -89,8 +89,9 @@ def check(model, method: str, source, controller) -> None:
     why = None
     m = model.module
     if method != "rk4":
-        why = (f"method '{method}': sensitivities follow the rk4 method only so far (the projection method's "
-               f"Jacobian is not derived yet); use --method rk4")
+        why = (f"method '{method}': sensitivities follow the rk4 method only so far"
+               + (" (the projection method's Jacobian is not derived yet)" if method == "projection" else "")
+               + "; use --method rk4")
     elif model.ns or model.nv != model.nq:
         why = ("the model has nonholonomic or quaternion signals or quasi-velocities, which sensitivities do not "
                "handle yet")
