@@ -1,7 +1,7 @@
 """Exact sensitivities of a run (andyc.runtime.sensitivities): dx(T)/dx0 and dx(T)/dp against central
 differences of the same runs (the compiled loop, without sensitivities), issue 22 item 1: the double pendulum
-(rk4, no jumps) and the compass gait across three heel strikes (saltation matrices). The run file keeps them;
-a method they do not follow is refused."""
+(rk4, no jumps), the compass gait across three heel strikes (saltation matrices) and the bouncing ball (impacts
+with restitution). The run file keeps them; a method they do not follow is refused."""
 
 import numpy as np
 
