@@ -60,6 +60,8 @@ def test_cycle_failures_say_why(shipped_build, tmp_path):
                    "--build-dir", shipped_build)
     assert never.exit_code == 1
     assert "did not reach jump 'next_spoke' within t_max = 0.5 s" in never.stdout
+    failed = json.loads((tmp_path / "a.json").read_text())       # strict JSON: no NaN for the unknown period
+    assert failed["converged"] is False and failed["period"] is None and failed["residual_history"] == []
     short = invoke("cycle", model, "--section", "next_spoke", "--dt", 2e-3, "--max-iterations", 1,
                    "-o", tmp_path / "b.json", "--build-dir", shipped_build)
     assert short.exit_code == 1

@@ -68,7 +68,7 @@ class Cycle:
                 "parameters": self.parameters, "converged": self.converged, "message": self.message,
                 "state": dict(zip(self.state_names, map(float, self.state))),
                 "discrete": dict(zip(self.discrete_names, map(float, self.discrete))),
-                "period": float(self.period),
+                "period": float(self.period) if np.isfinite(self.period) else None,   # (JSON has no NaN)
                 "multipliers": [{"real": float(m.real), "imag": float(m.imag), "abs": float(abs(m))} for m in mult],
                 "residual_history": [float(r) for r in self.history],
                 "section_dimension": 0 if self.basis is None else int(self.basis.shape[1]),
