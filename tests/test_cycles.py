@@ -70,6 +70,9 @@ def test_cycle_failures_say_why(shipped_build, tmp_path):
                                                                                               rel=1e-3)
     usage = invoke("cycle", model, "--section", "nope", "-o", tmp_path / "c.json", "--build-dir", shipped_build)
     assert usage.exit_code == 2 and "no jump 'nope'; jumps: next_spoke" in usage.output
+    unknown = invoke("cycle", model, "--section", "next_spoke", "--at", "slope=0.1", "-o", tmp_path / "d.json",
+                     "--build-dir", shipped_build)
+    assert unknown.exit_code == 2 and "no parameter named slope; parameters: m, g, l, alpha, gamma, w0" in unknown.output
 
 
 # -- compass gait (§8) --------------------------------------------------------------
