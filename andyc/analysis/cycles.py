@@ -179,11 +179,15 @@ class PoincareMap:
 
 
 def _before_last_jump(run, nd: int) -> np.ndarray:
-    """(x, d) just before the run's last jump (the discrete states then: those of the sample before it)."""
-    before = run.events["state_before"][-1]
-    t = run.events["time"][-1]
-    row = int(np.searchsorted(run.time, t, side="left")) - 1
-    return np.concatenate([before, run.discrete[max(row, 0)]])
+    """(x, d) just before the run's last jump: the discrete states then are those after the jump before it, or,
+    if there was none since, those of the last sample before it."""
+    ev = run.events
+    t = ev["time"][-1]
+    row = max(int(np.searchsorted(run.time, t, side="left")) - 1, 0)
+    d = run.discrete[row]
+    if len(ev["time"]) > 1 and ev["time"][-2] >= run.time[row]:
+        d = ev["discrete_after"][-2]
+    return np.concatenate([ev["state_before"][-1], d])
 
 
 def _apply_jump(model, k, x, u, p, d) -> None:
