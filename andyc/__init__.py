@@ -18,7 +18,7 @@ __version__ = "0.1.0"
 
 _NAMES = {"Diagnostic": "andyc.errors", "SpecError": "andyc.errors",
           "load": "andyc.spec.load", "derive": "andyc.symbolic", "generate": "andyc.codegen.generate",
-          "build": "andyc.pipeline", "compile_model": "andyc.pipeline", "simulate": "andyc.runtime.simulate",
+          "build": "andyc.pipeline", "compile_model": "andyc.pipeline", "build_derivatives": "andyc.pipeline", "simulate": "andyc.runtime.simulate",
           "Events": "andyc.runtime.options", "Init": "andyc.runtime.options", "Projection": "andyc.runtime.options"}
 
 __all__ = ["__version__", *_NAMES]

@@ -147,6 +147,19 @@ def compile_model(path, out_dir="build", force: bool = False):
 
 
 
+def build_derivatives(path, out_dir="build") -> Path:
+    """Build `path` (if needed) and write its exact first derivatives, out_dir/<name>/<name>_derivatives.py
+    (andyc.codegen.derivatives), unless that file is of this build already; returns its path. What a run with
+    sensitivities needs (andyc.simulate(..., sensitivities=True)); it derives the model (SymPy) when written."""
+    from andyc.codegen.derivatives import derivatives_path, write_derivatives
+
+    result = build(path, out_dir)
+    target = derivatives_path(out_dir, result.name)
+    if written_constant(target, "BUILD_KEY") != result.build_key:
+        write_derivatives(derive(load(path)), out_dir, result.build_key)
+    return target
+
+
 def _compiled_so_far(result: BuildResult) -> int:
     """What Numba has compiled in this process of the build's modules, where they are imported already (its
     equations, by their name; the algorithms, which every build of this andyc shares)."""

@@ -20,8 +20,8 @@ other section into docs/BENCHMARKS.md and docs/bench/. Every ratio is
 measured in this one run.
 
     python bench/run.py                      all sections (about 10 minutes)
-    python bench/run.py --only accuracy      one section: chains, models, swing_bar, constraints, hybrid, urdf,
-                                             accuracy (docs/BENCHMARKS.md then holds only what ran)
+    python bench/run.py --only accuracy      one section: chains, models, swing_bar, constraints, hybrid,
+                                             contacts, cycles, urdf, accuracy (docs/BENCHMARKS.md then holds only what ran)
 """
 
 from __future__ import annotations
@@ -401,7 +401,7 @@ def urdf_benchmark(tmp: Path) -> None:
           "pin.aba less the 1-joint call")
 
 
-SECTIONS = ("chains", "models", "swing_bar", "constraints", "hybrid", "contacts", "urdf", "accuracy")
+SECTIONS = ("chains", "models", "swing_bar", "constraints", "hybrid", "contacts", "cycles", "urdf", "accuracy")
 
 
 class Tee:
@@ -468,6 +468,12 @@ def main(argv=None):
 
                 section("contacts (issue 21): resting ball, rod on two supports, hopper; RK4, best of 5")
                 contacts_benchmark(tmp)
+            if "cycles" in only:
+                from cycles import cycles_benchmark
+
+                section("cycles (issue 22): one Newton step of andyc cycle on the walkers, exact Jacobian against "
+                        "finite differences")
+                cycles_benchmark(tmp)
             if "urdf" in only:
                 urdf_benchmark(tmp)
             accuracy = accuracy_benchmark(tmp) if "accuracy" in only else None

@@ -2,8 +2,9 @@
 
 The step maps of the walkers are computed from simulated steps: a run from
 a state just after an impact, stopped right after the next one (stop_after).
-Fixed points come from Newton's method on those maps, eigenvalues from
-central differences of them.
+The rimless wheel's fixed point comes from Newton's method on that map, its
+eigenvalue from central differences; the compass gait's, with exact
+Jacobians, are andyc cycle's (tests/test_cycles.py).
 """
 
 import math
@@ -88,48 +89,10 @@ def test_rimless_wheel_fixed_point_and_eigenvalue(compiled, method):
 
 # -- compass gait (§8) --------------------------------------------------------------
 
-PHI, W_STANCE, W_SWING, STEP_TIME = 0.2710286805, 1.0923835899, 0.3773739489, 0.7343464
-EIGENVALUES = np.array([-0.19973 + 0.54448j, -0.19973 - 0.54448j, 0.13157])
+STEP_TIME = 0.7343464
 
 
-def gait_state(z):
-    """The state just after a heel strike of leg 1 at the origin, from z = (half inter-leg angle,
-    stance speed, swing speed) with the signs of walking downhill (+x)."""
-    phi, w_st, w_sw = z
-    return np.array([-math.sin(phi), math.cos(phi), phi, -phi,
-                     math.cos(phi) * w_st, math.sin(phi) * w_st, -w_st, -w_sw])
-
-
-def gait_step(model, z):
-    """(z after the next heel strike, step time); roles swap: leg 2 stands after it."""
-    run = andyc.simulate(model, 5.0, dt=1e-3, method="projection", x0=gait_state(z), d0=np.zeros(1),
-                         flow0="stance1", events=andyc.Events(stop_after={"strike2": 1}), progress=False)
-    assert run.status == "finished" and run.event_names() == ["strike2"]
-    x = run.events["state_after"][0]
-    th1, th2, w1, w2 = x[2], x[3], x[6], x[7]
-    assert th1 == pytest.approx(-th2, abs=1e-9)            # both feet on the slope
-    return np.array([th2, -w2, -w1]), run.events["time"][0]
-
-
-def test_compass_gait_period_one_fixed_point_and_eigenvalues(compiled):
-    model = compiled("compass_gait")
-    z = np.array([0.25, 1.0, 0.3])
-    h = 1e-6
-    for _ in range(10):
-        f = gait_step(model, z)[0] - z
-        J = np.empty((3, 3))
-        for k in range(3):
-            e = np.zeros(3)
-            e[k] = h
-            J[:, k] = (gait_step(model, z + e)[0] - gait_step(model, z - e)[0]) / (2 * h)
-        z = z - np.linalg.solve(J - np.eye(3), f)
-        if np.max(np.abs(f)) < 1e-12:
-            break
-    assert np.max(np.abs(z - [PHI, W_STANCE, W_SWING])) < 1e-6
-    assert gait_step(model, z)[1] == pytest.approx(STEP_TIME, abs=1e-6)
-    eig = np.linalg.eigvals(J)
-    eig = eig[np.argsort(eig.imag)]
-    assert np.max(np.abs(eig - EIGENVALUES[np.argsort(EIGENVALUES.imag)])) < 1e-4
+# The period-1 fixed point, step time and eigenvalues: tests/test_cycles.py (andyc cycle, exact Jacobians, 1e-8).
 
 
 def test_compass_gait_walks_from_the_shipped_state(compiled):

@@ -13,6 +13,7 @@ command or family of commands, each a click command over the API:
     view.py       view (a run as an HTML page that plays it in 3-D)
     eom.py        eom (the equations written out for reading)
     linearize.py  linearize (A, B and eigenvalues about a point)
+    cycle.py      cycle (a periodic orbit through a jump: Newton on its Poincaré map, Floquet multipliers)
     analysis.py   bench (work-precision) and stability (stability maps)
     sweep.py      sweep (grids, Monte Carlo and CSV points on Dask, into a Zarr store), and plot STORE's maps
     common.py     what the commands share: a refused request, a model's problems, a model derived or compiled
@@ -30,7 +31,7 @@ import sys
 import click
 
 import andyc
-from andyc.cli import analysis, build, eom, graph, linearize, plot, sim, sweep, test, view
+from andyc.cli import analysis, build, cycle, eom, graph, linearize, plot, sim, sweep, test, view
 from andyc.cli.common import Refused
 from andyc.cli.formats import json_command, usage_report
 from andyc.outputs import OutputError
@@ -93,6 +94,7 @@ def main():
     andyc graph model.yaml      draw the frame tree and the hybrid automaton
     andyc view run.h5           a run as an HTML page that plays it in 3-D
     andyc linearize model.yaml  A, B and eigenvalues about a state
+    andyc cycle model.yaml      a periodic orbit through a jump (--section), its Floquet multipliers
     andyc bench model.yaml      work-precision: error against cost per method
     andyc stability model.yaml  stability map: step against method, failures named
     andyc eom model.yaml        M, G, constraint Jacobian, per element (LaTeX)
@@ -101,7 +103,7 @@ def main():
 
 
 for _command in (build.check, build.build, sim.sim, test.test, sweep.sweep, plot.plot, graph.graph, view.view,
-                 linearize.linearize, analysis.bench, analysis.stability, eom.eom):
+                 linearize.linearize, cycle.cycle, analysis.bench, analysis.stability, eom.eom):
     main.add_command(_command)
 
 __all__ = ["main", "Refused"]

@@ -56,10 +56,14 @@ from andyc.runtime.methods import MAX_STEPS, METHODS
 @click.option("--timeout", default=None, type=POSITIVE, metavar="SECONDS",
               help="Stop the run after this much wall time, keeping its samples (also when a controller never "
                    "returns).")
+@click.option("--sensitivities", is_flag=True, default=False,
+              help="Also compute the exact dx(T)/dx0 and dx(T)/dp (rk4; through the jumps' saltation matrices), "
+                   "into the HDF5 run file's /sensitivities.")
 @build_dir_option("--out-dir")
 @format_option
 def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, frames, init, init_tol, energy_correction,
-        energy_tol, event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, timeout, build_dir, fmt):
+        energy_tol, event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, timeout, sensitivities, build_dir,
+        fmt):
     """Build FILE if needed, simulate it and write run files.
 
     The model's simulate: section gives the options not given here (then the defaults shown).
@@ -99,6 +103,11 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
     if result.compiled:
         report.say(f"{model.name}: compiled {plural(result.compiled, 'function')} in {result.timings['compile']:.1f} s "
                    f"(once per build: Numba caches them)", err=True)
+    if sensitivities:
+        try:
+            andyc.build_derivatives(file, build_dir)
+        except SimulationError as exc:
+            raise Refused(str(exc))
     params, set_inputs = split_sets(overrides, model.input_names)
     for name, value in set_inputs.items():
         if name in inputs:
@@ -124,7 +133,8 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
                                  projection=andyc.Projection(energy_correction=energy_correction,
                                                              energy_tol=energy_tol),
                                  events=andyc.Events(tol=event_tol, max_instant_jumps=max_instant_jumps,
-                                                     zeno_tol=zeno_tol, stop_after=stops))
+                                                     zeno_tol=zeno_tol, stop_after=stops),
+                                 sensitivities=sensitivities)
     except InitialStateError as exc:        # a problem of the model: exit 1, as andyc check's
         refused = exc.located(file)
     except SimulationError as exc:
@@ -138,6 +148,12 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
         report.finish(1)
     save(run)
     report.say(f"{run.summary()}; wrote {', '.join(outs)}")
+    if run.sensitivities is not None:
+        h5 = [o for o in outs if Path(o).suffix.lower() != ".csv"]
+        report.say(f"sensitivities: dx(T)/dx0 ({model.nx} x {model.nx}), dx(T)/dp ({model.nx} x "
+                   f"{len(model.parameter_names)}) and dT/d(x0, d0, p) in " + (", ".join(f"{o}:/sensitivities" for o in h5)
+                                                                            or "no file")
+                   + ("; a CSV run file does not hold them" if len(h5) < len(outs) else ""))
     report.results.append({"file": file, "ok": run.finished, "summary": run.summary(), "outputs": list(outs),
                            "status": run.status})
     if not run.finished:

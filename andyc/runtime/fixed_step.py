@@ -26,9 +26,11 @@ MODE = {"rk4": IDEAL, "projection": IDEAL, "lagrange": LAGRANGE, "baumgarte": BA
 
 
 def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, projection: Projection, bar, jumps,
-                   interrupts, run_of):
+                   interrupts, run_of, tangent=None):
     """Integrate from (0, x) to t_end in steps dt, logging every `every`-th; x and d change in place.
-    projection.energy_correction is resolved (a bool). Returns (log, status, stats)."""
+    projection.energy_correction is resolved (a bool). Returns (log, status, stats).
+    tangent: an andyc.runtime.sensitivities.Tangent, carried through every step (the loop then takes one grid
+    step per call) and every jump."""
     n_steps = int(round(t_end / dt))
     if abs(n_steps * dt - t_end) > 1e-9 * max(1.0, t_end):
         raise SimulationError(f"t_end = {t_end} is not a whole number of steps dt = {dt}; "
@@ -61,7 +63,10 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
     interrupts.partial = partial
     balance = JumpWork(model, x, out_u[0], p, d, t)
     flow, message = follow_instant_jumps(model, t, state, source, p, d, flow, jumps, w, mode)
+    _no_instant_jump(tangent, jumps, 0)
     e0 = balance.add(x, inputs_at(model, source, t, state, p, d, flow), d)
+    if tangent is not None:
+        chunk = 1
     while i < n_steps and status == OK and message is None:
         message = interrupts.reason()
         if message is not None:
@@ -69,24 +74,28 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
             break
         i_end = min(i + chunk, n_steps)
         tic = time.perf_counter()
-        i0 = i
-        d_before = d.copy()
+        i0, t0, x0, d0, flow0 = i, t, state.copy(), d.copy(), flow
+        d_before = d0
         w.u[:] = source.held(flow)
         opts = integrator.options(mode, do_project, constrain, e0, etol, jumps.event_tol)
         i, row, status, t, flow, k = integrator.advance(model.ref, w.ref, opts, fn, data, p, d, x, t, flow, i, i_end,
                                                         0.0, dt, every, log, row)
+        if tangent is not None and status == OK:
+            tangent.advance(t0, x0, d0, flow0, t, 0.0 + i * dt, k, w.x_event[:nx], d)
         if k >= 0:
             if status != OK:
                 message = in_jump(model, status, k, t)
                 break
             balance = JumpWork(model, w.x_event, w.u, p, d_before, t)
+            n_jumps = len(jumps.times)
             flow, message = finish_jump(model, k, t, w.x_event[:nx], state, w.u, p, d, flow, jumps)
             if message is None:
                 flow, message = follow_instant_jumps(model, t, state, source, p, d, flow, jumps, w, mode)
+            _no_instant_jump(tangent, jumps, n_jumps + 1)
             if message is None and source.into(model, t, state, p, d, flow, w.u) != OK:
                 status = INPUT_FAILED
             e0 = balance.add(x, w.u, d)
-        elif i > i0:
+        elif i > i0 and tangent is None:
             elapsed = time.perf_counter() - tic
             chunk = int(min(max(chunk * 0.25 / max(elapsed, 1e-6) * (i_end - i0) / (i - i0), 1000), 10_000_000))
         bar(t)
@@ -101,6 +110,15 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
             out_u[row] = np.nan
         row += 1
     return tuple(a[:row] for a in log), ending(message, row, jumps), stats(counts, constrain)
+
+
+def _no_instant_jump(tangent, jumps, expected: int) -> None:
+    """Refuse sensitivities through a jump that happens at once after another (or at the start)."""
+    if tangent is not None and len(jumps.times) > expected:
+        raise SimulationError(f"{tangent.model.name}: cannot compute sensitivities through jump "
+                              f"'{tangent.model.jump_names[jumps.jumps[-1]]}' at t = {jumps.times[-1]:.12g}: it "
+                              f"happens at once (after another jump, or at the start), where the saltation "
+                              f"matrix is degenerate")
 
 
 def stats(counts, constrain: bool) -> dict:

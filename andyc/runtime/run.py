@@ -60,6 +60,9 @@ class Run:
     work_names: list = field(default_factory=list)   # the elements that do work, then 'jumps' (andyc.runtime.work)
     work: np.ndarray | None = None                   # (N, nw) the work of each, integrated with the motion
     power: np.ndarray | None = None                  # (N, nw) the power of each at the samples ('jumps': 0)
+    sensitivities: dict | None = None   # simulate(sensitivities=True): "x0" dx(T)/dx0 (nx, nx), "d0" dx(T)/dd0,
+                                        # "p" dx(T)/dp (nx, np), "time" dT/dz, "discrete" dd(T)/dz, z = (x0, d0, p)
+                                        # (andyc.runtime.sensitivities)
 
     def __post_init__(self):
         n = self.time.shape[0]
@@ -274,6 +277,9 @@ def write_h5(run: Run, path: Path) -> None:
         f.create_dataset("events", data=table, maxshape=(None,))
         for key in ("state_before", "state_after", "discrete_after"):
             f[f"event_states/{key}"] = ev[key]
+        if run.sensitivities is not None:       # dx(T)/dx0, dx(T)/dd0, dx(T)/dp, dT/dz, dd(T)/dz
+            for key, value in run.sensitivities.items():
+                f[f"sensitivities/{key}"] = value
 
 
 def read_h5(path) -> Run:
@@ -312,7 +318,9 @@ def read_h5(path) -> Run:
                    work=f["work"][()] if "work" in f else None, power=f["power"][()] if "power" in f else None,
                    contact_stick_rows=contacts.get("stick_rows", []),
                    contact_mu=[math.nan if m is None else m for m in contacts.get("mu", [])],
-                   slip_speeds=f["contacts/slip_speed"][()] if "contacts/slip_speed" in f else None)
+                   slip_speeds=f["contacts/slip_speed"][()] if "contacts/slip_speed" in f else None,
+                   sensitivities={k: f["sensitivities"][k][()] for k in f["sensitivities"]}
+                   if "sensitivities" in f else None)
 
 
 def write_csv(run: Run, path: Path) -> None:

@@ -59,7 +59,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
              parameters: dict | None = None, inputs: dict | None = None, x0=None, d0=None,
              flow0: str | int | None = None, every: int = 1, frames=None, rtol: float = 1e-8, atol: float = 1e-10,
              controller=None, progress: bool | None = None, interrupts: Interrupts | None = None,
-             events: Events = Events(), init: Init = Init(), projection: Projection = Projection()) -> Run:
+             events: Events = Events(), init: Init = Init(), projection: Projection = Projection(),
+             sensitivities: bool = False) -> Run:
     """Integrate `model` from t = 0 to t_end and return the logged Run.
 
     dt is the step of the fixed-step methods and the output spacing of the adaptive ones; every N logs one
@@ -77,6 +78,11 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     stop_after); init: what a constrained run does with an initial state off the constraint manifold
     (Init: mode, tol); projection: what the fixed-step methods correct after each step (Projection:
     normalize, energy_correction, energy_tol). See andyc.runtime.options.
+
+    sensitivities: also compute the exact derivatives of the run's end state, Run.sensitivities: "x0" dx(T)/dx0,
+    "d0" dx(T)/dd0, "p" dx(T)/dp (x0 and d0 held), "time" dT/d(x0, d0, p) (nonzero when the run ends
+    at a jump, stop_after) and "discrete" dd(T)/d(x0, d0, p), through the same RK4 steps and the saltation matrix of each jump
+    (andyc.runtime.sensitivities: the rk4 method; needs the build's derivatives, andyc.build_derivatives).
     """
     _check_option("events", events, Events)
     _check_option("init", init, Init)
@@ -102,6 +108,11 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
         require_independent_rows(model, method, x, u, p, d, flow)
     if projection.energy_correction:
         _require_free_speed(model, x, u, p, d, flow)
+    tangent = None
+    if sensitivities:
+        from andyc.runtime.sensitivities import Tangent, check, load_derivatives
+        check(model, method, source, controller)
+        tangent = Tangent(model, load_derivatives(model), p, source.held(flow))
     bar = Progress(f"{model.name} {method}", t_end, enabled=progress)
     interrupts = interrupts or Interrupts()
     start = time.perf_counter()
@@ -111,14 +122,17 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
         with interrupts.watching():
             if method in FIXED_STEP:
                 log, status, stats = run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, projection,
-                                                    bar, jumps, interrupts, run_of)
+                                                    bar, jumps, interrupts, run_of, tangent)
             else:
                 log, status, stats = run_adaptive(model, method, x, source, p, d, flow, t_end, dt * every, rtol, atol,
                                                   bar, jumps, interrupts, run_of)
             interrupts.stopped = True
     finally:
         bar.close()
-    return run_of(log, status, stats)
+    run = run_of(log, status, stats)
+    if tangent is not None:
+        run.sensitivities = tangent.result()
+    return run
 
 
 def _check_option(name: str, value, kind: type) -> None:

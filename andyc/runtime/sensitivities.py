@@ -1,0 +1,227 @@
+"""Exact sensitivities of a fixed-step RK4 run: dx(T)/dx0 and dx(T)/dp, through its jumps.
+
+The run's trajectory is the compiled loop's own (andyc.runtime.fixed_step, stepping one grid step per call
+here); beside it this module carries the tangent T = d(x, d, p, t)/dz, z = (x0, d0, p), through the same discrete
+map, with the exact first derivatives of the model's functions and the RK4 tangent step, compiled beside them
+(<name>_derivatives.py, andyc.codegen.derivatives); the jumps' Jacobians are assembled here, in NumPy.
+dx(T)/dp is at fixed x0 and d0. The active constraint rows must be independent (a saddle-point system solves
+for the accelerations' derivatives).
+
+Steps. The RK4 step x' = x + h/6 (K1 + 2 K2 + 2 K3 + K4), K_i = f(t + c_i h, x + c_i h K_(i-1)), differentiated
+stage by stage (the variational equations integrated by the same stages; forward mode of the step):
+
+    dK_i = F(stage i) [dx + c_i (dh K_(i-1) + h dK_(i-1)); dd; dp; dt + c_i dh],
+    dx' = dx + dh (K1 + 2 K2 + 2 K3 + K4)/6 + h/6 (dK1 + 2 dK2 + 2 dK3 + dK4),
+
+F = df/d(x, d, p, t) from M dv/dt = G (+ A^T lam in a constrained flow: the saddle-point system
+[[M, -A^T], [A, 0]] differentiated as in andyc.symbolic.linearize). On a whole grid step dh = dt = 0; the
+step that follows a jump starts at the jump's time t_e and ends on the grid, so it has dt = dt_e, dh = -dt_e.
+
+Jumps: the saltation matrix of the discrete map. The loop locates the guard's zero on the step as the
+step length tau with g(t + tau, Phi(x, tau)) = 0, Phi the RK4 step (andyc_numerics/integrator.py: locate).
+With Phi_tau its derivative in tau (the extra tangent column dh = 1 above) and the implicit function theorem,
+
+    dtau = -(g_w dPhi) / (g_x Phi_tau + g_t),                 w = (x, d, p), dPhi the step's tangent at fixed tau,
+    dw_e = dPhi + Phi_tau dtau,  dt_e = dt + dtau,
+    dw+ = I_w (R_w dw_e + R_t dt_e) + I_t dt_e,                 R the resets, I the impact map (after them)
+
+and the remainder of the step (length t_(i+1) - t_e) is differentiated as above. As h -> 0 (Phi_tau -> f-,
+the remainder's dh-column -> f+) this is the classical saltation matrix
+
+    Xi = D_w + (f+ - D_w f- - D_t) g_w / (g_w f- + g_t),      D = I o R, the whole jump map,
+
+(M. A. Aizerman & F. R. Gantmacher, "On the stability of periodic motions", J. Appl. Math. Mech. 22, 1958;
+P. C. Mueller, "Calculation of Lyapunov exponents for dynamic systems with discontinuities", Chaos, Solitons &
+Fractals 5, 1995; I. A. Hiskens & M. A. Pai, "Trajectory sensitivity analysis of hybrid systems", IEEE Trans.
+Circuits and Systems I 47(2), 2000).
+
+The impact I: v+ solves [[M, -J^T], [J, 0]] [v+; L] = [M v; J v - (1 + e) c] (c = J v + b the impact rows'
+velocity residual; ANDY eq. 19), differentiated the same way.
+
+Accuracy. This is the exact derivative of the discrete map with tau the exact root of g(Phi(x, tau)); the loop
+stops its root finding at a bracket of width event_tol (andyc.Events.tol, 1e-12 s), so the map it computes
+differs from that one by about |f| event_tol in x, and its finite differences carry that error divided by
+their step; the derivative itself is exact to round-off. When the run ends at a jump (stop_after), the end
+time is the jump's: dT/dz (Run.sensitivities["time"]) is dt_e, and dx(T)/dz the state just after it.
+
+Not handled (refused with a message by `check`): the projection method (its projection's Jacobian is not
+derived), lagrange and baumgarte, the adaptive methods, nonholonomic or quaternion signals, inputs driven by
+expressions, tables or controllers, guards that read multipliers, contacts, and jumps that happen at once
+after another (their saltation is degenerate). The user's functions in <name>_jumps.py are taken to change
+nothing (they are not differentiated).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+
+import numpy as np
+
+from andyc.errors import SimulationError
+
+
+
+def load_derivatives(model):
+    """The build's <name>_derivatives.py (andyc.pipeline.build_derivatives), imported; SimulationError when it is
+    missing or of another build."""
+    path = model.path.with_name(f"{model.name}_derivatives.py")
+    key = getattr(model.module, "BUILD_KEY", None)
+    if not path.exists():
+        raise SimulationError(f"{model.name}: sensitivities need the model's derivatives, {path.name}, beside its "
+                              f"build; write them with andyc.build_derivatives(MODEL_FILE, BUILD_DIR) (andyc sim "
+                              f"--sensitivities does)")
+    name = f"{model.module.__name__}_derivatives"
+    module = sys.modules.get(name)
+    if module is None or getattr(module, "__file__", None) != str(path):
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        sys.modules[name] = module
+    if module.BUILD_KEY != key:
+        raise SimulationError(f"{model.name}: {path} is of another build of the model; write it again with "
+                              f"andyc.build_derivatives(MODEL_FILE, BUILD_DIR)")
+    return module
+
+
+def check(model, method: str, source, controller) -> None:
+    """Refuse, with the reason, a run whose sensitivities this module does not compute (see the docstring)."""
+    why = None
+    m = model.module
+    if method != "rk4":
+        why = (f"method '{method}': sensitivities follow the rk4 method only so far"
+               + (" (the projection method's Jacobian is not derived yet)" if method == "projection" else "")
+               + "; use --method rk4")
+    elif model.ns or model.nv != model.nq:
+        why = ("the model has nonholonomic or quaternion signals or quasi-velocities, which sensitivities do not "
+               "handle yet")
+    elif controller is not None or source.drives or model.input_expressions:
+        why = "inputs driven by expressions, tables or a controller are not differentiated; hold the inputs"
+    elif model.input_names and np.any(np.asarray(m.FLOW_SETS_INPUT)):
+        why = "a flow sets inputs (of the parameters), which are not differentiated"
+    elif model.contact_names:
+        why = "contacts (their impacts are solved as a complementarity problem) are not differentiated"
+    elif model.nj and np.any(np.asarray(m.JUMP_MULTIPLIERS)):
+        why = "a guard or condition reads multipliers, whose derivatives are not derived"
+    if why is not None:
+        raise SimulationError(f"{model.name}: cannot compute sensitivities: {why}")
+
+
+class Tangent:
+    """The tangent T = d(x, d, p, t)/dz of a run, z = (x0, d0, p), carried step by step (see the module docstring)."""
+
+    def __init__(self, model, derivatives, p, u):
+        self.model, self.D, self.p, self.u = model, derivatives, np.asarray(p, float), np.asarray(u, float)
+        nx, nd, npar = model.nx, model.nd, len(p)
+        self.nx, self.nd, self.nw = nx, nd, nx + nd + npar + 1
+        self.ncol = nx + nd + npar
+        T = np.zeros((self.nw, self.ncol))
+        T[:-1, :] = np.eye(self.ncol)
+        self.T = T
+        m = model.module
+        self.flow_rows = [np.array([r for r in m.FLOW_ROWS[f] if r >= 0], dtype=np.int64) for f in range(model.nf)]
+        self.impact_rows = [[int(r) for r in m.IMPACT_ROWS[k] if r >= 0] for k in range(model.nj)]
+        self.jumps = 0
+        self.before_jump = None     # d(x, d)/dz just before the latest jump (after its time shift, before its map)
+
+    # -- the flow -------------------------------------------------------------------------------------------
+    def rates(self, t, x, d, flow):
+        """f(t, x) and F = df/dW (nx, NW) in `flow` (the build's compiled `rates`)."""
+        return self.D.rates(t, x, self.u, self.p, d, self.flow_rows[flow], self.model.nq)
+
+    @staticmethod
+    def _saddle(M, A):
+        """[[M, -A^T], [A, 0]]."""
+        n, m = M.shape[0], A.shape[0]
+        out = np.zeros((n + m, n + m))
+        out[:n, :n] = M
+        out[:n, n:] = -A.T
+        out[n:, :n] = A
+        return out
+
+    def step(self, t, h, x, d, flow, T, dh):
+        """The RK4 step of size h from (t, x) and its tangent: T (NW, k) at the start, dh (k,) the tangent of h.
+        Returns (x', T')."""
+        return self.D.rk4_tangent(t, h, x, self.u, self.p, d, self.flow_rows[flow], T, dh, self.model.nq)
+
+    # -- the driver's calls ---------------------------------------------------------------------------------
+    def advance(self, t0, x0, d0, flow0, t, t_grid, k, x_event, d_after):
+        """After one call of the compiled loop from (t0, x0, d0) in flow0: it reached t (the grid point t_grid,
+        or a jump k >= 0 at t, x_event the state just before it, d_after the discrete states after it)."""
+        T = self.T
+        if k < 0:
+            h = t_grid - t0
+            if h > 1e-14 * max(1.0, abs(t_grid)):
+                self.T = self.step(t0, h, x0, d0, flow0, T, -T[-1])[1]
+            else:
+                self.T = T.copy()
+            self.T[-1] = 0.0
+            return
+        self.jumps += 1
+        tau = t - t0
+        Te = np.hstack([T, np.zeros((self.nw, 1))])
+        xe, Te = self.step(t0, tau, x0, d0, flow0, Te, np.concatenate([np.zeros(self.ncol), [1.0]]))
+        x_event = np.asarray(x_event, float)
+        g, dg = self.D.guard_terms(k, t, x_event, self.u, self.p, d0)
+        rate = dg @ Te[:, -1]
+        if rate == 0.0:
+            raise SimulationError(f"{self.model.name}: jump '{self.model.jump_names[k]}' at t = {t:.12g}: the guard "
+                                  f"touches zero without crossing it (dg/dt = 0), where the jump time has no "
+                                  f"derivative")
+        dtau = -(dg @ Te[:, :-1]) / rate
+        T = Te[:, :-1] + np.outer(Te[:, -1], dtau)
+        self.before_jump = T[:-1 - len(self.p)].copy()     # d(x, d)/dz just before it
+        self.T = self.jump(k, t, x_event, d0, T)
+
+    def jump(self, k, t, x, d, T):
+        """The tangent through jump k's resets, then its impact, at (t, x, d) just before it."""
+        nx = self.nx
+        w = np.concatenate([x, d])
+        idx, r, dr = self.D.reset_terms(k, t, x, self.u, self.p, d)
+        if len(idx):
+            R = np.eye(self.nw)
+            R[idx] = dr
+            T = R @ T
+            w[idx] = r
+        x, d = w[:nx], w[nx:]
+        rows = self.impact_rows[k]
+        if rows:
+            T = self._impact(k, t, x, d, rows) @ T
+        return T
+
+    def _impact(self, k, t, x, d, rows):
+        """The Jacobian (NW, NW) of jump k's impact map at (t, x, d) (see the module docstring)."""
+        nq, nv = self.model.nq, self.model.nv
+        M, dM, _, _, A, dA, _, _, c, dc, _, _ = self.D.flow_terms(t, x, self.u, self.p, d)
+        J, dJ, c, dc = A[rows], dA[rows], c[rows], dc[rows]
+        e, de = self.D.restitution_terms(k, t, x, self.u, self.p, d)
+        v = x[nq:nq + nv]
+        saddle = self._saddle(M, J)
+        sol = _solve(saddle, np.concatenate([M @ v, J @ v - (1.0 + e) * c]))
+        vp, lam = sol[:nv], sol[nv:]
+        dv = np.zeros((nv, self.nw))
+        dv[:, nq:nq + nv] = np.eye(nv)
+        rhs = np.concatenate([(v - vp) @ dM + np.tensordot(lam, dJ, (0, 0)) + M @ dv,
+                              (v - vp) @ dJ + J @ dv - (1.0 + e) * dc - np.outer(c, de)])
+        out = np.eye(self.nw)
+        out[nq:nq + nv] = _solve(saddle, rhs)[:nv]
+        return out
+
+    def result(self) -> dict:
+        """At the run's end: dx/dx0 (nx, nx), dx/dd0 (nx, nd), dx/dp (nx, np); the time's dt/dz (nx + nd + np,)
+        and the discrete states' dd/dz (nd, nx + nd + np), z = (x0, d0, p); after a jump, "before_jump":
+        d(x, d)/dz of the state just before the latest one (nx + nd, nx + nd + np)."""
+        nx, nd, T = self.nx, self.nd, self.T
+        out = {"x0": T[:nx, :nx].copy(), "d0": T[:nx, nx:nx + nd].copy(), "p": T[:nx, nx + nd:].copy(),
+               "time": T[-1].copy(), "discrete": T[nx:nx + nd].copy()}
+        if self.before_jump is not None:
+            out["before_jump"] = self.before_jump
+        return out
+
+
+def _solve(a, b):
+    """a^-1 b, least squares when a is singular (redundant rows)."""
+    try:
+        return np.linalg.solve(a, b)
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(a, b, rcond=None)[0]

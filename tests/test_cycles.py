@@ -1,0 +1,141 @@
+"""andyc cycle (andyc.analysis.cycles): Newton's method on a jump's Poincaré map with exact Jacobians, issue 22
+items 2 and 3. The rimless wheel against its closed forms (REFERENCE-CASES §7) to 1e-12; the compass gait
+against §8 and against central differences of its one-step map (the legs swapped, as the step-to-step map of
+§8 is written): the two-step orbit's multipliers are the squares of that map's eigenvalues."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+import andyc
+from andyc.analysis.cycles import find_cycle
+from tests.support import MODELS
+from tests.support.cli import invoke
+
+ALPHA, GAMMA = 0.3, 0.04                                  # the shipped wheel's, g = l = 1
+
+
+def wheel_closed_form():
+    """(omega*, multiplier, step time). Between impacts the hub is an inverted pendulum about the foot, at angle
+    theta from the slope's normal: omega^2 = omega+^2 + 2 (cos(gamma - alpha) - cos(theta + gamma)) (energy,
+    theta from -alpha to alpha); the plastic impact keeps omega- = cos(2 alpha) omega-: omega+ = c omega-, with
+    omega-^2 = omega+^2 + 4 sin(alpha) sin(gamma). Fixed point: omega*^2 (1 - c^2) = 4 c^2 sin alpha sin gamma,
+    i.e. omega*^2 = 4 sin(alpha) sin(gamma) cot^2(2 alpha); the map omega+ -> omega+' = sqrt(c^2 (omega+^2 + 4 ..))
+    has the derivative c^2 at the fixed point. The step time is the quadrature of dtheta / omega."""
+    c = math.cos(2 * ALPHA)
+    w = math.sqrt(4 * math.sin(ALPHA) * math.sin(GAMMA)) / math.tan(2 * ALPHA)
+    time = quad(lambda th: 1 / math.sqrt(w * w + 2 * (math.cos(GAMMA - ALPHA) - math.cos(th + GAMMA))),
+                -ALPHA, ALPHA, epsabs=1e-13, epsrel=1e-13)[0]
+    return w, c * c, time
+
+
+def test_rimless_wheel_cycle_command(shipped_build, tmp_path):
+    w, multiplier, step = wheel_closed_form()
+    assert (w, multiplier) == (pytest.approx(0.317799, abs=5e-7), pytest.approx(0.681179, abs=5e-7))   # §7
+    out = tmp_path / "wheel.json"
+    result = invoke("cycle", MODELS / "rimless_wheel.yaml", "--section", "next_spoke", "-o", out,
+                    "--build-dir", shipped_build)
+    assert result.exit_code == 0, result.output
+    assert "Floquet multipliers (1 on the section; flow direction and 1 symmetry left out)" in result.stdout
+    found = json.loads(out.read_text())
+    assert found["converged"] and found["residual_history"][-1] <= 1e-11
+    history = found["residual_history"]
+    assert history[-2] < 1e-6 and history[-1] < 1e3 * history[-2] ** 2      # quadratic at the end
+    s, fx = found["state"], found["discrete"]["fx"]
+    assert abs(math.hypot(s["x_dot"], s["y_dot"]) - w) < 1e-12
+    assert abs(s["x"] - fx + math.sin(ALPHA)) < 1e-12 and abs(s["y"] - math.cos(ALPHA)) < 1e-12  # alpha behind
+    (m,) = found["multipliers"]
+    assert abs(m["real"] - multiplier) < 1e-12 and m["imag"] == 0.0
+    assert abs(found["period"] - step) < 1e-9                # RK4 at dt = 1e-3 and the quadrature
+    assert found["symmetries"] and found["section_dimension"] == 1
+
+
+def test_cycle_failures_say_why(shipped_build, tmp_path):
+    """A section never reached, and Newton stopped before it converges: exit 1, with the residual history."""
+    model = MODELS / "rimless_wheel.yaml"
+    never = invoke("cycle", model, "--section", "next_spoke", "--t-max", 0.5, "-o", tmp_path / "a.json",
+                   "--build-dir", shipped_build)
+    assert never.exit_code == 1
+    assert "did not reach jump 'next_spoke' within t_max = 0.5 s" in never.stdout
+    failed = json.loads((tmp_path / "a.json").read_text())       # strict JSON: no NaN for the unknown period
+    assert failed["converged"] is False and failed["period"] is None and failed["residual_history"] == []
+    short = invoke("cycle", model, "--section", "next_spoke", "--dt", 2e-3, "--max-iterations", 1,
+                   "-o", tmp_path / "b.json", "--build-dir", shipped_build)
+    assert short.exit_code == 1
+    assert "no convergence in 1 Newton steps: the residual went 0.0455, 0.00544" in short.stdout
+    assert json.loads((tmp_path / "b.json").read_text())["residual_history"] == pytest.approx([0.04546, 0.005443],
+                                                                                              rel=1e-3)
+    usage = invoke("cycle", model, "--section", "nope", "-o", tmp_path / "c.json", "--build-dir", shipped_build)
+    assert usage.exit_code == 2 and "no jump 'nope'; jumps: next_spoke" in usage.output
+    unknown = invoke("cycle", model, "--section", "next_spoke", "--at", "slope=0.1", "-o", tmp_path / "d.json",
+                     "--build-dir", shipped_build)
+    assert unknown.exit_code == 2 and "no parameter named slope; parameters: m, g, l, alpha, gamma, w0" in unknown.output
+
+
+# -- compass gait (§8) --------------------------------------------------------------
+
+PHI, W_STANCE, W_SWING, STEP_TIME = 0.2710286805, 1.0923835899, 0.3773739489, 0.7343464
+EIGENVALUES = np.array([-0.19973 + 0.54448j, -0.19973 - 0.54448j, 0.13157])
+
+
+def gait_state(z):
+    """The state just after a heel strike of leg 1 at the origin, from z = (half inter-leg angle, stance speed,
+    swing speed), walking downhill (+x)."""
+    phi, w_st, w_sw = z
+    return np.array([-math.sin(phi), math.cos(phi), phi, -phi,
+                     math.cos(phi) * w_st, math.sin(phi) * w_st, -w_st, -w_sw])
+
+
+def gait_step(model, z):
+    """z after the next heel strike (leg 2's; the roles swap), by the same rk4 as the cycle."""
+    run = andyc.simulate(model, 5.0, dt=1e-3, method="rk4", x0=gait_state(z), d0=np.zeros(1), flow0="stance1",
+                         events=andyc.Events(tol=1e-15, stop_after={"strike2": 1}), init=andyc.Init("as-is"),
+                         progress=False)
+    x = run.events["state_after"][0]
+    return np.array([x[3], -x[7], -x[6]])
+
+
+def test_compass_gait_cycle(compiled, shipped_build):
+    model = compiled("compass_gait")
+    andyc.build_derivatives(MODELS / "compass_gait.yaml", shipped_build)
+    cycle = find_cycle(model, "strike2")
+    assert cycle.converged, cycle.message
+    x, fx = cycle.state, cycle.discrete[0]
+    names = dict(zip(cycle.state_names, x))
+    # just after strike2 leg 2 stands at fx, phi ahead of the hip's normal; leg 1 phi behind
+    got = np.array([names["th2"], -names["th1"], -names["th2_dot"], -names["th1_dot"]])
+    assert np.max(np.abs(got - [PHI, PHI, W_STANCE, W_SWING])) < 1e-8                       # §8, to 1e-8
+    th2 = names["th2"]
+    assert abs(names["x"] - fx + math.sin(th2)) < 1e-12 and abs(names["y"] - math.cos(th2)) < 1e-12
+    # strike2 comes back after two steps (strike1 between): the step time is half the period
+    assert abs(cycle.period / 2 - STEP_TIME) < 5e-8                                          # §8 gives 7 digits
+    # the two-step map's multipliers are the squares of the step-to-step map's eigenvalues (§8: 5 digits)
+    mult = np.sort_complex(cycle.multipliers)
+    assert len(mult) == 3 and cycle.basis.shape[1] == 3
+    assert np.max(np.abs(mult - np.sort_complex(EIGENVALUES ** 2))) < 2e-5
+    # ... and, to 1e-8, those of central differences of the one-step map with the legs swapped, at the fixed point
+    z = got[[0, 2, 3]]
+    assert np.max(np.abs(gait_step(model, z) - z)) < 1e-10
+    J = np.empty((3, 3))
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = 1e-6
+        J[:, k] = (gait_step(model, z + e) - gait_step(model, z - e)) / 2e-6
+    step_eigenvalues = np.linalg.eigvals(J)
+    assert np.max(np.abs(np.sort_complex(step_eigenvalues ** 2) - mult)) < 1e-8
+    assert np.max(np.abs(np.sort_complex(step_eigenvalues) - np.sort_complex(EIGENVALUES))) < 1e-5
+
+
+def test_rimless_wheel_period_two(compiled, shipped_build):
+    """--period 2: the same orbit, the section passed twice: the period doubles, the multiplier squares."""
+    model = compiled("rimless_wheel")
+    andyc.build_derivatives(MODELS / "rimless_wheel.yaml", shipped_build)
+    w, multiplier, step = wheel_closed_form()
+    cycle = find_cycle(model, "next_spoke", period=2)
+    assert cycle.converged, cycle.message
+    assert abs(math.hypot(cycle.state[2], cycle.state[3]) - w) < 1e-12
+    assert abs(cycle.multipliers[0] - multiplier ** 2) < 1e-12
+    assert abs(cycle.period - 2 * step) < 2e-9
