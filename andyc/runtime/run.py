@@ -30,7 +30,8 @@ class Run:
     time: np.ndarray                 # (N,)
     state: np.ndarray                # (N, nx)
     energy: np.ndarray               # (N,)
-    frames: dict = field(default_factory=dict)      # name -> (N, 3)
+    frames: dict = field(default_factory=dict)      # name -> (N, 3) its origin in world
+    frame_rotations: dict = field(default_factory=dict)  # name -> (N, 4) unit quaternion w, x, y, z: own axes -> world
     status: str = "finished"         # "finished" or "stopped: why"
     stats: dict = field(default_factory=dict)       # steps, rhs_evaluations, wall_seconds
     multiplier_names: list = field(default_factory=list)
@@ -161,6 +162,24 @@ class Run:
 RUN_SUFFIXES = (".h5", ".hdf5", ".csv")
 
 
+def unit_quaternions(R: np.ndarray) -> np.ndarray:
+    """(N, 4) unit quaternions w, x, y, z of the rotation matrices R (N, 3, 3), each taken with the sign nearer
+    the one before it, so a logged rotation is continuous in time (q and -q are the same rotation; an
+    animation interpolating between samples, or a plot, wants no jump between them). SciPy's conversion
+    (Shepperd's method, exact to rounding at every angle)."""
+    from scipy.spatial.transform import Rotation
+
+    if not len(R):
+        return np.zeros((0, 4))
+    xyzw = Rotation.from_matrix(R).as_quat()
+    q = np.concatenate([xyzw[:, 3:], xyzw[:, :3]], axis=1)
+    flips = np.cumprod(np.where(np.einsum("ij,ij->i", q[1:], q[:-1]) < 0.0, -1.0, 1.0))
+    q[1:] *= flips[:, None]
+    if q[0, 0] < 0.0:         # the first sample with w >= 0, so a run's first rotation has one spelling
+        q *= -1.0
+    return q
+
+
 def _largest(a: np.ndarray) -> float:
     """The largest |entry|, skipping NaN (the rows a sample's flow does not use)."""
     return float(np.nanmax(np.abs(a), initial=0.0)) if a.size else 0.0
@@ -188,6 +207,8 @@ def write_h5(run: Run, path: Path) -> None:
         f["energy"] = run.energy
         for name, xyz in run.frames.items():
             f[f"frames/{name}"] = xyz
+        for name, wxyz in run.frame_rotations.items():
+            f[f"frame_rotations/{name}"] = wxyz
         if run.contact_names:
             f["contacts/closed"] = run.contact_closed
             f["contacts/normal_force"] = run.normal_forces
@@ -208,6 +229,8 @@ def read_h5(path) -> Run:
     with h5py.File(path, "r") as f:
         a = dict(f.attrs)
         frames = {name: f["frames"][name][()] for name in f["frames"]} if "frames" in f else {}
+        rotations = ({name: f["frame_rotations"][name][()] for name in f["frame_rotations"]}
+                     if "frame_rotations" in f else {})          # run files before andyc logged rotations: none
         contacts = json.loads(a.get("contacts", '{"names": [], "rows": []}'))
         jump_names = json.loads(a.get("jump_names", "[]"))
         table = f["events"][()]
@@ -221,7 +244,8 @@ def read_h5(path) -> Run:
                    rtol=float(a["rtol"]), atol=float(a["atol"]), t_end=float(a["t_end"]),
                    parameters=json.loads(a["parameters"]), inputs=json.loads(a.get("inputs", "{}")),
                    state_names=[str(s) for s in f["state"].attrs["names"]], time=f["time"][()],
-                   state=f["state"][()], energy=f["energy"][()], frames=frames, status=str(a["status"]),
+                   state=f["state"][()], energy=f["energy"][()], frames=frames, frame_rotations=rotations,
+                   status=str(a["status"]),
                    stats=json.loads(a.get("stats", "{}")), andyc_version=str(a["andyc_version"]),
                    multiplier_names=[str(s) for s in f["multipliers"].attrs["names"]],
                    multipliers=f["multipliers"][()], residual_position=f["residual/position"][()],
@@ -252,6 +276,9 @@ def write_csv(run: Run, path: Path) -> None:
     for name, xyz in run.frames.items():
         columns += [f"{name}.x", f"{name}.y", f"{name}.z"]
         data.append(xyz)
+    for name, wxyz in run.frame_rotations.items():
+        columns += [f"{name}.qw", f"{name}.qx", f"{name}.qy", f"{name}.qz"]
+        data.append(wxyz)
     with open(path, "w", encoding="utf-8", errors="backslashreplace") as fh:
         fh.write("\n".join(header) + "\n")
         np.savetxt(fh, np.hstack(data), delimiter=",", header=",".join(columns), comments="", fmt="%.17g")

@@ -51,7 +51,7 @@ from andyc.runtime.interrupts import Interrupts
 from andyc.runtime.methods import FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
 from andyc.runtime.options import Events, Init, Projection
 from andyc.runtime.progress import Progress
-from andyc.runtime.run import Run
+from andyc.runtime.run import Run, unit_quaternions
 
 
 def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str = "rk4", *,
@@ -167,18 +167,21 @@ class _Assembly:
         phi, c, lam = np.empty((n, model.nh)), np.empty((n, model.nc)), np.empty((n, model.nc))
         if model.nc:
             integrator.evaluate_constraints(model.ref, work(model).ref, log, p, phi, c, lam)
-        frames_out = {}
+        frames_out, rotations = {}, {}
         if frame_names:
-            xyz = np.empty((n, len(model.frame_names), 3))
-            integrator.evaluate_frames(model.ref, log, p, xyz)
-            frames_out = {name: xyz[:, model.frame_names.index(name)] for name in frame_names}
+            poses = np.empty((n, len(model.frame_names), 12))
+            integrator.evaluate_frames(model.ref, log, p, poses)
+            at = {name: model.frame_names.index(name) for name in frame_names}
+            frames_out = {name: poses[:, k, :3].copy() for name, k in at.items()}
+            rotations = {name: unit_quaternions(poses[:, k, 3:].reshape(n, 3, 3)) for name, k in at.items()}
         held = u_log[0] if n else self.source.held(model.initial_flow)
         return Run(model=model.name, spec_sha256=model.spec_sha256, method=self.method, dt=self.dt, nq=model.nq,
                    nv=model.nv, rtol=0.0 if fixed else self.rtol, atol=0.0 if fixed else self.atol, t_end=self.t_end,
                    parameters=dict(zip(model.parameter_names, map(float, p))),
                    inputs={n: self.source.drives.get(n, float(v)) for n, v in zip(model.input_names, held)},
                    state_names=list(model.state_names), time=t_log, state=x_log, input_names=list(model.input_names),
-                   input_values=u_log, energy=energy, frames=frames_out, status=status, stats=stats,
+                   input_values=u_log, energy=energy, frames=frames_out, frame_rotations=rotations, status=status,
+                   stats=stats,
                    multiplier_names=list(model.multiplier_names), multipliers=lam, residual_position=phi,
                    residual_velocity=c, energy_correction=bool(self.energy_correction),
                    flow=f_log, flow_names=list(model.flow_names), discrete_names=list(model.discrete_names),

@@ -34,6 +34,7 @@ class SymbolicModel:
     energy: sp.Expr           # kinetic + potential
     power: sp.Expr            # power of the non-conservative elements
     frame_positions: dict     # frame name -> 3x1, world (user frames only)
+    frame_rotations: dict     # frame name -> 3x3, own axes -> world (the same frames)
     elements: list            # ElementTerms, per element
     constraints: ConstraintTerms  # phi, c = A v + b, kappa (eq. 10-12); empty without constraints
     hybrid: HybridTerms       # flows, jumps (one flow, no jumps without a hybrid section)
