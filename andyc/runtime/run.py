@@ -52,6 +52,17 @@ class Run:
     contact_rows: list = field(default_factory=list)   # the multiplier (row) of each contact's normal force
     andyc_version: str = andyc.__version__
     display: dict = field(default_factory=dict)      # state units, the ground, shapes: for pictures (andyc.spec.display)
+    meshes: dict = field(default_factory=dict)       # mesh file (as display's shapes name it) -> its bytes, as read
+
+    def mesh_bytes(self, file: str) -> bytes | None:
+        """The bytes of a shape's mesh file: as the run file holds them, else read from the file; None when
+        neither has it (the file was moved since)."""
+        if file not in self.meshes:
+            try:
+                self.meshes[file] = Path(file).read_bytes()
+            except OSError:
+                return None
+        return self.meshes[file]
 
     def __post_init__(self):
         n = self.time.shape[0]
@@ -209,6 +220,13 @@ def write_h5(run: Run, path: Path) -> None:
             f[f"frames/{name}"] = xyz
         for name, wxyz in run.frame_rotations.items():
             f[f"frame_rotations/{name}"] = wxyz
+        # The shapes' mesh files go in whole (compressed), so that andyc view needs only the run file.
+        files = dict.fromkeys(s["file"] for s in run.display.get("shapes", []) if s["kind"] == "mesh")
+        for k, file in enumerate(files):
+            data = run.mesh_bytes(file)
+            if data is not None:
+                f.create_dataset(f"meshes/{k}", data=np.frombuffer(data, dtype=np.uint8), compression="gzip")
+                f[f"meshes/{k}"].attrs["file"] = file
         if run.contact_names:
             f["contacts/closed"] = run.contact_closed
             f["contacts/normal_force"] = run.normal_forces
@@ -237,6 +255,7 @@ def read_h5(path) -> Run:
         events = {"time": table["time"], "jump": np.array([jump_names.index(j.decode() if isinstance(j, bytes) else j)
                                                            for j in table["jump"]], dtype=np.int32),
                   "from_flow": table["from_flow"], "to_flow": table["to_flow"]}
+        meshes = {str(d.attrs["file"]): d[()].tobytes() for d in f["meshes"].values()} if "meshes" in f else {}
         if "event_states" in f:
             events.update({key: f["event_states"][key][()] for key in f["event_states"]})
         return Run(model=a["model"], spec_sha256=a["spec_sha256"], method=a["method"], dt=float(a["dt"]),
@@ -257,7 +276,7 @@ def read_h5(path) -> Run:
                    input_names=[str(s) for s in f["inputs"].attrs["names"]] if "inputs" in f else [],
                    input_values=f["inputs"][()] if "inputs" in f else None,
                    frame_parents=json.loads(a.get("frame_parents", "{}")), display=json.loads(a.get("display", "{}")),
-                   contact_names=contacts["names"], contact_rows=contacts["rows"])
+                   contact_names=contacts["names"], contact_rows=contacts["rows"], meshes=meshes)
 
 
 def write_csv(run: Run, path: Path) -> None:
