@@ -184,3 +184,15 @@ def test_the_panda_visuals_are_its_meshes_on_its_link_frames():
     assert all(s["kind"] == "mesh" and s["format"] == "dae" and s["file"].startswith(str(ROBOTS_DIR)) for s in shapes)
     finger = [s for s in shapes if s["frame"] == "panda_rightfinger"][0]
     assert finger["rpy"] == [0.0, 0.0, pytest.approx(math.pi)]
+
+
+def test_a_robot_with_many_shapes_keeps_them_in_its_run_file(tmp_path):
+    """More shapes than an HDF5 attribute holds (its object header takes 64 kB in all): the display record
+    goes into a dataset, and reads back equal."""
+    from tests.support.runs import plain_run
+
+    run = plain_run()
+    shape = {"frame": "world", "kind": "sphere", "radius": 0.1, "xyz": [0.0, 0.0, 0.0], "rpy": [0.0, 0.0, 0.0],
+             "rgba": [0.5, 0.5, 0.5, 1.0]}
+    run.display = {"units": {}, "ground": None, "shapes": [dict(shape, radius=0.001 * (k + 1)) for k in range(1000)]}
+    assert read_h5(run.save(tmp_path / "run.h5")).display == run.display

@@ -171,6 +171,7 @@ class Run:
 
 
 RUN_SUFFIXES = (".h5", ".hdf5", ".csv")
+MAX_ATTRIBUTE = 32_000      # characters of an HDF5 attribute at most (its object header holds 64 kB in all)
 
 
 def unit_quaternions(R: np.ndarray) -> np.ndarray:
@@ -201,7 +202,10 @@ def write_h5(run: Run, path: Path) -> None:
 
     with h5py.File(path, "w") as f:
         for key, value in run.attributes().items():
-            f.attrs[key] = value
+            if key == "display" and len(value) > MAX_ATTRIBUTE:     # a robot's many shapes: as a dataset
+                f["display"] = value
+            else:
+                f.attrs[key] = value
         f["time"] = run.time
         f["state"] = run.state
         f["state"].attrs["names"] = run.state_names
@@ -256,6 +260,7 @@ def read_h5(path) -> Run:
                                                            for j in table["jump"]], dtype=np.int32),
                   "from_flow": table["from_flow"], "to_flow": table["to_flow"]}
         meshes = {str(d.attrs["file"]): d[()].tobytes() for d in f["meshes"].values()} if "meshes" in f else {}
+        display = a.get("display") or (f["display"].asstr()[()] if "display" in f else "{}")
         if "event_states" in f:
             events.update({key: f["event_states"][key][()] for key in f["event_states"]})
         return Run(model=a["model"], spec_sha256=a["spec_sha256"], method=a["method"], dt=float(a["dt"]),
@@ -275,7 +280,7 @@ def read_h5(path) -> Run:
                    discrete=f["discrete"][()] if "discrete" in f else None, events=events, jump_names=jump_names,
                    input_names=[str(s) for s in f["inputs"].attrs["names"]] if "inputs" in f else [],
                    input_values=f["inputs"][()] if "inputs" in f else None,
-                   frame_parents=json.loads(a.get("frame_parents", "{}")), display=json.loads(a.get("display", "{}")),
+                   frame_parents=json.loads(a.get("frame_parents", "{}")), display=json.loads(display),
                    contact_names=contacts["names"], contact_rows=contacts["rows"], meshes=meshes)
 
 
