@@ -39,3 +39,15 @@ def compiled(build_dir, shipped_build):
         return cache[path]
 
     return get
+
+
+@pytest.fixture(scope="session")
+def panda_arm(shipped_build, tmp_path_factory):
+    """example-robot-data's panda with its fingers locked (as tests/test_reduce.py reads it), compiled into the
+    shipped models' build folder: its build is reused by meaning across runs (a fresh build takes a minute)."""
+    from tests.support import ROBOTS_DIR
+
+    source = tmp_path_factory.mktemp("panda") / "panda_arm.yaml"
+    source.write_text(f"name: panda_arm\nurdf:\n  file: {ROBOTS_DIR / 'panda_description/urdf/panda.urdf'}\n"
+                      "  lock: {panda_finger_joint1: 0.02}\n")
+    return andyc.compile_model(source, shipped_build)[0]

@@ -59,7 +59,8 @@ def test_the_data_holds_the_runs_frames_at_the_samples_kept_and_decimates_a_long
     assert data["flow"] == [int(f) for f in run.flow[kept]] and data["flow_names"] == ["stance1", "stance2"]
     assert data["events"] == [[1.0, "strike2"], [2.0, "strike1"]]
     assert data["planar"] and data["up"] == 1 and data["ground"] == 0.0 and data["hybrid"]
-    assert set(data["paths"]) == {"foot1", "foot2"}
+    assert data["trails"] == ["foot1", "foot2"] and data["follow"] is None          # the end frames by default
+    assert data["shapes"] == [] and data["rotations"] == {}
     short = view_data(run, fps=30, max_samples=20)
     assert len(short["time"]) == 20 and short["time"][-1] == pytest.approx(3.0)
     assert view_data(walker_run(ground=None))["ground"] is None       # no ground in the model: no grid
@@ -96,6 +97,53 @@ def test_view_command_writes_the_page_and_refuses_what_it_cannot_show(tmp_path):
     bare.frames, bare.frame_parents = {}, {}
     result = CliRunner().invoke(cli.main, ["view", str(bare.save(tmp_path / "bare.h5"))])
     assert result.exit_code == 2 and "--frames all" in result.output
+    for option in ("--follow", "--trails"):
+        result = CliRunner().invoke(cli.main, ["view", str(path), option, "knee", "-o", str(tmp_path / "k.html")])
+        assert result.exit_code == 2 and "no frame 'knee'" in result.output and option in result.output
+    result = CliRunner().invoke(cli.main, ["view", str(path), "--follow", "hip", "--trails", "hip,foot2",
+                                           "-o", str(tmp_path / "f.html")])
+    assert result.exit_code == 0, result.output
+    data = json.loads((tmp_path / "f.html").read_text().split('id="andyc-data">', 1)[1].split("</script>", 1)[0])
+    assert data["follow"] == "hip" and data["trails"] == ["hip", "foot2"]
+
+
+def test_shapes_ride_on_their_frames_rotations(compiled, tmp_path):
+    """A double pendulum run: each shape in the data as the model says, each shaped frame's rotation at the
+    samples kept as the quaternion (x, y, z, w: three.js's order) of a turn about z by q1 (upper) and q1 + q2
+    (lower), written by hand; the sticks only of frames without a shape; a shape on a frame the run did not
+    log is listed as not drawn."""
+    run = andyc.simulate(compiled("double_pendulum"), 1.0, dt=1e-3, frames="all")
+    data = view_data(run, fps=30)
+    kept = np.searchsorted(run.time, np.array(data["time"]) + run.time[0] - 1e-12)
+    assert data["shapes"] == compiled("double_pendulum").display["shapes"] and data["missing"] == []
+    q1, q2 = run.column("q1")[kept], run.column("q2")[kept]
+    for name, angle in (("upper", q1), ("lower", q1 + q2), ("elbow", q1), ("tip", q1 + q2)):
+        expected = np.column_stack([0 * angle, 0 * angle, np.sin(angle / 2), np.cos(angle / 2)])
+        got = np.array(data["rotations"][name])
+        sign = np.sign(np.sum(got * expected, axis=1))[:, None]
+        assert np.allclose(got, sign * expected, atol=1e-4)              # written with 5 digits
+    assert [e for e in data["edges"] if e[1] in ("elbow", "tip", "upper", "lower")] == []
+    partial = andyc.simulate(compiled("double_pendulum"), 0.1, dt=1e-3, frames=["upper", "elbow"])
+    assert view_data(partial)["missing"] == ["a box on frame 'lower', which the run did not log",
+                                             "a sphere on frame 'tip', which the run did not log"]
+
+
+def test_a_mesh_goes_into_the_page_whole(tmp_path):
+    """A mesh shape's file is in the page as its bytes in base64, read from the run file, not the disk."""
+    import base64
+
+    run = walker_run()
+    stl = bytes(range(256)) * 3
+    run.frame_rotations = {name: np.tile([1.0, 0, 0, 0], (len(run.time), 1)) for name in run.frames}
+    run.display = {"ground": None, "shapes": [{"frame": "hip", "kind": "mesh", "file": str(tmp_path / "gone.stl"),
+                                               "format": "stl", "scale": [1, 1, 1], "xyz": [0, 0, 0],
+                                               "rpy": [0, 0, 0], "rgba": None}]}
+    run.meshes = {str(tmp_path / "gone.stl"): stl}
+    data = view_data(run)
+    assert data["shapes"][0]["mesh"] == 0 and "file" not in data["shapes"][0]
+    assert base64.b64decode(data["meshes"][0]["base64"]) == stl and data["meshes"][0]["format"] == "stl"
+    run.meshes = {}
+    assert view_data(run)["missing"] == [f"the mesh {tmp_path / 'gone.stl'} (in neither the run file nor on disk)"]
 
 
 # -- in a browser ----------------------------------------------------------------------------------------
@@ -143,6 +191,20 @@ def moved(a, b) -> int:
     return int(np.count_nonzero(np.abs(a - b).max(axis=2) > 24))
 
 
+def coloured(pixels, test) -> np.ndarray:
+    """The mask of the pixels whose (r, g, b) pass `test` (the background is a blue gradient)."""
+    r, g, b = pixels[..., 0], pixels[..., 1], pixels[..., 2]
+    return test(r, g, b)
+
+
+def check_shapes_move(shots, test, least: int):
+    """The shapes' pixels (those `test` picks) are drawn at each time, more than `least`, and move between."""
+    (a, _), (b, _) = shots
+    ma, mb = coloured(a, test), coloured(b, test)
+    assert ma.sum() > least and mb.sum() > least, (ma.sum(), mb.sum())
+    assert np.count_nonzero(ma != mb) > least // 2
+
+
 def check_shots(shots, requests):
     (a, _), (b, _) = shots
     for pixels, _ in shots:
@@ -168,3 +230,33 @@ def test_a_swing_bar_run_plays_offline(browser, compiled, tmp_path):
     shots, requests = screenshots(browser, out, [0.3, 1.2], tmp_path)
     check_shots(shots, requests)
     assert "t = 0.30 s" in shots[0][1] and "flow" not in shots[0][1]
+
+
+def grey(r, g, b):
+    """Near-white or grey, neither blue (the background) nor coloured: the panda's meshes."""
+    return (np.abs(r - b) < 40) & (np.abs(r - g) < 40) & (r > 90)
+
+
+def test_the_panda_with_its_meshes_plays_offline(browser, panda_arm, tmp_path):
+    """example-robot-data's panda (fingers locked) falling under gravity, drawn with its DAE visual meshes
+    (inlined in the page from the run file): the canvas is drawn, the meshes' pixels move, nothing is
+    fetched."""
+    run = andyc.simulate(panda_arm, t_end=1.5, dt=1e-3, frames="all")
+    out = tmp_path / "panda.html"
+    result = CliRunner().invoke(cli.main, ["view", str(run.save(tmp_path / "panda.h5")), "-o", str(out)])
+    assert result.exit_code == 0 and "11 shapes" in result.output, result.output
+    shots, requests = screenshots(browser, out, [0.2, 1.4], tmp_path)
+    check_shots(shots, requests)
+    check_shapes_move(shots, grey, 2000)
+
+
+def test_a_double_pendulum_with_shapes_plays_offline(browser, compiled, tmp_path):
+    """The YAML model's shape: keys: its red spheres (the masses) are drawn and move between two times."""
+    run = andyc.simulate(compiled("double_pendulum"), t_end=2.0, dt=1e-3, frames="all")
+    out = tmp_path / "double_pendulum.html"
+    result = CliRunner().invoke(cli.main, ["view", str(run.save(tmp_path / "dp.h5")), "-o", str(out),
+                                           "--trails", "tip"])
+    assert result.exit_code == 0 and "4 shapes" in result.output, result.output
+    shots, requests = screenshots(browser, out, [0.2, 1.0], tmp_path)
+    check_shots(shots, requests)
+    check_shapes_move(shots, lambda r, g, b: (r > 150) & (g < 90) & (b < 90), 200)

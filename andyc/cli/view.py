@@ -18,11 +18,16 @@ from andyc.outputs import check_output
 @click.option("--max-samples", default=3000, show_default=True, type=click.IntRange(min=2), metavar="N",
               help="At most N samples, evenly spread in time: a long run is decimated (and plays faster "
                    "only if you choose a speed above 1).")
-def view(run_file, out, fps, max_samples):
+@click.option("--follow", default=None, metavar="FRAME", help="The camera follows this logged frame.")
+@click.option("--trails", default=None, metavar="F1,F2",
+              help="The frames that leave a trail (their path up to the time shown); default the end frames "
+                   "(feet, tips); '' for none.")
+def view(run_file, out, fps, max_samples, follow, trails):
     """Write RUN_FILE (the HDF5 run of `andyc sim ... --frames all`) as one HTML page that plays its
     logged frames in 3-D in a browser, offline: play, pause, scrub, speed, the time and the active
-    flow, the jumps on the timeline, the ground where the model has one. Needs the meshcat package
-    (andyc[view]), whose three.js viewer is inlined into the page."""
+    flow, the jumps on the timeline, the ground where the model has one; the model's shapes (shape:, a
+    URDF's visuals and meshes) moved by the logged frames, sticks for the frames without one. Needs the
+    meshcat package (andyc[view]), whose three.js viewer is inlined into the page."""
     from andyc.plot.view import meshcat_bundle, write_view
     from andyc.runtime.run import read_h5
 
@@ -45,6 +50,17 @@ def view(run_file, out, fps, max_samples):
     if not run.frames:
         raise click.BadParameter(f"{run_file}: this run of {run.model} logged no frames to view; re-run it with "
                                  f"`andyc sim MODEL.yaml --frames all --out {run_file}`", param_hint="RUN_FILE")
-    info = write_view(run, out, fps=fps, max_samples=max_samples)
-    click.echo(f"wrote {out} ({info['samples']} samples of {len(run.time)}, {info['bytes'] / 1e6:.2f} MB, "
-               f"in {info['seconds']:.2f} s)")
+    for name in ([follow] if follow else []) + (trails.split(",") if trails else []):
+        if name not in run.frames:
+            option = "'--follow'" if name == follow else "'--trails'"
+            raise click.BadParameter(f"the run logged no frame '{name}'; logged: {', '.join(run.frames)}",
+                                     param_hint=option)
+    try:
+        info = write_view(run, out, fps=fps, max_samples=max_samples, follow=follow,
+                          trails=None if trails is None else [t for t in trails.split(",") if t])
+    except ValueError as exc:          # a run file from before andyc logged rotations, of a model with shapes
+        raise click.BadParameter(f"{run_file}: {exc}", param_hint="RUN_FILE") from None
+    for what in info["missing"]:
+        click.echo(f"warning: not drawn: {what}", err=True)
+    click.echo(f"wrote {out} ({info['samples']} samples of {len(run.time)}, {info['shapes']} shapes, "
+               f"{info['bytes'] / 1e6:.2f} MB, in {info['seconds']:.2f} s)")

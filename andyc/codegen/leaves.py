@@ -27,7 +27,7 @@ DOCS = {
     "signal_rates": "Rates of the nonholonomic signals (ANDY eq. 4) into xdot[NQ + NV:].",
     "energy": "Total mechanical energy: kinetic + gravity + springs + potentials.",
     "power": "Power of the non-conservative elements (forces, torques, dampers).",
-    "frame_positions": "Origins of FRAMES in world coordinates into out (len(FRAMES), 3).",
+    "frame_poses": "Pose of each of FRAMES in world into out (len(FRAMES), 12): origin, then rotation row by row.",
     "constraint_gains": "Soft-constraint gains K_s and K_d of each row (ANDY eq. 13-15), for the baumgarte method, "
                         "into S.",
     "restitution": "Coefficient of restitution of each jump's impact (a contact's slip end: its friction mu), into S.",
@@ -111,8 +111,10 @@ def leaves(model: SymbolicModel) -> Leaves:
     out.add("energy", STATE, [("e", model.energy)], returns="e")
     out.add("power", STATE, [("w", model.power)], returns="w")
     frames = list(model.frame_positions)
-    out.add("frame_positions", f"{STATE}, out",
-            [(f"out[{k}, {i}]", model.frame_positions[f][i]) for k, f in enumerate(frames) for i in range(3)])
+    out.add("frame_poses", f"{STATE}, out",
+            [(f"out[{k}, {i}]", model.frame_positions[f][i]) for k, f in enumerate(frames) for i in range(3)]
+            + [(f"out[{k}, {3 + 3 * i + j}]", model.frame_rotations[f][i, j])
+               for k, f in enumerate(frames) for i in range(3) for j in range(3)])
     if model.signals:
         nq = len(model.q)
         out.add("signal_rates", f"{STATE}, xdot", [(f"xdot[{nq + n + i}]", r) for i, r in enumerate(model.signal_rates)])

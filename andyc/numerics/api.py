@@ -36,8 +36,8 @@ def _power(model, t, x, u, p, d):
 
 
 @jit
-def _frame_positions(model, t, x, u, p, d, out):
-    call(model.frame_positions, (t, x, u, p, d, out))
+def _frame_poses(model, t, x, u, p, d, out):
+    call(model.frame_poses, (t, x, u, p, d, out))
 
 
 @jit
@@ -162,13 +162,24 @@ class Functions:
         p, u, d, _ = self._args(u, p, d, None)
         return _power(self.model, float(t), _vector(x), u, p, d)
 
+    def frame_poses(self, t, x, u=None, p=None, d=None):
+        """The pose of each of FRAMES in world, (len(FRAMES), 12): its origin, then its rotation matrix (own
+        axes -> world) row by row."""
+        p, u, d, _ = self._args(u, p, d, None)
+        out = np.zeros((self.sizes["frames"], 12))
+        _frame_poses(self.model, float(t), _vector(x), u, p, d, out)
+        return out
+
     def frame_positions(self, t, x, u=None, p=None, d=None, out=None):
         """Origins of FRAMES in world coordinates, (len(FRAMES), 3) (into `out` when given)."""
-        p, u, d, _ = self._args(u, p, d, None)
-        nframes = self.sizes["frames"]
-        out = np.zeros((nframes, 3)) if out is None else out
-        _frame_positions(self.model, float(t), _vector(x), u, p, d, out)
+        poses = self.frame_poses(t, x, u, p, d)
+        out = np.zeros((len(poses), 3)) if out is None else out
+        out[:] = poses[:, :3]
         return out
+
+    def frame_rotations(self, t, x, u=None, p=None, d=None):
+        """Rotation matrix of each of FRAMES, own axes -> world, (len(FRAMES), 3, 3)."""
+        return self.frame_poses(t, x, u, p, d)[:, 3:].reshape(-1, 3, 3)
 
     def constraints(self, t, x, u, p, d, phi, c, A, kappa):
         """Constraint residuals phi (NH,), velocity residuals c = A v + b (NC,), their Jacobian A (NC, NV) and

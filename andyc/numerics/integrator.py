@@ -329,9 +329,10 @@ def evaluate_energy(model, log, p, out):
 
 @jit
 def evaluate_frames(model, log, p, out):
-    """Frame origins at the logged samples, out (N, frames, 3)."""
+    """Frame poses at the logged samples, out (N, frames, 12): each frame's origin, then its rotation matrix
+    (own axes -> world) row by row (the leaf frame_poses)."""
     for r in range(log.t.shape[0]):
-        call(model.frame_positions, (log.t[r], log.x[r], log.u[r], p, log.d[r], out[r]))
+        call(model.frame_poses, (log.t[r], log.x[r], log.u[r], p, log.d[r], out[r]))
 
 
 @jit

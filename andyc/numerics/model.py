@@ -25,7 +25,8 @@ marked STATE; k is a jump's index; S is the scratch of layout.py:
                                               with dc/dt = A dv/dt + kappa (ANDY eq. 11), into S
     signal_rates(STATE, xdot)                 d sigma/dt into xdot[NQ + NV:] (ANDY eq. 4)
     energy(STATE) -> E, power(STATE) -> P     total energy; power of the non-conservative elements
-    frame_positions(STATE, out)               origins of the frames in world, out (frames, 3)
+    frame_poses(STATE, out)                   each frame's pose in world, out (frames, 12): its origin, then
+                                              its rotation (own axes -> world) row by row
     constraint_gains(p, S)                    Baumgarte gains K_s, K_d of each row (ANDY eq. 13-15), into S
     restitution(p, S)                         restitution of each jump's impact, into S
     guard(k, STATE, lam) -> g, enabled(k, STATE, lam) -> e   jump k happens where g crosses zero while e >= 0;
@@ -58,7 +59,7 @@ TABLES = ("quaternions",                            # index in x of each quatern
           "jump_contact",                            # the contact whose impact jump k is, or -1
           "row_work")                                # the work slot of each row's constraint power, or -1
 LEAF_NAMES = ("dynamics", "dynamics_constraints", "constraints_into", "signal_rates", "energy", "power",
-              "frame_positions", "constraint_gains", "restitution", "guard", "guard_rate", "enabled", "reset",
+              "frame_poses", "constraint_gains", "restitution", "guard", "guard_rate", "enabled", "reset",
               "flow_inputs", "closed_form")
 WORK = {    # the arrays of Work: name -> shape, from the sizes and the scratch layout
     "M": ("nv", "nv"), "G": ("ng",), "S": ("rows", "width"),
@@ -81,7 +82,7 @@ if NUMBA:
         "signal_rates": types.void(*_STATE, _V),
         "energy": _f8(*_STATE),
         "power": _f8(*_STATE),
-        "frame_positions": types.void(*_STATE, _MAT),
+        "frame_poses": types.void(*_STATE, _MAT),
         "constraint_gains": types.void(_V, _MAT),
         "restitution": types.void(_V, _MAT),
         "guard": _f8(_i8, *_STATE, _V),
@@ -197,7 +198,7 @@ else:
 def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, impact_rows,
            impact_nrows, jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers,
            jump_contact, row_work, leaves):
-    (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_positions,
+    (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
      constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form) = leaves
     return Model(sizes[0], sizes[1], sizes[2], sizes[3], sizes[4], sizes[5], sizes[6], sizes[7], sizes[8], sizes[9],
                  sizes[10],
@@ -208,7 +209,7 @@ def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_sl
                  borrowed(impact_rows), borrowed(impact_nrows), borrowed(jump_source), borrowed(jump_target),
                  borrowed(jump_direction), borrowed(jump_priority), borrowed(jump_order), borrowed(jump_multipliers),
                  borrowed(jump_contact), borrowed(row_work),
-                 dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_positions,
+                 dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
                  constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form,
                  (quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, impact_rows, impact_nrows,
                   jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact,

@@ -45,7 +45,8 @@ def window(run: Run, t0: float | None = None, t1: float | None = None) -> Run:
     k = (ev["time"] >= lo) & (ev["time"] <= hi)
     return dataclasses.replace(
         run, time=run.time[s], state=run.state[s], energy=run.energy[s],
-        frames={name: xyz[s] for name, xyz in run.frames.items()}, multipliers=run.multipliers[s],
+        frames={name: xyz[s] for name, xyz in run.frames.items()},
+        frame_rotations={name: q[s] for name, q in run.frame_rotations.items()}, multipliers=run.multipliers[s],
         residual_position=run.residual_position[s], residual_velocity=run.residual_velocity[s], flow=run.flow[s],
         discrete=run.discrete[s], input_values=run.input_values[s], events={key: v[k] for key, v in ev.items()})
 

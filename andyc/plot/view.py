@@ -7,19 +7,27 @@ machinery (three.js AnimationMixer tracks, `set_animation`) moves the scene; the
 play/pause, a time scrubber, the speed, the time and the active flow, and the jumps as ticks on the
 timeline.
 
-- `view_data(run, fps, max_samples)`: what the page shows, as plain data (tests check it): the samples
-  kept (`andyc.plot.animate.animation_samples`: real time at `fps`, at most `max_samples`: a long run
-  is decimated), each logged frame's positions at them, the sticks (`animation_edges`), the leaf
-  frames' paths, the flows and the events, the vertical axis, the ground (only where the model has
-  one: `has_ground`) and whether the model is planar (then the camera looks square onto its plane).
+- `view_data(run, fps, max_samples, follow, trails)`: what the page shows, as plain data (tests check
+  it): the samples kept (`andyc.plot.animate.animation_samples`: real time at `fps`, at most
+  `max_samples`: a long run is decimated), each logged frame's position at them and, for the frames
+  that carry shapes, its rotation; the shapes of the model
+  (andyc.spec.shapes, from the run file's display record) with their mesh files' bytes in base64;
+  the sticks (`animation_edges`) of the frames without a shape; the frames that leave a trail (the
+  leaf frames unless `trails` names them); the frame the camera follows; the flows and the events,
+  the vertical axis, the ground (only where the model has one: `has_ground`) and whether the model
+  is planar (then the camera looks square onto its plane).
 - `view_html(run, ...)`, `write_view(run, out, ...)`: the page.
 
-The frames' rotations are not logged (a run logs frame origins), so a stick joins a frame to its
-parent and nothing shows a body's spin about its own stick.
+A shape is a three.js object (box, sphere, cylinder, a capsule as a cylinder and two spheres: the
+bundle's three.js r132 has no capsule; a mesh as MeshCat's `_meshfile_geometry`, or `_meshfile_object`
+to keep a DAE's or OBJ's own colours) under a node per frame that the animation tracks move by the
+frame's logged position and rotation; its pose in the frame (xyz, rpy) is that node's child's fixed
+transform.
 """
 
 from __future__ import annotations
 
+import base64
 import html
 import json
 import re
@@ -52,16 +60,32 @@ def meshcat_bundle() -> str:
     return path.read_text(encoding="utf-8")
 
 
-def view_data(run: Run, fps: int = 30, max_samples: int = MAX_SAMPLES) -> dict:
+def view_data(run: Run, fps: int = 30, max_samples: int = MAX_SAMPLES, follow: str | None = None,
+              trails=None) -> dict:
     """The page's data (see the module's docstring): 'model', 'time' (s, from the run's start),
-    'frames' {name: [[x, y, z] per sample]}, 'edges' [[parent, child]], 'paths' {leaf: [[x, y, z]] at
-    every sample kept}, 'flow_names', 'flow' (per sample), 'events' [[time, jump]], 'hybrid', 'up'
-    (1: y, 2: z), 'planar', 'ground' (height along `up`, or None), 'centre' and 'extent' (m), 'fps'
-    (samples kept per second of run time at real speed). ValueError if the run logged no frames."""
+    'frames' {name: [[x, y, z] per sample]}, 'rotations' {name: [[x, y, z, w] per sample]} (three.js's
+    order) for the frames with shapes, 'shapes' [shape with 'mesh': index into
+    'meshes' [{'format', 'base64'}]], 'edges' [[parent, child]] (the sticks of the frames without a
+    shape), 'trails' [frame], 'follow' (a frame or None), 'flow_names', 'flow' (per sample), 'events'
+    [[time, jump]], 'hybrid', 'up' (1: y, 2: z), 'planar', 'ground' (height along `up`, or None),
+    'centre' and 'extent' (m), 'fps' (samples kept per second of run time at real speed), 'missing'
+    [what is not drawn, and why]. ValueError if the run logged no frames, or `follow` or `trails` names a
+    frame it did not log."""
     if not run.frames:
         raise ValueError(f"{run.model}: the run logged no frames to view; re-run it with "
                          "`andyc sim MODEL.yaml --frames all --out RUN.h5`")
+    trails = leaf_frames(run) if trails is None else list(trails)
+    for name in ([follow] if follow else []) + trails:
+        if name not in run.frames:
+            raise ValueError(f"{run.model}: the run logged no frame '{name}'; logged: {', '.join(run.frames)}")
     samples = animation_samples(run, fps, max_samples)
+    shapes, meshes, missing = _shapes(run)
+    shaped = {s["frame"] for s in shapes}
+    turning = sorted(shaped - {"world"})
+    for name in turning:
+        if name not in run.frame_rotations:
+            raise ValueError(f"{run.model}: the run file has no rotation of frame '{name}' (written before "
+                             "andyc logged rotations); re-run it with `andyc sim MODEL.yaml --frames all`")
     view = animation_view(run)
     t = run.time[samples]
     xyz = np.concatenate([np.zeros((1, 3))] + [p[samples] for p in run.frames.values()])
@@ -73,14 +97,40 @@ def view_data(run: Run, fps: int = 30, max_samples: int = MAX_SAMPLES) -> dict:
     return {
         "model": run.model, "time": [float(f"{v - t[0]:.9g}") for v in t],
         "frames": {name: rounded(p[samples]) for name, p in run.frames.items()},
-        "edges": [list(e) for e in animation_edges(run)],
-        "paths": {name: rounded(run.frames[name][samples]) for name in leaf_frames(run)},
+        "rotations": {name: rounded(run.frame_rotations[name][samples][:, [1, 2, 3, 0]]) for name in turning},
+        "shapes": shapes, "meshes": meshes, "missing": missing,
+        "edges": [list(e) for e in animation_edges(run) if e[1] not in shaped],
+        "trails": trails, "follow": follow,
         "flow_names": list(run.flow_names), "flow": [int(f) for f in run.flow[samples]],
         "events": [[float(ev["time"][k] - t[0]), run.jump_names[ev["jump"][k]]] for k in np.flatnonzero(inside)],
         "hybrid": is_hybrid(run), "up": int(view["up"]), "planar": bool(view["planar"]),
         "ground": view["ground_height"], "centre": [float(c) for c in (lo + hi) / 2],
         "extent": float(max(np.max(hi - lo), 1e-3)), "fps": (len(t) - 1) / duration if duration > 0 else 1.0,
     }
+
+
+def _shapes(run: Run) -> tuple[list, list, list]:
+    """(shapes, meshes, missing): the run's shapes on the frames it logged (and 'world'), each mesh as an
+    index into `meshes` [{'format', 'base64'}] (its file's bytes, from the run file or the file), and
+    what is not drawn and why."""
+    shapes, meshes, index, missing = [], [], {}, []
+    for shape in run.display.get("shapes", []):
+        if shape["frame"] != "world" and shape["frame"] not in run.frames:
+            missing.append(f"a {shape['kind']} on frame '{shape['frame']}', which the run did not log")
+            continue
+        shape = dict(shape)
+        if shape["kind"] == "mesh":
+            file = shape.pop("file")
+            if file not in index:
+                data = run.mesh_bytes(file)
+                if data is None:
+                    missing.append(f"the mesh {file} (in neither the run file nor on disk)")
+                    continue
+                index[file] = len(meshes)
+                meshes.append({"format": shape["format"], "base64": base64.b64encode(data).decode("ascii")})
+            shape["mesh"] = index[file]
+        shapes.append(shape)
+    return shapes, meshes, missing
 
 
 def view_html(data: dict) -> str:
@@ -97,11 +147,13 @@ def view_html(data: dict) -> str:
     return re.sub(r"\{\{(TITLE|MESHCAT|DATA)\}\}", lambda m: parts[m.group(1)], page)
 
 
-def write_view(run: Run, out, fps: int = 30, max_samples: int = MAX_SAMPLES) -> dict:
-    """Write the page of `run` to `out`; returns {'samples' (kept), 'bytes', 'seconds'}."""
+def write_view(run: Run, out, fps: int = 30, max_samples: int = MAX_SAMPLES, follow: str | None = None,
+               trails=None) -> dict:
+    """Write the page of `run` to `out`; returns {'samples' (kept), 'shapes', 'bytes', 'seconds', 'missing'}."""
     start = time.perf_counter()
-    data = view_data(run, fps, max_samples)
+    data = view_data(run, fps, max_samples, follow, trails)
     text = view_html(data)
     with write_atomic(out) as tmp:
         Path(tmp).write_text(text, encoding="utf-8")
-    return {"samples": len(data["time"]), "bytes": len(text.encode("utf-8")), "seconds": time.perf_counter() - start}
+    return {"samples": len(data["time"]), "shapes": len(data["shapes"]), "bytes": len(text.encode("utf-8")),
+            "seconds": time.perf_counter() - start, "missing": data["missing"]}

@@ -227,7 +227,7 @@ def compile_integrator(model: CompiledModel, function=None, data=None) -> None:
     if function is not None:
         return
     integrator.evaluate_energy(m, log, p, np.zeros(1))
-    integrator.evaluate_frames(m, log, p, np.zeros((1, len(model.frame_names), 3)))
+    integrator.evaluate_frames(m, log, p, np.zeros((1, len(model.frame_names), 12)))
     integrator.evaluate_powers(m, w.ref, log, p, np.zeros((1, model.nw)))
     integrator.evaluate_constraints(m, w.ref, log, p, np.zeros((1, model.nh)), np.zeros((1, model.nc)),
                                     np.zeros((1, model.nc)))

@@ -33,7 +33,8 @@ class Run:
     time: np.ndarray                 # (N,)
     state: np.ndarray                # (N, nx)
     energy: np.ndarray               # (N,)
-    frames: dict = field(default_factory=dict)      # name -> (N, 3)
+    frames: dict = field(default_factory=dict)      # name -> (N, 3) its origin in world
+    frame_rotations: dict = field(default_factory=dict)  # name -> (N, 4) unit quaternion w, x, y, z: own axes -> world
     status: str = "finished"         # "finished" or "stopped: why"
     stats: dict = field(default_factory=dict)       # steps, rhs_evaluations, wall_seconds
     multiplier_names: list = field(default_factory=list)
@@ -63,6 +64,17 @@ class Run:
     sensitivities: dict | None = None   # simulate(sensitivities=True): "x0" dx(T)/dx0 (nx, nx), "d0" dx(T)/dd0,
                                         # "p" dx(T)/dp (nx, np), "time" dT/dz, "discrete" dd(T)/dz, z = (x0, d0, p)
                                         # (andyc.runtime.sensitivities)
+    meshes: dict = field(default_factory=dict)       # mesh file (as display's shapes name it) -> its bytes, as read
+
+    def mesh_bytes(self, file: str) -> bytes | None:
+        """The bytes of a shape's mesh file: as the run file holds them, else read from the file; None when
+        neither has it (the file was moved since)."""
+        if file not in self.meshes:
+            try:
+                self.meshes[file] = Path(file).read_bytes()
+            except OSError:
+                return None
+        return self.meshes[file]
 
     def __post_init__(self):
         n = self.time.shape[0]
@@ -228,6 +240,25 @@ class Run:
 
 
 RUN_SUFFIXES = (".h5", ".hdf5", ".csv")
+MAX_ATTRIBUTE = 32_000      # characters of an HDF5 attribute at most (its object header holds 64 kB in all)
+
+
+def unit_quaternions(R: np.ndarray) -> np.ndarray:
+    """(N, 4) unit quaternions w, x, y, z of the rotation matrices R (N, 3, 3), each taken with the sign nearer
+    the one before it, so a logged rotation is continuous in time (q and -q are the same rotation; an
+    animation interpolating between samples, or a plot, wants no jump between them). SciPy's conversion
+    (Shepperd's method, exact to rounding at every angle)."""
+    from scipy.spatial.transform import Rotation
+
+    if not len(R):
+        return np.zeros((0, 4))
+    xyzw = Rotation.from_matrix(R).as_quat()
+    q = np.concatenate([xyzw[:, 3:], xyzw[:, :3]], axis=1)
+    flips = np.cumprod(np.where(np.einsum("ij,ij->i", q[1:], q[:-1]) < 0.0, -1.0, 1.0))
+    q[1:] *= flips[:, None]
+    if q[0, 0] < 0.0:         # the first sample with w >= 0, so a run's first rotation has one spelling
+        q *= -1.0
+    return q
 
 
 def _largest(a: np.ndarray) -> float:
@@ -240,7 +271,10 @@ def write_h5(run: Run, path: Path) -> None:
 
     with h5py.File(path, "w") as f:
         for key, value in run.attributes().items():
-            f.attrs[key] = value
+            if key == "display" and len(value) > MAX_ATTRIBUTE:     # a robot's many shapes: as a dataset
+                f["display"] = value
+            else:
+                f.attrs[key] = value
         f["time"] = run.time
         f["state"] = run.state
         f["state"].attrs["names"] = run.state_names
@@ -261,6 +295,15 @@ def write_h5(run: Run, path: Path) -> None:
         f["energy_balance"] = run.energy_balance
         for name, xyz in run.frames.items():
             f[f"frames/{name}"] = xyz
+        for name, wxyz in run.frame_rotations.items():
+            f[f"frame_rotations/{name}"] = wxyz
+        # The shapes' mesh files go in whole (compressed), so that andyc view needs only the run file.
+        files = dict.fromkeys(s["file"] for s in run.display.get("shapes", []) if s["kind"] == "mesh")
+        for k, file in enumerate(files):
+            data = run.mesh_bytes(file)
+            if data is not None:
+                f.create_dataset(f"meshes/{k}", data=np.frombuffer(data, dtype=np.uint8), compression="gzip")
+                f[f"meshes/{k}"].attrs["file"] = file
         if run.contact_names:
             f["contacts/closed"] = run.contact_closed
             f["contacts/normal_force"] = run.normal_forces
@@ -288,12 +331,16 @@ def read_h5(path) -> Run:
     with h5py.File(path, "r") as f:
         a = dict(f.attrs)
         frames = {name: f["frames"][name][()] for name in f["frames"]} if "frames" in f else {}
+        rotations = ({name: f["frame_rotations"][name][()] for name in f["frame_rotations"]}
+                     if "frame_rotations" in f else {})          # run files before andyc logged rotations: none
         contacts = json.loads(a.get("contacts", '{"names": [], "rows": []}'))
         jump_names = json.loads(a.get("jump_names", "[]"))
         table = f["events"][()]
         events = {"time": table["time"], "jump": np.array([jump_names.index(j.decode() if isinstance(j, bytes) else j)
                                                            for j in table["jump"]], dtype=np.int32),
                   "from_flow": table["from_flow"], "to_flow": table["to_flow"]}
+        meshes = {str(d.attrs["file"]): d[()].tobytes() for d in f["meshes"].values()} if "meshes" in f else {}
+        display = a.get("display") or (f["display"].asstr()[()] if "display" in f else "{}")
         if "event_states" in f:
             events.update({key: f["event_states"][key][()] for key in f["event_states"]})
         return Run(model=a["model"], spec_sha256=a["spec_sha256"], method=a["method"], dt=float(a["dt"]),
@@ -301,7 +348,8 @@ def read_h5(path) -> Run:
                    rtol=float(a["rtol"]), atol=float(a["atol"]), t_end=float(a["t_end"]),
                    parameters=json.loads(a["parameters"]), inputs=json.loads(a.get("inputs", "{}")),
                    state_names=[str(s) for s in f["state"].attrs["names"]], time=f["time"][()],
-                   state=f["state"][()], energy=f["energy"][()], frames=frames, status=str(a["status"]),
+                   state=f["state"][()], energy=f["energy"][()], frames=frames, frame_rotations=rotations,
+                   status=str(a["status"]),
                    stats=json.loads(a.get("stats", "{}")), andyc_version=str(a["andyc_version"]),
                    multiplier_names=[str(s) for s in f["multipliers"].attrs["names"]],
                    multipliers=f["multipliers"][()], residual_position=f["residual/position"][()],
@@ -312,8 +360,8 @@ def read_h5(path) -> Run:
                    discrete=f["discrete"][()] if "discrete" in f else None, events=events, jump_names=jump_names,
                    input_names=[str(s) for s in f["inputs"].attrs["names"]] if "inputs" in f else [],
                    input_values=f["inputs"][()] if "inputs" in f else None,
-                   frame_parents=json.loads(a.get("frame_parents", "{}")), display=json.loads(a.get("display", "{}")),
-                   contact_names=contacts["names"], contact_rows=contacts["rows"],
+                   frame_parents=json.loads(a.get("frame_parents", "{}")), display=json.loads(display),
+                   contact_names=contacts["names"], contact_rows=contacts["rows"], meshes=meshes,
                    work_names=[str(s) for s in f["work"].attrs["names"]] if "work" in f else [],
                    work=f["work"][()] if "work" in f else None, power=f["power"][()] if "power" in f else None,
                    contact_stick_rows=contacts.get("stick_rows", []),
@@ -349,6 +397,9 @@ def write_csv(run: Run, path: Path) -> None:
     for name, xyz in run.frames.items():
         columns += [f"{name}.x", f"{name}.y", f"{name}.z"]
         data.append(xyz)
+    for name, wxyz in run.frame_rotations.items():
+        columns += [f"{name}.qw", f"{name}.qx", f"{name}.qy", f"{name}.qz"]
+        data.append(wxyz)
     with open(path, "w", encoding="utf-8", errors="backslashreplace") as fh:
         fh.write("\n".join(header) + "\n")
         np.savetxt(fh, np.hstack(data), delimiter=",", header=",".join(columns), comments="", fmt="%.17g")

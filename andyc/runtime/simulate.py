@@ -51,7 +51,7 @@ from andyc.runtime.interrupts import Interrupts
 from andyc.runtime.methods import FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
 from andyc.runtime.options import Events, Init, Projection
 from andyc.runtime.progress import Progress
-from andyc.runtime.run import Run
+from andyc.runtime.run import Run, unit_quaternions
 from andyc.runtime.status import lost_constraints
 
 
@@ -205,11 +205,13 @@ class _Assembly:
         if model.nc:
             integrator.evaluate_constraints(model.ref, work(model).ref, log, p, phi, c, lam)
         slip = slip_speeds(model, t_log, x_log, u_log, p, d_log) if model.contact_names else None
-        frames_out = {}
+        frames_out, rotations = {}, {}
         if frame_names:
-            xyz = np.empty((n, len(model.frame_names), 3))
-            integrator.evaluate_frames(model.ref, log, p, xyz)
-            frames_out = {name: xyz[:, model.frame_names.index(name)] for name in frame_names}
+            poses = np.empty((n, len(model.frame_names), 12))
+            integrator.evaluate_frames(model.ref, log, p, poses)
+            at = {name: model.frame_names.index(name) for name in frame_names}
+            frames_out = {name: poses[:, k, :3].copy() for name, k in at.items()}
+            rotations = {name: unit_quaternions(poses[:, k, 3:].reshape(n, 3, 3)) for name, k in at.items()}
         power = np.empty((n, model.nw))
         if model.nw:
             integrator.evaluate_powers(model.ref, work(model).ref, log, p, power)
@@ -222,7 +224,8 @@ class _Assembly:
                    state_names=list(model.state_names), time=t_log, state=np.ascontiguousarray(x_log[:, :model.nx]),
                    work_names=list(model.work_names), work=np.ascontiguousarray(x_log[:, model.nx:]), power=power,
                    input_names=list(model.input_names),
-                   input_values=u_log, energy=energy, frames=frames_out, status=status, stats=stats,
+                   input_values=u_log, energy=energy, frames=frames_out, frame_rotations=rotations, status=status,
+                   stats=stats,
                    multiplier_names=list(model.multiplier_names), multipliers=lam, residual_position=phi,
                    residual_velocity=c, energy_correction=bool(self.energy_correction),
                    flow=f_log, flow_names=list(model.flow_names), discrete_names=list(model.discrete_names),

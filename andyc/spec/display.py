@@ -10,6 +10,8 @@ the generated module (DISPLAY, in METADATA) and from there into every run file, 
 - 'ground': {'axis': k, 'height': h} when a constraint row or a jump guard holds a frame at world axis k
   = h (a foot on the ground: `foot.y`, `ball.y - r`; or the coordinate that is that frame's height, as a
   bouncing ball's `y`), with gravity pulling along -k; else None. The plots shade the ground only then.
+- 'shapes': what `andyc view` draws on the frames: the YAML's `shape:` keys, then the URDF's visuals
+  (andyc.spec.shapes), sizes in numbers, mesh files by their absolute path.
 """
 
 from __future__ import annotations
@@ -17,11 +19,13 @@ from __future__ import annotations
 import sympy as sp
 
 from andyc.spec.model import Nonholonomic, Rotate, Translate
+from andyc.spec.shapes import urdf_shapes
 
 
 def display(spec) -> dict:
-    """{'units': {state: unit}, 'ground': {'axis', 'height'} | None}; see the module's docstring."""
-    return {"units": units(spec), "ground": ground(spec)}
+    """{'units': {state: unit}, 'ground': {'axis', 'height'} | None, 'shapes': [shape]}; see the module's
+    docstring."""
+    return {"units": units(spec), "ground": ground(spec), "shapes": spec.shapes + urdf_shapes(spec.visuals)}
 
 
 def units(spec) -> dict:

@@ -31,6 +31,7 @@ from andyc.spec.meaning import meaning_sha256
 from andyc.spec.model import Spec
 from andyc.spec.schema_errors import schema, schema_problems
 from andyc.spec.simulate import build_simulate
+from andyc.spec.shapes import build_shapes
 from andyc.spec.scope import Report, check_names, declare_constants, declare_states, driven_inputs, warn_unused
 from andyc.spec.yamlpos import MAX_YAML_BYTES, SourceMap, load_yaml
 
@@ -117,6 +118,7 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
         check_conservative(elements, constraints, frames, data.get("constraints") or [], scope)
     check_energy_law(data, frames, constraints, flows, initial_flow, scope)
     check_work_names(data, jumps, scope)
+    shapes = build_shapes(data, scope, smap.file)
     gravity = (scope.vector(data["gravity"], ("gravity",), scope.parameter_names, "only parameters are allowed here")
                if "gravity" in data else sp.zeros(3, 1))
     if report.problems:
@@ -137,5 +139,5 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
                 frames=frames + elements.offset_frames, bodies=elements.bodies, loads=elements.loads,
                 dampers=elements.dampers, springs=elements.springs, potentials=elements.potentials,
                 constraints=constraints, conserves_energy=conserves, discrete=scope.discrete, flows=flows,
-                jumps=jumps, initial_flow=initial_flow, contacts=contacts, input_expressions=input_expressions,
+                jumps=jumps, initial_flow=initial_flow, contacts=contacts, input_expressions=input_expressions, shapes=shapes,
                 driven_inputs=driven, closed_form=closed_form, simulate=simulate, expect=expect, **origin)

@@ -5,7 +5,7 @@ is a hash of the document as data, so comments, key order, quoting and
 whitespace do not count. Runtime data does not count either: parameter
 defaults, numeric input defaults, how the model is run (simulate:, expect:), initial values (coordinates, speeds,
 discrete states, the signals of ball, floating and nonholonomic links) and
-the description. Those are written into the generated module's front file,
+the description, and the shapes a picture draws (`shape:` on frames and bodies). Those are written into the generated module's front file,
 which is rewritten without touching the compiled equations (see
 codegen.generate). Anything not listed here counts: a key is only left out
 when it is certain that no equation depends on it.
@@ -40,6 +40,8 @@ def meaning(data: dict) -> dict:
             out[key] = [[n, _without(v, initial)] for n, v in data[key].items()]
     if isinstance(data.get("frames"), list):
         out["frames"] = [_frame(f) for f in data["frames"]]
+    if isinstance(data.get("bodies"), list):         # a body's shape: a picture (andyc.spec.shapes)
+        out["bodies"] = [_without(b, ("shape",)) for b in data["bodies"]]
     return out
 
 
@@ -56,4 +58,4 @@ def _without(value, keys):
 def _frame(frame):
     if not isinstance(frame, dict):
         return frame
-    return {k: (_without(v, _LINK_INITIAL[k]) if k in _LINK_INITIAL else v) for k, v in frame.items()}
+    return {k: (_without(v, _LINK_INITIAL[k]) if k in _LINK_INITIAL else v) for k, v in frame.items() if k != "shape"}

@@ -250,7 +250,8 @@ class Spec:
     initial_flow: int = 0
     contacts: list = field(default_factory=list)       # of andyc.spec.contacts.Contact; their modes are the flows
     warnings: list = field(default_factory=list)   # of Diagnostic
-    visuals: list = field(default_factory=list)    # URDF visual geometry, for later display (andyc.spec.urdf)
+    visuals: list = field(default_factory=list)    # URDF visual geometry, as read (andyc.spec.urdf)
+    shapes: list = field(default_factory=list)     # the YAML's shape: keys, for andyc view (andyc.spec.shapes)
     locked: tuple = ()          # URDF joints held at given values (urdf: {lock: ...}), by their URDF name
     reduce: bool = False        # merge the bodies fixed to one moving frame before deriving (andyc.symbolic.reduce)
     input_expressions: dict = field(default_factory=dict)  # input name -> the expression text that drives it

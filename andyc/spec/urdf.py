@@ -191,6 +191,12 @@ def read(path, options=None, option_error=None, raw: bytes | None = None) -> Urd
         warnings.append(Diagnostic(file, 1, "robot", f"{n} visual mesh file(s) not found (first: "
                                    f"{writer.missing_meshes[0]!r}); kept as written in Spec.visuals",
                                    "give the folders that hold the packages in 'urdf: {package_paths: [...]}'"))
+    unreadable = [v for v in writer.visuals if v["geometry"] == "mesh" and Path(v["filename"]).suffix.lower()
+                  not in (".stl", ".obj", ".dae")]
+    if unreadable:
+        warnings.append(Diagnostic(file, unreadable[0]["line"], "robot", f"{len(unreadable)} visual mesh file(s) "
+                                   f"andyc view cannot draw (first: {unreadable[0]['filename']!r}); not drawn",
+                                   "convert them to STL, OBJ or DAE (e.g. with meshlab or trimesh)"))
     if writer.odd_inertia:
         odd = sorted(writer.odd_inertia)
         n = len(odd)

@@ -268,7 +268,24 @@ class LinkWriter:
                 material = element.find("material")
                 if material is not None and material.get("name"):
                     ref["material"] = material.get("name")
+                rgba = self.material_rgba(material)
+                if rgba is not None:
+                    ref["rgba"] = rgba
                 self.visuals.append(ref)
+
+    def material_rgba(self, material):
+        """[r, g, b, a] of a visual's <material>: its own <color rgba>, else that of the robot's top-level
+        <material> of its name (as URDF defines them); None without one, or one that is not 4 numbers in 0..1."""
+        if material is None:
+            return None
+        color = material.find("color")
+        if color is None and material.get("name"):
+            named = [m for m in self.reader.root.findall("material") if m.get("name") == material.get("name")]
+            color = named[0].find("color") if named else None
+        rgba = _numbers(color.get("rgba", "")) if color is not None else None
+        if isinstance(rgba, list) and len(rgba) == 4 and all(0.0 <= c <= 1.0 for c in rgba):
+            return rgba
+        return None
 
     def resolve(self, filename: str) -> str:
         """package://PKG/REL and relative names -> an existing file (search paths, the URDF's folder and its

@@ -53,6 +53,7 @@ def derive(spec: Spec) -> SymbolicModel:
         inputs=[s for s, _ in spec.inputs.values()],
         assignments=emit.assignments, M=M, G=G, energy=energy, power=power,
         frame_positions={f.name: kin[f.name].r for f in spec.frames if not f.internal},
+        frame_rotations={f.name: kin[f.name].R for f in spec.frames if not f.internal},
         elements=terms, powers=powers, work_names=work_names, row_work=row_work,
         constraints=constraints, hybrid=hybrid, derive_seconds=time.perf_counter() - start)
 

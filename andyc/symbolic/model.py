@@ -34,6 +34,7 @@ class SymbolicModel:
     energy: sp.Expr           # kinetic + potential
     power: sp.Expr            # power of the non-conservative elements
     frame_positions: dict     # frame name -> 3x1, world (user frames only)
+    frame_rotations: dict     # frame name -> 3x3, own axes -> world (the same frames)
     elements: list            # ElementTerms, per element
     work_names: list          # the work slots the integrator carries (work.py): elements, constraints, 'jumps'
     powers: list              # the power of each element slot (the first of work_names), written after G
