@@ -21,7 +21,7 @@ import numpy as np
 
 from andyc.errors import SimulationError
 from andyc.numerics.status import IDEAL
-from andyc.spec.contacts import flow_of, radices, states_of
+from andyc.spec.modes import flow_of, radices, states_of
 
 @dataclass(frozen=True)
 class CompiledModel:

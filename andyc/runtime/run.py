@@ -13,7 +13,7 @@ import andyc
 from andyc.errors import plural, printable
 from andyc.outputs import write_atomic
 from andyc.runtime.status import drift, largest_residual
-from andyc.spec.contacts import radices
+from andyc.spec.modes import radices
 
 
 @dataclass

@@ -48,6 +48,7 @@ import sympy as sp
 from andyc.spec.expressions import TIME
 from andyc.spec.hybrid import multiplier_symbols, restitution
 from andyc.spec.model import FALLING, RISING, Flow, Jump
+from andyc.spec.modes import flow_of, radices, states_of  # noqa: F401 (part of this module's API)
 from andyc.spec.scope import Scope
 
 IMPACT, LIFTOFF, SLIP, STOP = "impact", "liftoff", "slip", "stop"
@@ -66,28 +67,6 @@ class Contact:
     friction: sp.Expr | None = None     # mu, an expression of parameters; None: frictionless
     stick: str | None = None    # the name of its stick row (slip speed = 0), with friction
     friction_multiplier: str | None = None  # the friction force's name (the stick row's multiplier)
-
-
-def radices(frictional: list) -> list:
-    """The number of states of each contact (4 with friction, 2 without), from a flag per contact."""
-    return [4 if f else 2 for f in frictional]
-
-
-def states_of(flow: int, radix: list) -> list:
-    """Each contact's state in `flow` (the flow index is the states in mixed radix, contact 0 the lowest digit)."""
-    states = []
-    for r in radix:
-        states.append(flow % r)
-        flow //= r
-    return states
-
-
-def flow_of(states: list, radix: list) -> int:
-    flow, place = 0, 1
-    for s, r in zip(states, radix):
-        flow += s * place
-        place *= r
-    return flow
 
 
 def mode_name(states: list, contacts: list) -> str:
