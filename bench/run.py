@@ -21,7 +21,8 @@ measured in this one run.
 
     python bench/run.py                      all sections (about 10 minutes)
     python bench/run.py --only accuracy      one section: chains, models, swing_bar, constraints, hybrid, urdf,
-                                             accuracy (docs/BENCHMARKS.md then holds only what ran)
+                                             large, accuracy (docs/BENCHMARKS.md then holds only what ran)
+    python bench/large.py --large            issue 27's large sizes (chain n = 32, g1, N-four-bar N = 10)
 """
 
 from __future__ import annotations
@@ -401,7 +402,7 @@ def urdf_benchmark(tmp: Path) -> None:
           "pin.aba less the 1-joint call")
 
 
-SECTIONS = ("chains", "models", "swing_bar", "constraints", "hybrid", "contacts", "urdf", "accuracy")
+SECTIONS = ("chains", "models", "swing_bar", "constraints", "hybrid", "contacts", "urdf", "large", "accuracy")
 
 
 class Tee:
@@ -470,6 +471,10 @@ def main(argv=None):
                 contacts_benchmark(tmp)
             if "urdf" in only:
                 urdf_benchmark(tmp)
+            if "large" in only:             # issue 27; its large sizes: python bench/large.py --large
+                import large
+
+                large.run()
             accuracy = accuracy_benchmark(tmp) if "accuracy" in only else None
             if kane is not None:
                 chains_benchmark(tmp, args.max_bodies, kane.result())
