@@ -1,7 +1,8 @@
 """Issue 27: large models. Forward dynamics per call on the planar chain (andyc's compiled function in a
 compiled loop, `pin.aba` and MuJoCo's `mj_forward` from Python), RK4 steps/s against MuJoCo's RK4 C loop
 (`mj_step` with nstep), the URDF robots solo12 and g1, and the IFToMM A02 N-four-bar (us per projection
-step, build time by stage, B0 against the reduced exact motion; bench/large_models.py).
+step, build time by stage, B0 against the reduced exact motion; bench/large_models.py); and the factor +
+solve kernels alone, dense against the tree's LTDL, which the choice of formulation rests on.
 
 On a loaded machine absolute times move: every figure comes from `--rounds` alternated rounds (andyc, then
 each peer, then andyc again ...), printed as min .. max, and ratios are taken within a round.
@@ -20,9 +21,12 @@ import time
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 import andyc
 from andyc.independent.robots import robots_dir
+from andyc.numerics.linalg import cholesky, ltdl, ltdl_solve, solve_lower, solve_upper
+from andyc.symbolic.formulation import dense_operations, ltdl_operations, tree_of
 
 from large_models import (nfourbar_yaml, planar_chain_mjcf, planar_chain_pinocchio, planar_chain_yaml,
                           reduced_b0)
@@ -222,6 +226,75 @@ def fourbar_section(tmp: Path, sizes, rounds: int, t_end: float = 20.0, dt: floa
               f"{t.get('compile', 0):.1f}); {_spread(walls)} us per step; B0 error {worst:.1e} m", flush=True)
 
 
+@njit(cache=False)
+def _dense_loop(M0, b0, M, b, n, reps):
+    acc = 0.0
+    for _ in range(reps):
+        for i in range(n):              # (element by element: a slice assignment slows the kernels after it)
+            for j in range(n):
+                M[i, j] = M0[i, j]
+            b[i] = b0[i]
+        cholesky(M, n, 0.0)
+        solve_lower(M, b, n)
+        solve_upper(M, b, n)
+        acc += b[0]
+    return acc
+
+
+@njit(cache=False)
+def _tree_loop(M0, b0, M, b, parent, order, n, reps):
+    acc = 0.0
+    for _ in range(reps):
+        for i in range(n):              # (element by element: a slice assignment slows the kernels after it)
+            for j in range(n):
+                M[i, j] = M0[i, j]
+            b[i] = b0[i]
+        ltdl(M, parent, order, n, 0.0)
+        ltdl_solve(M, parent, order, b, n)
+        acc += b[0]
+    return acc
+
+
+def _limbs(base: int, limbs) -> list:
+    """Parents of a floating base's `base` speeds (a chain) with limbs of the given lengths on its last."""
+    parent = list(range(-1, base - 1))
+    for length in limbs:
+        start = len(parent)
+        parent += [base - 1] + list(range(start, start + length - 1))
+    return parent
+
+
+KERNEL_TREES = {**{f"chain {n}": list(range(-1, n - 1)) for n in (2, 3, 4, 8, 16, 32)},
+                "quadruped 6 + 4 x 3": _limbs(6, [3, 3, 3, 3]), "humanoid 6 + 3 + 2 x 6 + 2 x 7": _limbs(6, [3, 6, 6, 7, 7])}
+
+
+def kernel_section(rounds: int) -> None:
+    """What formulation.LTDL_GAIN rests on: factor + solve of M dv/dt = G alone, dense against the tree's, on
+    random matrices of each tree's pattern (the copy of M into the scratch included in both)."""
+    section("factor + solve alone: dense Cholesky against the tree's LTDL (andyc/symbolic/formulation.py)")
+    rng = np.random.default_rng(0)
+    for name, parent in KERNEL_TREES.items():
+        n = len(parent)
+        L = np.eye(n)
+        for k in range(n):
+            j = parent[k]
+            while j >= 0:
+                L[k, j] = rng.uniform(-1, 1)
+                j = parent[j]
+        M0, b0 = L.T @ np.diag(rng.uniform(0.5, 2.0, n)) @ L, rng.normal(size=n)
+        tree, order = (np.array(a, dtype=np.int64) for a in tree_of([set(np.flatnonzero(M0[i])) - {i}
+                                                                     for i in range(n)]))
+        M, b = M0.copy(), b0.copy()
+        reps = 200_000 if n < 10 else 20_000
+        timers = {"dense": lambda r: _dense_loop(M0, b0, M, b, n, r),
+                  "ltdl": lambda r: _tree_loop(M0, b0, M, b, tree, order, n, r)}
+        times = compare({k: (lambda f: lambda r: _per_call(lambda: f(reps), 1) / reps)(f) for k, f in timers.items()},
+                        rounds, 1)
+        ops = ltdl_operations(list(tree)) / dense_operations(n)
+        print(f"{name:>32}: operations ltdl/dense {ops:.2f}; time ltdl/dense {_spread(_ratios(times, 'ltdl', 'dense'))}"
+              f" (dense {_spread(times['dense'])} us)", flush=True)
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--large", action="store_true", help="also the large sizes (minutes of Numba compile)")
@@ -229,15 +302,18 @@ def main(argv=None) -> None:
     parser.add_argument("--fourbar", type=int, nargs="*", help="N-four-bar sizes (default 1 2 5)")
     parser.add_argument("--robot", choices=tuple(ROBOTS), nargs="*", help="URDF robots (default solo12)")
     parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--no-kernels", action="store_true", help="skip the factor + solve comparison")
     args = parser.parse_args(argv)
     large = args.large
     chains = args.chain if args.chain is not None else CHAINS + (CHAINS_LARGE if large else ())
     fourbars = args.fourbar if args.fourbar is not None else FOURBARS + (FOURBARS_LARGE if large else ())
     robots = args.robot if args.robot is not None else ("solo12", "g1") if large else ("solo12",)
-    run(chains, robots, fourbars, args.rounds)
+    run(chains, robots, fourbars, args.rounds, not args.no_kernels)
 
 
-def run(chains=CHAINS, robots=("solo12",), fourbars=FOURBARS, rounds: int = 5) -> None:
+def run(chains=CHAINS, robots=("solo12",), fourbars=FOURBARS, rounds: int = 5, kernels: bool = True) -> None:
+    if kernels:
+        kernel_section(rounds)
     with tempfile.TemporaryDirectory() as tmpdir:
         tmp = Path(tmpdir)
         if chains:

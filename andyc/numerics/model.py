@@ -46,13 +46,14 @@ import numpy as np
 from .compiler import NUMBA, cfunc, jit
 from .layout import VECTORS, scratch_layout
 
-SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj")
+SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj", "nt")   # nt: speeds under LTDL (or 0)
 ROWS = ("s_a", "s_c", "s_w") + tuple(f"s_{name}" for name in VECTORS)  # the first row of each part of S
 TABLES = ("quaternions",                            # index in x of each quaternion signal's w
           "flow_rows", "flow_nrows", "flow_nhrows",  # active rows of each flow (holonomic first), then -1
           "impact_rows", "impact_nrows",             # rows taking each jump's impact
           "jump_source", "jump_target", "jump_direction", "jump_priority", "jump_order", "jump_multipliers",
-          "jump_contact")                            # the contact whose impact jump k is, or -1
+          "jump_contact",                            # the contact whose impact jump k is, or -1
+          "mass_parent", "mass_order")               # the tree of M: parent of each speed; children first
 LEAF_NAMES = ("dynamics", "dynamics_constraints", "constraints_into", "signal_rates", "energy", "power",
               "frame_positions", "constraint_gains", "restitution", "guard", "guard_rate", "enabled", "reset",
               "flow_inputs", "closed_form")
@@ -191,20 +192,22 @@ else:
 
 @jit
 def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, impact_rows, impact_nrows, jump_source,
-           jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact, leaves):
+           jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact, mass_parent,
+           mass_order, leaves):
     (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_positions,
      constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form) = leaves
     return Model(sizes[0], sizes[1], sizes[2], sizes[3], sizes[4], sizes[5], sizes[6], sizes[7], sizes[8], sizes[9],
+                 sizes[10],
                  rows[0], rows[1], rows[2], rows[3], rows[4], rows[5], rows[6], rows[7], rows[8], rows[9], rows[10],
                  rows[11], rows[12],
                  borrowed(quaternions), borrowed(flow_rows), borrowed(flow_nrows), borrowed(flow_nhrows),
                  borrowed(impact_rows), borrowed(impact_nrows), borrowed(jump_source), borrowed(jump_target),
                  borrowed(jump_direction), borrowed(jump_priority), borrowed(jump_order), borrowed(jump_multipliers),
-                 borrowed(jump_contact),
+                 borrowed(jump_contact), borrowed(mass_parent), borrowed(mass_order),
                  dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_positions,
                  constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form,
                  (quaternions, flow_rows, flow_nrows, flow_nhrows, impact_rows, impact_nrows, jump_source, jump_target,
-                  jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact))
+                  jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact, mass_parent, mass_order))
 
 
 def sizes_of(equations) -> dict:

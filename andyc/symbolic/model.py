@@ -9,6 +9,7 @@ import sympy as sp
 from andyc.errors import plural
 from andyc.spec.model import Spec
 from andyc.symbolic.constraints import ConstraintTerms
+from andyc.symbolic.formulation import ForwardDynamics
 from andyc.symbolic.hybrid import HybridTerms
 
 
@@ -37,6 +38,7 @@ class SymbolicModel:
     elements: list            # ElementTerms, per element
     constraints: ConstraintTerms  # phi, c = A v + b, kappa (eq. 10-12); empty without constraints
     hybrid: HybridTerms       # flows, jumps (one flow, no jumps without a hybrid section)
+    forward: ForwardDynamics | None = None  # how dv/dt = M^-1 G is solved (formulation.py); None: dense
     derive_seconds: float = 0.0
 
     @property
