@@ -172,6 +172,57 @@ def rk4_ratios(model, mj, rounds: int, t_end: float = 5.0, dt: float = 1e-3) -> 
     return out
 
 
+def formulation_loops(model) -> dict:
+    """name -> timer (us per evaluation) of M dv/dt = G solved both ways in the same build: the generated M and G
+    (the leaf `dynamics`) then the dense Cholesky, or the tree's LTDL (when M has a tree): the formulation's
+    gain alone, A/B in one process."""
+    numerics = model.numerics
+    call, borrowed, linalg = numerics.model.call, numerics.model.borrowed, numerics.linalg
+    cholesky_, lower, upper = linalg.cholesky, linalg.solve_lower, linalg.solve_upper
+    ltdl_, ltdl_solve_ = linalg.ltdl, linalg.ltdl_solve
+    parent, order = model.module.MASS_PARENT, model.module.MASS_ORDER
+
+    @njit(cache=False)
+    def dense(n, m, w, x, u, p, d):
+        x, u, p, d, M, G = borrowed(x), borrowed(u), borrowed(p), borrowed(d), w.M, w.G
+        acc = 0.0
+        for _ in range(n):
+            x[0] += 1e-12
+            call(m.dynamics, (0.0, x, u, p, d, M, G))
+            cholesky_(M, m.nv, 0.0)
+            lower(M, G, m.nv)
+            upper(M, G, m.nv)
+            acc += G[0]
+        return acc
+
+    @njit(cache=False)
+    def tree(n, m, w, x, u, p, d, parent, order):
+        x, u, p, d, M, G = borrowed(x), borrowed(u), borrowed(p), borrowed(d), w.M, w.G
+        acc = 0.0
+        for _ in range(n):
+            x[0] += 1e-12
+            call(m.dynamics, (0.0, x, u, p, d, M, G))
+            ltdl_(M, parent, order, m.nv, 0.0)
+            ltdl_solve_(M, parent, order, G, m.nv)
+            acc += G[0]
+        return acc
+
+    (m, w, x, u, p, d, _), keep = _rhs_arguments(model)
+
+    def timed(f, *extra):
+        def run(n):
+            tic = time.perf_counter()
+            f(n, m, w, x, u, p, d, *extra)
+            return 1e6 * (time.perf_counter() - tic) / n
+        run.keep = keep
+        return run
+
+    out = {"dense": timed(dense)}
+    if len(order):
+        out["ltdl"] = timed(tree, parent, order)
+    return out
+
+
 def robot_section(tmp: Path, names, rounds: int) -> None:
     """Floating-base URDF robots: andyc against pin.aba (both from the same URDF, free-flyer base)."""
     section("URDF robots on a floating base: forward dynamics per call against pin.aba (issue 27)")
@@ -193,12 +244,16 @@ def robot_section(tmp: Path, names, rounds: int) -> None:
         build = time.perf_counter() - tic
         pmodel = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer())
         q, v = pin.neutral(pmodel), np.zeros(pmodel.nv)       # the timing does not depend on the state's values
-        times = compare({"andyc": AndycForward(model), "pin": pin_forward(pmodel, q, v)}, rounds, 20000)
+        timers = {"andyc": AndycForward(model), "pin": pin_forward(pmodel, q, v), **formulation_loops(model)}
+        times = compare(timers, rounds, 20000)
         t = result.timings
         print(f"{name}: nv {pmodel.nv}, build {build:.1f} s (derive {t.get('derive', 0):.1f}, generate "
-              f"{t.get('generate', 0):.1f}, compile {t.get('compile', 0):.1f}); andyc {_spread(times['andyc'])} us, "
-              f"pin.aba {_spread(times['pin'])} us, andyc/pin.aba {_spread(_ratios(times, 'andyc', 'pin'))}",
-              flush=True)
+              f"{t.get('generate', 0):.1f}, compile {t.get('compile', 0):.1f}); formulation {model.module.FORMULATION}"
+              f" {model.module.FORWARD_OPERATIONS}", flush=True)
+        print(f"  andyc rhs {_spread(times['andyc'])} us, pin.aba {_spread(times['pin'])} us, andyc/pin.aba "
+              f"{_spread(_ratios(times, 'andyc', 'pin'))}; M, G + dense {_spread(times['dense'])} us"
+              + (f", M, G + ltdl {_spread(times['ltdl'])} us, ltdl/dense {_spread(_ratios(times, 'ltdl', 'dense'))}"
+                 if "ltdl" in times else ""), flush=True)
 
 
 def fourbar_section(tmp: Path, sizes, rounds: int, t_end: float = 20.0, dt: float = 1e-3) -> None:
