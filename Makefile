@@ -28,6 +28,7 @@ test: $(STAMP)
 	$(ANDYC) test models/ --build-dir build/tests
 
 bench: $(STAMP)
+	$(PY) -m pip install --quiet --disable-pip-version-check -e '.[test,bench]'
 	$(PY) bench/run.py
 	$(PY) bench/latency.py
 	$(PY) bench/ci_latency.py

@@ -21,7 +21,9 @@ measured in this one run.
 
     python bench/run.py                      all sections (about 10 minutes)
     python bench/run.py --only accuracy      one section: chains, models, swing_bar, constraints, hybrid,
-                                             contacts, cycles, urdf, accuracy (docs/BENCHMARKS.md then holds only what ran)
+                                             contacts, cycles, urdf, large, accuracy (docs/BENCHMARKS.md then holds
+                                             only what ran)
+    python bench/large.py --large            issue 27's large sizes (chain n = 32, g1, N-four-bar N = 10)
 """
 
 from __future__ import annotations
@@ -401,7 +403,7 @@ def urdf_benchmark(tmp: Path) -> None:
           "pin.aba less the 1-joint call")
 
 
-SECTIONS = ("chains", "models", "swing_bar", "constraints", "hybrid", "contacts", "cycles", "urdf", "accuracy")
+SECTIONS = ("chains", "models", "swing_bar", "constraints", "hybrid", "contacts", "cycles", "urdf", "large", "accuracy")
 
 
 class Tee:
@@ -476,6 +478,10 @@ def main(argv=None):
                 cycles_benchmark(tmp)
             if "urdf" in only:
                 urdf_benchmark(tmp)
+            if "large" in only:             # issue 27; its large sizes: python bench/large.py --large
+                import large
+
+                large.run()
             accuracy = accuracy_benchmark(tmp) if "accuracy" in only else None
             if kane is not None:
                 chains_benchmark(tmp, args.max_bodies, kane.result())

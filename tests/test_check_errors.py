@@ -432,8 +432,11 @@ def test_cli_check_models_prints_a_summary(tmp_path):
     result = andyc_cli("check", *SHIPPED, cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert "Traceback" not in result.stderr
-    summaries = result.stdout.strip().splitlines()
-    assert len(summaries) == len(SHIPPED)          # one paragraph (a single line) per model
+    lines = result.stdout.strip().splitlines()
+    summaries = [line for line in lines if not line.startswith(" ")]
+    assert len(summaries) == len(SHIPPED)          # one paragraph per model: its summary line, then indented ones
+    details = [line for line in lines if line.startswith(" ")]
+    assert len(details) == len(SHIPPED) and all(d.startswith("  forward dynamics: ") for d in details)
     for model, summary in zip(SHIPPED, summaries):
         assert summary.startswith(f"{model}: model '{model.stem}' is valid")
         for word in ("state", "bod", "frame"):

@@ -42,6 +42,7 @@ def check(files, fmt):
             from andyc.pipeline import reduction_report
 
             summary += "\n" + reduction_report(file, spec, model)
+        summary += "\n  " + model.forward.describe(model.constraints.nc > 0)
         report.say(summary)
         report.results.append({"file": file, "ok": True, "summary": summary})
     if problems:

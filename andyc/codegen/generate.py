@@ -30,6 +30,7 @@ from andyc.codegen.buildfiles import (PACKAGE, BuildResult, build_key, equations
 from andyc.codegen.leaves import leaves, state_names
 from andyc.codegen.printer import to_code
 from andyc.spec.display import display
+from andyc.symbolic.formulation import DENSE, LTDL, choose, pattern_of, tree_of
 from andyc.symbolic.model import SymbolicModel
 
 TEMPLATES = PACKAGE / "templates"
@@ -83,6 +84,15 @@ def _slip_tables(model: SymbolicModel) -> dict:
     return {"flow_slip": slip, "flow_slip_mu": slip_mu}
 
 
+def _forward_context(model: SymbolicModel) -> dict:
+    """The tree of M (when it has one) and the formulation the runtime uses (andyc.symbolic.formulation)."""
+    fwd = model.forward or choose(model.M)
+    tree = tree_of(pattern_of(model.M)) if fwd.chosen == DENSE else (fwd.parent, fwd.order)
+    parent, order = tree if tree is not None else ([], [])
+    return {"formulation": fwd.chosen, "forward_operations": fwd.operations, "mass_parent": parent,
+            "mass_order": order, "nt": len(order) if fwd.chosen == LTDL else 0}
+
+
 def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
     """The text of <name>_equations.py (the model's leaves, everything of it that Numba compiles: it depends
     only on what the equations depend on) and the operation count of each leaf."""
@@ -111,6 +121,7 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         "discrete": [x.name for x in spec.discrete],
         "has_closed_form": bool(spec.closed_form),
         **_hybrid_context(model),
+        **_forward_context(model),
         "leaves": found.functions,
     }
     return _environment().get_template("equations.py.j2").render(**context), found.operations

@@ -11,7 +11,8 @@ import math
 import numpy as np
 
 from .compiler import jit
-from .linalg import add_rows_transposed, cholesky, correction, solve_gram, solve_lower, solve_upper, whiten
+from .linalg import (add_rows_transposed, cholesky, correction, ltdl, ltdl_solve, solve_gram, solve_lower, solve_upper,
+                     whiten)
 from .model import call
 from .status import BAUMGARTE, DEPENDENT, IDEAL, OK, PAINLEVE, RANK_TOL, SINGULAR_MASS
 
@@ -30,6 +31,11 @@ def rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode):
         if status == OK:
             status = constraint_force(model, p, flow, mode, M, G, S)
             solve_upper(M, G, nv)
+    elif model.nt > 0:                  # a = M^-1 G along the tree of M (LTDL, Featherstone 2005)
+        call(model.dynamics, (t, x, u, p, d, M, G))
+        status = OK if ltdl(M, model.mass_parent, model.mass_order, nv, 0.0) else SINGULAR_MASS
+        if status == OK:
+            ltdl_solve(M, model.mass_parent, model.mass_order, G, nv)
     else:
         call(model.dynamics, (t, x, u, p, d, M, G))
         status = OK if cholesky(M, nv, 0.0) else SINGULAR_MASS

@@ -1,4 +1,5 @@
-"""Cholesky, triangular solves and the Gram solves of the constrained dynamics (Braun & Goldfarb, Part II).
+"""Cholesky, triangular solves and the Gram solves of the constrained dynamics (Braun & Goldfarb, Part II);
+the tree's sparse LTDL factorization of M (Featherstone 2005; andyc/symbolic/formulation.py).
 
 The Gram solves work in the scratch S of layout.py, at the rows the compiled Model (`model`) gives.
 Sizes are arguments, the same compiled code serving every model. For the sizes of most models
@@ -64,6 +65,54 @@ def cholesky(M, n, tol):
     if n == 7: return _cholesky(M, 7, tol)      # noqa: E701
     if n == 8: return _cholesky(M, 8, tol)      # noqa: E701
     return _cholesky(M, n, tol)
+
+
+@jit
+def ltdl(M, parent, order, n, tol):
+    """M[:n, :n] <- its LTDL factors along the tree `parent` (M = L^T D L; Featherstone 2005, Table 1), in place:
+    L_ki at [k, i] for i an ancestor of k (unit diagonal, not stored), 1 / D_kk on the diagonal. `order`
+    lists every speed before its parent. M's entries outside the tree's pattern (neither an ancestor nor a
+    descendant) are neither read nor written: they are zero, and stay so in the factors (no fill-in).
+    Returns False when a pivot D_kk is not above tol * the largest diagonal entry."""
+    scale = 0.0
+    for j in range(n):
+        scale = max(scale, M[j, j])
+    for kk in range(n):
+        k = order[kk]
+        d = M[k, k]                     # final: every descendant of k has been eliminated
+        if not d > tol * scale:
+            return False
+        r = 1.0 / d
+        M[k, k] = r
+        i = parent[k]
+        while i >= 0:
+            a = M[k, i] * r
+            j = i
+            while j >= 0:               # j = i, then i's ancestors: M_ij -= L_ki M_kj
+                M[i, j] -= a * M[k, j]
+                j = parent[j]
+            M[k, i] = a
+            i = parent[i]
+    return True
+
+
+@jit
+def ltdl_solve(M, parent, order, b, n):
+    """b[:n] <- M^-1 b = L^-1 D^-1 L^-T b, M factored by ltdl (Featherstone 2005, eq. 10-12)."""
+    for kk in range(n):                 # L^T y = b: descendants first
+        k = order[kk]
+        i = parent[k]
+        while i >= 0:
+            b[i] -= M[k, i] * b[k]
+            i = parent[i]
+    for k in range(n):
+        b[k] *= M[k, k]
+    for kk in range(n - 1, -1, -1):     # L x = y: ancestors first
+        k = order[kk]
+        i = parent[k]
+        while i >= 0:
+            b[k] -= M[k, i] * b[i]
+            i = parent[i]
 
 
 @jit(inline="always")

@@ -49,7 +49,7 @@ import numpy as np
 from .compiler import NUMBA, cfunc, jit
 from .layout import VECTORS, scratch_layout
 
-SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj", "nw")
+SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj", "nw", "nt")   # nt: speeds under LTDL (or 0)
 ROWS = ("s_a", "s_c", "s_w") + tuple(f"s_{name}" for name in VECTORS)  # the first row of each part of S
 TABLES = ("quaternions",                            # index in x of each quaternion signal's w
           "flow_rows", "flow_nrows", "flow_nhrows",  # active rows of each flow (holonomic first), then -1
@@ -57,7 +57,8 @@ TABLES = ("quaternions",                            # index in x of each quatern
           "impact_rows", "impact_nrows",             # rows taking each jump's impact
           "jump_source", "jump_target", "jump_direction", "jump_priority", "jump_order", "jump_multipliers",
           "jump_contact",                            # the contact whose impact jump k is, or -1
-          "row_work")                                # the work slot of each row's constraint power, or -1
+          "row_work",                                # the work slot of each row's constraint power, or -1
+          "mass_parent", "mass_order")               # the tree of M: parent of each speed; children first
 LEAF_NAMES = ("dynamics", "dynamics_constraints", "constraints_into", "signal_rates", "energy", "power",
               "frame_poses", "constraint_gains", "restitution", "guard", "guard_rate", "enabled", "reset",
               "flow_inputs", "closed_form")
@@ -197,23 +198,23 @@ else:
 @jit
 def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, impact_rows,
            impact_nrows, jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers,
-           jump_contact, row_work, leaves):
+           jump_contact, row_work, mass_parent, mass_order, leaves):
     (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
      constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form) = leaves
     return Model(sizes[0], sizes[1], sizes[2], sizes[3], sizes[4], sizes[5], sizes[6], sizes[7], sizes[8], sizes[9],
-                 sizes[10],
+                 sizes[10], sizes[11],
                  rows[0], rows[1], rows[2], rows[3], rows[4], rows[5], rows[6], rows[7], rows[8], rows[9], rows[10],
                  rows[11], rows[12],
                  borrowed(quaternions), borrowed(flow_rows), borrowed(flow_nrows), borrowed(flow_nhrows),
                  borrowed(flow_slip), borrowed(flow_slip_mu),
                  borrowed(impact_rows), borrowed(impact_nrows), borrowed(jump_source), borrowed(jump_target),
                  borrowed(jump_direction), borrowed(jump_priority), borrowed(jump_order), borrowed(jump_multipliers),
-                 borrowed(jump_contact), borrowed(row_work),
+                 borrowed(jump_contact), borrowed(row_work), borrowed(mass_parent), borrowed(mass_order),
                  dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
                  constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form,
                  (quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, impact_rows, impact_nrows,
                   jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact,
-                  row_work))
+                  row_work, mass_parent, mass_order))
 
 
 def sizes_of(equations) -> dict:

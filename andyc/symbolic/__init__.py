@@ -7,6 +7,7 @@
     reduce.py       bodies fixed to one moving frame merged into one
     work.py         the power of every element that does work (the energy balance E - E0 - W)
     emitter.py      the ordered intermediate assignments;  model.py: SymbolicModel and its summary
+    formulation.py  the forward dynamics each model gets: dense Cholesky of M, or LTDL along its tree
     linearize.py    A, B by exact forward-mode derivatives;  eom.py: the equations written out for reading
 """
 
@@ -19,6 +20,7 @@ from andyc.spec.model import Spec
 from andyc.symbolic.constraints import FrameQuantities, constraint_terms
 from andyc.symbolic.dynamics import assemble, element_terms
 from andyc.symbolic.emitter import Emitter
+from andyc.symbolic.formulation import choose
 from andyc.symbolic.hybrid import hybrid_terms
 from andyc.symbolic.kinematics import frame_kinematics
 from andyc.symbolic.model import SymbolicModel
@@ -31,7 +33,8 @@ def derive(spec: Spec) -> SymbolicModel:
 
     Stages: frame kinematics (eq. 1-3) -> element terms (eq. 5-7) -> sums (eq. 8)
     -> constraint residuals, Jacobian and velocity-product term (eq. 10-12)
-    -> the hybrid automaton's guards, resets and impact rows (eq. 16-19).
+    -> the hybrid automaton's guards, resets and impact rows (eq. 16-19)
+    -> the forward dynamics' formulation, from the operation counts (formulation.py).
     """
     start = time.perf_counter()
     if spec.reduce:
@@ -55,7 +58,7 @@ def derive(spec: Spec) -> SymbolicModel:
         frame_positions={f.name: kin[f.name].r for f in spec.frames if not f.internal},
         frame_rotations={f.name: kin[f.name].R for f in spec.frames if not f.internal},
         elements=terms, powers=powers, work_names=work_names, row_work=row_work,
-        constraints=constraints, hybrid=hybrid, derive_seconds=time.perf_counter() - start)
+        constraints=constraints, hybrid=hybrid, forward=choose(M), derive_seconds=time.perf_counter() - start)
 
 
 __all__ = ["derive", "SymbolicModel"]

@@ -9,6 +9,7 @@ import sympy as sp
 from andyc.errors import plural
 from andyc.spec.model import Spec
 from andyc.symbolic.constraints import ConstraintTerms
+from andyc.symbolic.formulation import ForwardDynamics
 from andyc.symbolic.hybrid import HybridTerms
 
 
@@ -41,6 +42,7 @@ class SymbolicModel:
     row_work: list            # per velocity-level row: the slot of its constraint's power, or -1
     constraints: ConstraintTerms  # phi, c = A v + b, kappa (eq. 10-12); empty without constraints
     hybrid: HybridTerms       # flows, jumps (one flow, no jumps without a hybrid section)
+    forward: ForwardDynamics | None = None  # how dv/dt = M^-1 G is solved (formulation.py); None: dense
     derive_seconds: float = 0.0
 
     @property

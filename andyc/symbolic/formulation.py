@@ -1,0 +1,129 @@
+"""Which forward dynamics a model gets: the dense factorization of M, or the tree's sparse one.
+
+Forward dynamics solves M dv/dt = G (ANDY eq. 8). The dense path factors all of M (Cholesky,
+n^3 / 6 multiply-adds). In a kinematic tree, M_ij = 0 unless speed i's joint is an ancestor or a
+descendant of speed j's: Featherstone's LTDL factorization M = L^T D L ("Efficient factorization of
+the joint-space inertia matrix for branched kinematic trees", IJRR 24(6), 2005, Table 1 and eq. 8-12)
+then keeps that sparsity exactly (no fill-in) and costs sum_k d_k^2 for depths d_k, which on a
+branched tree (a quadruped's or a humanoid's limbs on a floating base) is far below n^3 / 6; on an
+unbranched chain the two are the same work.
+
+The tree is read off M's symbolic zero pattern, so it needs no numbering convention (andyc puts a
+floating base's six speeds last): a speed whose closed neighbourhood {j : M_ij != 0} contains
+another's is its ancestor (in a tree, N[d] is a subset of N[a] for a an ancestor of d). Speeds sorted
+by decreasing neighbourhood, ties by index, give an order with ancestors first; the parent lambda(i)
+is the latest of i's neighbours before it. The factorization is exact (no fill-in) when every
+neighbour of i before it lies on i's chain i, lambda(i), lambda(lambda(i)), ... (then eliminating
+a speed only updates entries between its own ancestors); otherwise the dense path is used.
+
+The operation counts are those of the numerical kernels (andyc/numerics/linalg.py: cholesky with
+solve_lower and solve_upper, ltdl with ltdl_solve), a multiplication, an addition, a division or a
+square root counting one: the same for every state, from M's pattern alone. Both run after the same
+generated M and G (the leaf `dynamics`), whose count is the model's OPERATIONS["dynamics"].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+DENSE, LTDL = "dense", "ltdl"
+FORMULATIONS = (DENSE, LTDL)
+LTDL_GAIN = 0.6     # the tree factorization is chosen when it needs at most this fraction of the dense
+                    # operations: the dense kernels run with sizes as constants up to n = 8 (unrolled) and
+                    # stream through rows, the tree's reads its parents from a table. Measured (bench/large.py,
+                    # kernels): on chains (0.69 .. 0.96 of the operations) the tree's is 1.0 .. 2x slower,
+                    # on a quadruped's tree (0.44) and a humanoid's (0.22) 0.3 .. 0.6x the time.
+
+
+@dataclass
+class ForwardDynamics:
+    """The chosen formulation, the tree (parent of each speed, -1 for a root; `order`: every speed before
+    its parent) when M has one, and the operation count of each alternative (None: not applicable)."""
+    chosen: str
+    parent: list = field(default_factory=list)
+    order: list = field(default_factory=list)
+    operations: dict = field(default_factory=dict)
+
+    def describe(self, rows: bool = False) -> str:
+        """One line for `andyc check`; `rows`: the model has constraint rows (their flows stay dense)."""
+        ops = ", ".join(f"{name} {'n/a (M has no tree pattern)' if n is None else n}"
+                        for name, n in self.operations.items())
+        what = ("sparse LTDL along the tree of M (Featherstone 2005)" if self.chosen == LTDL
+                else "dense Cholesky of M")
+        depth = f"; tree depth {max(_depths(self.parent)) + 1}" if self.parent else ""
+        note = "; flows with constraint rows: dense (the Gram solves and the projection use its factor)" if rows else ""
+        return f"forward dynamics: {what}{depth}; factor + solve operations: {ops}{note}"
+
+
+def _depths(parent: list) -> list:
+    out = []
+    for i in range(len(parent)):
+        d, j = 0, parent[i]
+        while j >= 0:
+            d, j = d + 1, parent[j]
+        out.append(d)
+    return out
+
+
+def _chain(parent: list, i: int) -> list:
+    """i's ancestors, nearest first."""
+    out, j = [], parent[i]
+    while j >= 0:
+        out.append(j)
+        j = parent[j]
+    return out
+
+
+def tree_of(pattern: list[set]) -> tuple[list, list] | None:
+    """(parent, order) of the tree of a symmetric pattern (pattern[i]: the j != i with M_ij != 0), or None
+    when eliminating along any tree read from it would fill in (module docstring)."""
+    n = len(pattern)
+    rank = sorted(range(n), key=lambda i: (-len(pattern[i]), i))        # ancestors first
+    position = {i: k for k, i in enumerate(rank)}
+    parent = [-1] * n
+    for i in range(n):
+        before = [j for j in pattern[i] if position[j] < position[i]]
+        if before:
+            parent[i] = max(before, key=position.get)
+    for i in range(n):
+        chain = set(_chain(parent, i))
+        if any(position[j] < position[i] and j not in chain for j in pattern[i]):
+            return None
+    return parent, rank[::-1]
+
+
+def dense_operations(n: int) -> int:
+    """Operations of cholesky(M, n) + solve_lower + solve_upper (linalg.py)."""
+    factor = sum(2 * j + 1 + (n - 1 - j) * (2 * j + 1) for j in range(n)) + n + n * (n - 1) // 2
+    return factor + 2 * n * n
+
+
+def ltdl_operations(parent: list) -> int:
+    """Operations of ltdl + ltdl_solve (linalg.py) along the tree `parent`."""
+    depth = _depths(parent)
+    factor = sum(1 + sum(1 + 2 * (depth[i] + 1) for i in _chain(parent, k)) for k in range(len(parent)))
+    return factor + 4 * sum(depth) + len(parent)
+
+
+def pattern_of(M: sp.Matrix) -> list[set]:
+    n = M.rows
+    return [{j for j in range(n) if j != i and (M[i, j] != 0 or M[j, i] != 0)} for i in range(n)]
+
+
+def choose(M: sp.Matrix, force: str | None = None) -> ForwardDynamics:
+    """The forward dynamics of M dv/dt = G: the tree's LTDL when M has a tree pattern and it needs at most
+    LTDL_GAIN of the dense operations, else dense; `force` (DENSE or LTDL) overrides the counts (LTDL still
+    needs the pattern: ValueError without)."""
+    n = M.rows
+    tree = tree_of(pattern_of(M))
+    ops = {DENSE: dense_operations(n), LTDL: None if tree is None else ltdl_operations(tree[0])}
+    if force == LTDL and tree is None:
+        raise ValueError("M has no tree pattern: the LTDL factorization would fill in")
+    if force is not None:
+        chosen = force
+    else:
+        chosen = LTDL if tree is not None and ops[LTDL] <= LTDL_GAIN * ops[DENSE] else DENSE
+    parent, order = tree if tree is not None and chosen == LTDL else ([], [])
+    return ForwardDynamics(chosen, parent, order, ops)
