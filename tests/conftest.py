@@ -4,6 +4,7 @@ compiles once, not once per worker and run); other models into a temporary folde
 numerics every build shares compile once into andyc's cache (ANDYC_CACHE_DIR), as for any user, so that
 `make demo` after `make test` finds them."""
 
+import os
 from pathlib import Path
 
 import pytest
@@ -42,12 +43,17 @@ def compiled(build_dir, shipped_build):
 
 
 @pytest.fixture(scope="session")
-def panda_arm(shipped_build, tmp_path_factory):
+def panda_arm(shipped_build):
     """example-robot-data's panda with its fingers locked (as tests/test_reduce.py reads it), compiled into the
     shipped models' build folder: its build is reused by meaning across runs (a fresh build takes a minute)."""
     from tests.support import ROBOTS_DIR
 
-    source = tmp_path_factory.mktemp("panda") / "panda_arm.yaml"
-    source.write_text(f"name: panda_arm\nurdf:\n  file: {ROBOTS_DIR / 'panda_description/urdf/panda.urdf'}\n"
-                      "  lock: {panda_finger_joint1: 0.02}\n")
+    # (beside the builds, at one path: a build keeps the model file it came from, and refuses another of its name)
+    source = Path(shipped_build) / "panda_arm.yaml"
+    text = (f"name: panda_arm\nurdf:\n  file: {ROBOTS_DIR / 'panda_description/urdf/panda.urdf'}\n"
+            "  lock: {panda_finger_joint1: 0.02}\n")
+    if not source.exists() or source.read_text() != text:
+        partial = source.with_name(f"panda_arm.{os.getpid()}.tmp")      # whole, for the other worker too
+        partial.write_text(text)
+        os.replace(partial, source)
     return andyc.compile_model(source, shipped_build)[0]

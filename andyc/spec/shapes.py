@@ -16,6 +16,7 @@ sits on the body's frame. The shapes travel in DISPLAY (andyc.spec.display) into
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 from andyc.spec.frames import AXES
@@ -95,8 +96,14 @@ def mesh_file(name: str, where, scope: Scope, folder: Path) -> dict:
     return {"file": str(path), "format": fmt or ""}
 
 
+_HEX = re.compile(r"#(?:[0-9a-fA-F]{6}|[0-9a-fA-F]{8})")
+
+
 def colour(value, where, scope: Scope) -> list:
     """[r, g, b, a] in 0..1 from a colour name or 3 or 4 numbers; reported when it is neither."""
+    if isinstance(value, str) and _HEX.fullmatch(value):     # '#rrggbb' or '#rrggbbaa': no library needed
+        digits = value[1:]
+        return [int(digits[i:i + 2], 16) / 255 for i in range(0, len(digits), 2)] + ([1.0] if len(digits) == 6 else [])
     if isinstance(value, str):
         from matplotlib.colors import to_rgba      # its CSS4 and tab: names; imported only for a name
 
