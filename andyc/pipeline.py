@@ -127,18 +127,21 @@ def build(path, out_dir="build", force: bool = False) -> BuildResult:
     return result
 
 
-def compile_model(path, out_dir="build", force: bool = False):
+def compile_model(path, out_dir="build", force: bool = False, integrator: bool = True):
     """Build (if needed), import a model and compile all that a run needs (its functions and its
     integrator, or load them from Numba's cache); returns (CompiledModel, BuildResult), with the
-    number of functions Numba compiled (not loaded) in result.compiled."""
+    number of functions Numba compiled (not loaded) in result.compiled. integrator=False leaves the
+    integrator to simulate(), which compiles (or loads) only what its run calls: what one `andyc sim`
+    does, where loading the rest from the cache would be most of a warm run's time."""
     from andyc.runtime.compiled import compilations, compile_integrator, load_compiled
 
     result = build(path, out_dir, force)
     t0 = time.perf_counter()
     before = _compiled_so_far(result)
     compiled = load_compiled(result.module_path)
-    compile_integrator(compiled)
-    if compiled.input_expressions:          # the integrator's variant that calls the model's input callback
+    if integrator:
+        compile_integrator(compiled)
+    if integrator and compiled.input_expressions:          # the integrator's variant that calls the model's input callback
         data = np.zeros(compiled.nf * len(compiled.input_names) + 3 + compiled.nx)
         compile_integrator(compiled, compiled.numerics.inputs.callbacks(compiled.module.MODEL_INPUTS), data)
     result.timings["compile"] = time.perf_counter() - t0

@@ -75,16 +75,16 @@ def derived(file):
         fail_spec(exc)
 
 
-def compiled(file, out_dir, force: bool = False, report=None):
+def compiled(file, out_dir, force: bool = False, report=None, integrator: bool = True):
     """(CompiledModel, BuildResult) of FILE; a model error is printed as andyc check does (exit 1; to
-    `report`, a andyc.cli.formats.Report, when given)."""
+    `report`, a andyc.cli.formats.Report, when given). integrator: as andyc.compile_model's."""
     from andyc.codegen.buildfiles import numerics_compiled
 
     if sys.stderr.isatty() and not numerics_compiled():
         click.echo("andyc: compiling the integrator every model shares, once for this installation (about a "
                    "minute; a new model then compiles in seconds) ...", err=True)
     try:
-        return andyc.compile_model(file, out_dir, force)
+        return andyc.compile_model(file, out_dir, force, integrator)
     except SpecError as exc:
         fail_spec(exc, report)
     except SimulationError as exc:

@@ -84,7 +84,7 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
         check_output(out, read, "run file")
     report = Report("sim", fmt)
     check_folder(build_dir, read)
-    model, result = compiled(file, build_dir, report=report)
+    model, result = compiled(file, build_dir, report=report, integrator=False)
     given = model_options(click.get_current_context(), model.simulate)
     t_end, dt, method, every, init, init_tol = (given[k] for k in ("t_end", "dt", "method", "every", "init", "init_tol"))
     energy_correction, energy_tol, event_tol = given["energy_correction"], given["energy_tol"], given["event_tol"]

@@ -21,6 +21,7 @@ import numpy as np
 
 from andyc.errors import SimulationError
 from andyc.numerics.status import IDEAL
+from andyc.runtime.methods import ADAPTIVE, FIXED_STEP
 from andyc.spec.modes import flow_of, radices, states_of
 
 @dataclass(frozen=True)
@@ -207,46 +208,60 @@ def sample_run(model: CompiledModel):
     return p, u.copy(), model.initial_state(p), model.initial_discrete(p), model.initial_flow, work(model)
 
 
-def compile_integrator(model: CompiledModel, function=None, data=None) -> None:
-    """Compile all that a run calls (or load it from Numba's cache) with the argument types simulate() passes:
-    the integrator (a block of no steps, one-sample logs), the hybrid step, the log evaluations, and the
+def compile_integrator(model: CompiledModel, function=None, data=None, method: str | None = None,
+                       frames: bool = True) -> None:
+    """Compile what a run calls (or load it from Numba's cache) with the argument types simulate() passes: the
+    integrator (a block of no steps, one-sample logs), the hybrid step, the log evaluations, and the
     right-hand side, guards and jumps that the adaptive methods call from Python. With an input function
-    (and its data), the integrator's variant that calls it. simulate() calls this before it starts its
-    clock, so a run's wall time never includes compilation; once compiled for one model, the algorithms
-    load from the cache for every other."""
+    (and its data), the integrator's variant that calls it. With a method, only what a run of that method
+    calls on this model (no guards without jumps, no constraint code without rows, no frames unless logged):
+    each function loaded from the cache costs a warm `andyc sim` up to 40 ms. Without one, everything, as
+    `andyc build` does, so that no later run compiles. simulate() calls this before it starts its clock, so a
+    run's wall time never includes compilation; once compiled for one model, the algorithms load from the
+    cache for every other."""
     numerics, m = model.numerics, model.ref
     integrator = numerics.integrator
+    every = method is None
+    fixed, adaptive = every or method in FIXED_STEP, every or method in ADAPTIVE
     p, u, x, d, flow, w = sample_run(model)
     x = np.concatenate([x, np.zeros(model.nw)])      # the state and the work (andyc.runtime.work)
     log = integrator.Log(np.zeros(1), x[None, :].copy(), u[None, :].copy(), np.full(1, flow, dtype=np.int64),
                          d[None, :].copy())
-    opts = integrator.options(IDEAL, False, False, 0.0, -1.0, 1e-12)
-    integrator.advance(m, w.ref, opts, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1, log, 1)
-    integrator.instant(m, w.ref, IDEAL, function, data, 0.0, x.copy(), p, d.copy(), flow)
+    if fixed:
+        opts = integrator.options(IDEAL, False, False, 0.0, -1.0, 1e-12)
+        integrator.advance(m, w.ref, opts, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1,
+                           log, 1)
+    if model.nj or every:
+        integrator.instant(m, w.ref, IDEAL, function, data, 0.0, x.copy(), p, d.copy(), flow)
     integrator.update_inputs(function, 0.0, x, p, d, flow, u, data)
     if function is not None:
         return
     integrator.evaluate_energy(m, log, p, np.zeros(1))
-    integrator.evaluate_frames(m, log, p, np.zeros((1, len(model.frame_names), 12)))
-    integrator.evaluate_powers(m, w.ref, log, p, np.zeros((1, model.nw)))
-    integrator.evaluate_constraints(m, w.ref, log, p, np.zeros((1, model.nh)), np.zeros((1, model.nc)),
-                                    np.zeros((1, model.nc)))
-    numerics.dynamics.rhs_mode_into(m, w.ref, 0.0, x, u, p, d, flow, w.xdot, IDEAL)
-    if model.nw:
-        xdot = np.zeros(model.nx + model.nw)
-        numerics.dynamics.rhs_mode_into(m, w.ref, 0.0, x, u, p, d, flow, xdot, IDEAL)
-        integrator.stage_powers(m, w.ref, 0.0, x, u, p, d, flow, xdot)
-    if model.nj:
-        numerics.dynamics.jump(m, w.ref, 0, 0.0, x.copy(), u, p, d.copy())
-    integrator.crosses(0, 1.0, -1.0)
-    integrator.illinois_trial(0.0, 1.0, 1.0, -1.0, 1.0)
-    integrator.illinois_bracket(1.0, 0.0, 1.0, 1.0, -1.0, 0, 0.5, -0.5)
-    module = model.module
-    module.energy(0.0, x, u, p, d)
-    module.guard(0, 0.0, x, u, p, d)
-    module.enabled(0, 0.0, x, u, p, d)
     model.flow_inputs(u, p)
-    module.constraints(0.0, x, u, p, d, np.empty(model.nh), np.empty(model.nc), np.empty((model.nc, model.nv)),
-                       np.empty(model.nc))
+    if frames:
+        integrator.evaluate_frames(m, log, p, np.zeros((1, len(model.frame_names), 12)))
+    if model.nw or every:
+        integrator.evaluate_powers(m, w.ref, log, p, np.zeros((1, model.nw)))
+    if model.nc or every:
+        integrator.evaluate_constraints(m, w.ref, log, p, np.zeros((1, model.nh)), np.zeros((1, model.nc)),
+                                        np.zeros((1, model.nc)))
+        module = model.module
+        module.constraints(0.0, x, u, p, d, np.empty(model.nh), np.empty(model.nc),
+                           np.empty((model.nc, model.nv)), np.empty(model.nc))
     if model.nc:
         numerics.dynamics.project(m, w.ref, 0.0, x.copy(), u, p, d, flow, True, 0.0, -1.0)
+    if model.nj:
+        numerics.dynamics.jump(m, w.ref, 0, 0.0, x.copy(), u, p, d.copy())
+        model.module.energy(0.0, x, u, p, d)         # the energy a jump changes (andyc.runtime.work)
+    if adaptive:
+        numerics.dynamics.rhs_mode_into(m, w.ref, 0.0, x, u, p, d, flow, w.xdot, IDEAL)
+        if model.nw:
+            xdot = np.zeros(model.nx + model.nw)
+            numerics.dynamics.rhs_mode_into(m, w.ref, 0.0, x, u, p, d, flow, xdot, IDEAL)
+            integrator.stage_powers(m, w.ref, 0.0, x, u, p, d, flow, xdot)
+    if adaptive and (model.nj or every):
+        integrator.crosses(0, 1.0, -1.0)
+        integrator.illinois_trial(0.0, 1.0, 1.0, -1.0, 1.0)
+        integrator.illinois_bracket(1.0, 0.0, 1.0, 1.0, -1.0, 0, 0.5, -0.5)
+        model.module.guard(0, 0.0, x, u, p, d)
+        model.module.enabled(0, 0.0, x, u, p, d)

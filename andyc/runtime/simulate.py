@@ -98,8 +98,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     x, d, flow = initial_state(model, p, x0, d0, flow0)
     jumps = EventLog(model, events)
     frame_names = _frame_selection(model, frames)
-    compile_integrator(model)
-    compile_integrator(model, *source.function_data)
+    compile_integrator(model, method=method, frames=bool(frame_names))
+    compile_integrator(model, *source.function_data, method=method)
     u = inputs_at(model, source, 0.0, x, p, d, flow)
     if flow0 is None and model.contact_names:      # contacts touching at rest start closed
         flow = initial_mode(model, 0.0, x, u, p, d)
