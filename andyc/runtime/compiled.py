@@ -50,6 +50,8 @@ class CompiledModel:
     conserves_energy: bool = False
     work_names: tuple = ()      # the work slots carried after the state (andyc.runtime.work): elements, then 'jumps'
     untracked_work: tuple = ()  # frames moved by a link that depends on t (their driving work is not in the work)
+    energy_laws: tuple = ()     # per flow: its declared energy law as written (andyc.spec.energy_law), or None
+    energy_law_where: tuple = ()  # per flow: (line, document path) of that law, or None
     source: str = ""            # the model file's name
     constraint_where: tuple = ()  # (line, document path) of each row in the model file
     discrete_names: tuple = ()

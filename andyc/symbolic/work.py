@@ -62,6 +62,21 @@ def work_slots(spec: Spec, terms: list, constraints) -> tuple[list, list, list]:
     return names, powers, row_slot
 
 
+def energy_law_terms(spec: Spec, quantities) -> list:
+    """Per flow, (Phi_e, dPhi_e/dv) of its declared energy law (andyc.spec.energy_law), or None where the built-in
+    law E - E0 - W holds: the energy correction of the projection method moves the speeds along the gradient
+    (Braun & Goldfarb eq. 6). Frame quantities enter through their Jacobians (quantities.jac), as in rows."""
+    out = []
+    for law in spec.energy_laws or [None] * len(spec.flows):
+        if law is None:
+            out.append(None)
+            continue
+        for sym, fq in law.quantities.items():
+            quantities.define(sym, fq)
+        out.append((law.expr, quantities.jac(law.expr)))
+    return out
+
+
 def time_power(energy: sp.Expr) -> sp.Expr:
     """d energy / dt at fixed q: the power an element's explicit time dependence gives (a potential V(q, t), a
     spring whose length depends on t). Where the energy switches in t (sign, abs, min, max of t), SymPy's
