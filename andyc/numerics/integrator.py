@@ -30,8 +30,8 @@ from collections import namedtuple
 from .compiler import jit
 from .dynamics import enabled_value, guard_value, jump, multipliers, project, rhs_mode_into
 from .model import borrowed, call
-from .status import (DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, REST_SPEED, RISING,
-                     SLIP_STOP)
+from .status import (BAUMGARTE, DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, REST_SPEED,
+                     RISING, SLIP_STOP)
 
 Options = namedtuple("Options", "mode project constrain e0 energy_tol event_tol")
 Options.__doc__ = """How a run integrates: mode (IDEAL, LAGRANGE or BAUMGARTE: how constraint forces are found),
@@ -59,11 +59,15 @@ def update_inputs(inputs, t, x, p, d, flow, u, data):
 
 
 @jit(inline="always")
-def stage_powers(model, w, t, x, u, p, d, flow, xdot):
+def stage_powers(model, w, t, x, u, p, d, flow, xdot, mode):
     """xdot[NX:NX + NW] = the power of each work slot at (t, x) (andyc/symbolic/work.py), right after
-    rhs_mode_into in `flow`: the elements' from the dynamics leaf (it wrote them after G), each working
+    rhs_mode_into in `flow` with `mode`: the elements' from the dynamics leaf (it wrote them after G), each working
     constraint row's -lam (c - A v) from the multipliers the flow's constraint solve left in S's y row and the
-    row's A and c in S. So the work W is integrated with the motion."""
+    row's A and c in S. So the work W is integrated with the motion.
+
+    In the BAUMGARTE mode the rows' forces A^T lam (lam with the soft terms, ANDY eq. 15) also act off the
+    constraint manifold, where c != 0: each row's whole power lam A v is counted, a working row's in its
+    constraint's slot (lam c more), another's in the slot `baumgarte` (ROW_WORK = -2 - that slot; -1: none)."""
     nx, nv, nq = model.nx, model.nv, model.nq
     if model.nw == 0:
         return
@@ -73,12 +77,19 @@ def stage_powers(model, w, t, x, u, p, d, flow, xdot):
     for r in range(model.flow_nrows[flow]):
         row = model.flow_rows[flow, r]
         slot = model.row_work[row]
-        if slot < 0:
+        if slot == -1 or (slot < -1 and mode != BAUMGARTE):
             continue
-        b = S[model.s_cv, row]
+        c = S[model.s_cv, row]
+        av = 0.0
         for j in range(nv):
-            b -= S[model.s_a + row, j] * x[nq + j]
-        xdot[nx + slot] -= S[model.s_y, r] * b
+            av += S[model.s_a + row, j] * x[nq + j]
+        lam = S[model.s_y, r]
+        if slot >= 0:
+            xdot[nx + slot] -= lam * (c - av)
+            if mode == BAUMGARTE:
+                xdot[nx + slot] += lam * c
+        else:
+            xdot[nx - 2 - slot] += lam * av
 
 
 @jit
@@ -107,7 +118,7 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale):
         status = rhs_mode_into(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
         if status != OK:
             return status
-        stage_powers(model, w, t + c * h, xt, u, p, d, flow, k[s])
+        stage_powers(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
     total = 0.0
     grown = 0.0
     for j in range(nx):
@@ -356,13 +367,18 @@ def evaluate_constraints(model, w, log, p, phi, c, lam):
 
 
 @jit
-def evaluate_powers(model, w, log, p, out):
+def evaluate_powers(model, w, log, p, out, mode):
     """The power of each work slot at the logged samples, out (N, NW); a constraint's with the ideal multipliers
-    of the sample's flow (see dynamics.multipliers), the jumps' 0."""
+    of the sample's flow (see dynamics.multipliers; in the BAUMGARTE mode the run's own, soft terms included),
+    the jumps' 0."""
     nx, xdot = model.nx, w.k[0]
     for r in range(log.t.shape[0]):
         t, x, u, d, flow = log.t[r], log.x[r], log.u[r], log.d[r], log.flow[r]
-        if model.flow_nrows[flow] > 0:
+        if model.flow_nrows[flow] > 0 and mode == BAUMGARTE:
+            if rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode) != OK:
+                out[r, :] = math.nan
+                continue
+        elif model.flow_nrows[flow] > 0:
             if multipliers(model, w, t, x, u, p, d, flow, w.lam) != OK:
                 out[r, :] = math.nan
                 continue
@@ -370,6 +386,6 @@ def evaluate_powers(model, w, log, p, out):
                 w.S[model.s_y, n] = w.lam[model.flow_rows[flow, n]]
         else:
             call(model.dynamics, (t, x, u, p, d, w.M, w.G))
-        stage_powers(model, w, t, x, u, p, d, flow, xdot)
+        stage_powers(model, w, t, x, u, p, d, flow, xdot, mode)
         for i in range(model.nw):
             out[r, i] = xdot[nx + i]

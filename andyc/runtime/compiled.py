@@ -230,14 +230,14 @@ def compile_integrator(model: CompiledModel, function=None, data=None) -> None:
         return
     integrator.evaluate_energy(m, log, p, np.zeros(1))
     integrator.evaluate_frames(m, log, p, np.zeros((1, len(model.frame_names), 12)))
-    integrator.evaluate_powers(m, w.ref, log, p, np.zeros((1, model.nw)))
+    integrator.evaluate_powers(m, w.ref, log, p, np.zeros((1, model.nw)), IDEAL)
     integrator.evaluate_constraints(m, w.ref, log, p, np.zeros((1, model.nh)), np.zeros((1, model.nc)),
                                     np.zeros((1, model.nc)))
     numerics.dynamics.rhs_mode_into(m, w.ref, 0.0, x, u, p, d, flow, w.xdot, IDEAL)
     if model.nw:
         xdot = np.zeros(model.nx + model.nw)
         numerics.dynamics.rhs_mode_into(m, w.ref, 0.0, x, u, p, d, flow, xdot, IDEAL)
-        integrator.stage_powers(m, w.ref, 0.0, x, u, p, d, flow, xdot)
+        integrator.stage_powers(m, w.ref, 0.0, x, u, p, d, flow, xdot, IDEAL)
     if model.nj:
         numerics.dynamics.jump(m, w.ref, 0, 0.0, x.copy(), u, p, d.copy())
     integrator.crosses(0, 1.0, -1.0)

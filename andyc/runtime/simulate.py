@@ -40,11 +40,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from andyc.errors import SimulationError
+from andyc.numerics.status import IDEAL
 from andyc.runtime.adaptive import run_adaptive
 from andyc.runtime.compiled import CompiledModel, compile_integrator, work
 from andyc.runtime.contacts import friction_coefficients, initial_mode, slip_speeds
 from andyc.runtime.events import EventLog
-from andyc.runtime.fixed_step import run_fixed_step
+from andyc.runtime.fixed_step import MODE, run_fixed_step
 from andyc.runtime.initial import consistent_initial_state, initial_state, require_independent_rows
 from andyc.runtime.inputs import InputSource, input_source, inputs_at
 from andyc.runtime.interrupts import Interrupts
@@ -245,7 +246,7 @@ class _Assembly:
             rotations = {name: unit_quaternions(poses[:, k, 3:].reshape(n, 3, 3)) for name, k in at.items()}
         power = np.empty((n, model.nw))
         if model.nw:
-            integrator.evaluate_powers(model.ref, work(model).ref, log, p, power)
+            integrator.evaluate_powers(model.ref, work(model).ref, log, p, power, MODE.get(self.method, IDEAL))
         status = lost_constraints(self.method, status, phi, c, t_log)
         held = u_log[0] if n else self.source.held(model.initial_flow)
         return Run(model=model.name, spec_sha256=model.spec_sha256, method=self.method, dt=self.dt, nq=model.nq,

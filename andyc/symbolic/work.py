@@ -35,15 +35,18 @@ from andyc.spec.expressions import TIME
 from andyc.spec.model import Spec
 
 JUMPS = "jumps"     # the work slot of the energy the jumps change (resets, impacts): E+ - E- at each
+BAUMGARTE = "baumgarte"  # the work slot of the baumgarte method's constraint forces off the manifold
 
 
 def work_slots(spec: Spec, terms: list, constraints) -> tuple[list, list, list]:
     """The work slots of the model: (names, powers, row_slot). names: every element that does work, in the
     model's order (forces and torques, dampers, springs and potentials that depend on t: `terms`, the
-    ElementTerms), then each constraint with a working row, then 'jumps' when the model has jumps. powers: the
+    ElementTerms), then each constraint with a working row, then 'baumgarte' when a constraint has gains (the
+    baumgarte method's forces off the manifold), then 'jumps' when the model has jumps. powers: the
     power of each element slot (the first len(powers) names), which the dynamics leaf writes after G. row_slot:
     for each velocity-level row of `constraints`, the slot its power -lam (c - A v) goes to, or -1 (the
-    numerics compute it from the step's multipliers, A and c)."""
+    numerics compute it from the step's multipliers, A and c), or -2 - the slot `baumgarte` (a row that does
+    no work on the manifold, in a model with gains: its power lam A v in the baumgarte method)."""
     elements = [(e.name, e.power) for e in terms if e.power != 0]
     names, powers = [n for n, _ in elements], [e for _, e in elements]
     row_slot = [-1] * constraints.nc
@@ -57,6 +60,12 @@ def work_slots(spec: Spec, terms: list, constraints) -> tuple[list, list, list]:
         for k in working:
             row_slot[rows[k]] = len(names)
         names.append(c.name)
+    if -1 in row_slot and any(c.stiffness != 0 or c.damping != 0 for c in spec.constraints):
+        # The baumgarte method's soft terms act off the manifold, where every row's force does work lam A v: the
+        # rows whose constraint does none on it count theirs in the slot `baumgarte` (-2 - slot: the numerics
+        # add it in that method only, integrator.stage_powers).
+        row_slot = [-2 - len(names) if slot < 0 else slot for slot in row_slot]
+        names.append(BAUMGARTE)
     if spec.jumps:
         names.append(JUMPS)
     return names, powers, row_slot
