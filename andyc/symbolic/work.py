@@ -22,8 +22,12 @@ and the rows' A and c (the table ROW_WORK of the build), as -lam . (c - A v), so
 drifts from 0 still gets the b of its actual state; the elements' powers are written by the dynamics leaf
 after G (G[NV + i]), sharing its subexpressions.
 
-Not here: a frame whose link depends on t (its driving power is not derived; the balance of such a model
-includes it as an error), and the energy a jump changes (the integrator adds E+ - E- to the work `jumps`).
+In the baumgarte method the rows' forces (with the soft terms of ANDY eq. 15) also act off the manifold,
+where c != 0: there each row's whole power lam A v is counted, in its constraint's slot or in `baumgarte`.
+
+Not here: a frame whose link depends on t (its driving power, the reaction along dr/dt, depends on the
+accelerations and is not derived; the balance of such a model includes it as an error), and the energy a
+jump changes (the integrator adds E+ - E- to the work `jumps`).
 """
 
 from __future__ import annotations
