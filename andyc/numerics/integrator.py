@@ -74,6 +74,7 @@ def stage_powers(model, w, t, x, u, p, d, flow, xdot, mode):
     G, S = w.G, w.S
     for i in range(model.nw):           # (the leaf writes the elements' slots only: the others stay 0 in G)
         xdot[nx + i] = G[nv + i]
+    call(model.drive_power, (t, x, u, p, d, xdot))      # (reads dv/dt in xdot: after rhs_mode_into)
     for r in range(model.flow_nrows[flow]):
         row = model.flow_rows[flow, r]
         slot = model.row_work[row]
@@ -368,24 +369,15 @@ def evaluate_constraints(model, w, log, p, phi, c, lam):
 
 @jit
 def evaluate_powers(model, w, log, p, out, mode):
-    """The power of each work slot at the logged samples, out (N, NW); a constraint's with the ideal multipliers
-    of the sample's flow (see dynamics.multipliers; in the BAUMGARTE mode the run's own, soft terms included),
-    the jumps' 0."""
+    """The power of each work slot at the logged samples, out (N, NW), from the right-hand side in the run's `mode`
+    (a constraint's with its multipliers, soft terms included in the BAUMGARTE mode; the drive's with dv/dt), the
+    jumps' 0."""
     nx, xdot = model.nx, w.k[0]
     for r in range(log.t.shape[0]):
         t, x, u, d, flow = log.t[r], log.x[r], log.u[r], log.d[r], log.flow[r]
-        if model.flow_nrows[flow] > 0 and mode == BAUMGARTE:
-            if rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode) != OK:
-                out[r, :] = math.nan
-                continue
-        elif model.flow_nrows[flow] > 0:
-            if multipliers(model, w, t, x, u, p, d, flow, w.lam) != OK:
-                out[r, :] = math.nan
-                continue
-            for n in range(model.flow_nrows[flow]):          # (multipliers leaves them in y, as the rhs does)
-                w.S[model.s_y, n] = w.lam[model.flow_rows[flow, n]]
-        else:
-            call(model.dynamics, (t, x, u, p, d, w.M, w.G))
+        if rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode) != OK:
+            out[r, :] = math.nan
+            continue
         stage_powers(model, w, t, x, u, p, d, flow, xdot, mode)
         for i in range(model.nw):
             out[r, i] = xdot[nx + i]

@@ -64,3 +64,8 @@ def closed_form(t, u, p, x):
 @leaf("energy_law")
 def energy_law(k, t, x, u, p, d, grad):
     return math.nan
+
+
+@leaf("drive_power")
+def drive_power(t, x, u, p, d, xdot):
+    return None

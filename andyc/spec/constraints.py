@@ -348,24 +348,18 @@ def _works(row: sp.Expr, speeds: set) -> bool:
 def check_energy_law(data: dict, frames: list, constraints: list, flows: list, initial_flow: int, scope: Scope):
     """Where the model asks for the energy correction (`energy_correction: true` in its simulate: section or an
     expectation), its law E(t) - E(0) - W(t) = 0 (Braun & Goldfarb eq. 5-6, W the work of every element,
-    andyc/symbolic/work.py) must make sense: every element's work known (no frame whose link depends on t),
-    and a speed left for the correction to move (fewer constraint rows than speeds in the initial flow)."""
+    andyc/symbolic/work.py) must make sense: a speed left for the correction to move (fewer constraint rows
+    than speeds in the initial flow)."""
     places = [("simulate", "energy_correction")] if (data.get("simulate") or {}).get("energy_correction") else []
     places += [("expect", i, "energy_correction") for i, e in enumerate(data.get("expect") or [])
                if isinstance(e, dict) and e.get("energy_correction")]
     if not places:
         return
-    driven = rheonomic_frames(frames)
     speeds = len(scope.coordinates) + len(scope.speeds)
     active = set(flows[initial_flow].constraints) if flows else {c.name for c in constraints}
     rows = sum(len(c.rows) for c in constraints if c.name in active)
     for path in places:
-        if driven:
-            scope.report.error(path, f"the energy law E - E0 - W = 0 is not known: frame '{driven[0]}' moves by a link "
-                               "that depends on t, whose driving work andyc does not derive",
-                               "remove energy_correction, or prescribe that motion by a constraint that depends on t "
-                               "(its work is part of W)")
-        elif rows >= speeds:
+        if rows >= speeds:
             scope.report.error(path, f"the energy law has no speed to correct: the {rows} constraint rows of the "
                                f"initial flow fix all {speeds} speeds", "remove energy_correction")
 
@@ -401,6 +395,15 @@ def rheonomic_frames(frames: list) -> list[str]:
     """The frames whose link depends on t: their motion is prescribed, and the power that drives it is not
     derived (andyc/symbolic/work.py), so the energy balance of a model with one is not complete."""
     return [f.name for f in frames if any(TIME in _free(step) for step in f.transforms)]
+
+
+def driven_frames(frames: list) -> list[str]:
+    """The frames moved along t: those whose link depends on t and every frame below them (parents come first)."""
+    driven = set(rheonomic_frames(frames))
+    for f in frames:
+        if f.parent in driven:
+            driven.add(f.name)
+    return [f.name for f in frames if f.name in driven]
 
 
 def _free(step) -> set:

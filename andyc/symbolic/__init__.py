@@ -47,7 +47,7 @@ def derive(spec: Spec) -> SymbolicModel:
     constraints = constraint_terms(spec, quantities)
     hybrid = hybrid_terms(spec, quantities, constraints)
     laws = energy_law_terms(spec, quantities)
-    work_names, powers, row_work = work_slots(spec, terms, constraints)
+    work_names, powers, row_work, prescribed = work_slots(spec, terms, constraints)
     rates = {sym: rate for K in kin.values() for sym, rate in K.signal_rates.items()}
     return SymbolicModel(
         spec=spec, t=TIME,
@@ -59,7 +59,7 @@ def derive(spec: Spec) -> SymbolicModel:
         frame_positions={f.name: kin[f.name].r for f in spec.frames if not f.internal},
         frame_rotations={f.name: kin[f.name].R for f in spec.frames if not f.internal},
         elements=terms, powers=powers, work_names=work_names, row_work=row_work,
-        constraints=constraints, hybrid=hybrid, energy_laws=laws, forward=choose(M), derive_seconds=time.perf_counter() - start)
+        constraints=constraints, hybrid=hybrid, energy_laws=laws, prescribed=prescribed, forward=choose(M), derive_seconds=time.perf_counter() - start)
 
 
 __all__ = ["derive", "SymbolicModel"]
