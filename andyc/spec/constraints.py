@@ -366,14 +366,20 @@ def check_energy_law(data: dict, frames: list, constraints: list, flows: list, i
 
 def check_work_names(data: dict, jumps: list, scope: Scope):
     """A model with jumps carries the energy they change as the work slot 'jumps' (andyc/symbolic/work.py, the
-    run files' work_jumps and power_jumps): no element that does work may take that name."""
-    if not jumps:
-        return
+    run files' work_jumps and power_jumps); any model may carry the slots 'baumgarte' and 'prescribed_motion'
+    (the baumgarte method's forces off the manifold, the links that depend on t): no element that does work may
+    take those names."""
+    reserved = {"baumgarte": "the baumgarte method's constraint forces off the manifold",
+                "prescribed_motion": "what drives the links that depend on t"}
+    if jumps:
+        reserved["jumps"] = "the model's jumps"
     for section in ("forces", "torques", "dampers", "springs", "potentials", "constraints"):
         for i, entry in enumerate(data.get(section) or []):
-            if isinstance(entry, dict) and entry.get("name") == "jumps":
-                scope.report.error((section, i, "name"), "the name 'jumps' is taken by the work of the model's "
-                                   "jumps (the run files' work_jumps, power_jumps)", "choose another name")
+            name = entry.get("name") if isinstance(entry, dict) else None
+            if name in reserved:
+                scope.report.error((section, i, "name"), f"the name '{name}' is taken by the work of "
+                                   f"{reserved[name]} (the run files' work_{name}, power_{name})",
+                                   "choose another name")
 
 
 def working_rows(c: Constraint, positions: set, speeds: set) -> list[int]:
