@@ -54,7 +54,7 @@ def test_declared_law_kept_to_round_off(compiled):
     ref = reference(kept.time)
     dist_kept = np.abs(kept.state.T - ref).max()
     dist_free = np.abs(free.state.T - ref).max()
-    assert dist_kept <= dist_free                # measured 1.9e-9 and 2.3e-9
+    assert dist_kept <= dist_free                # measured 6.08e-8 and 6.12e-8 (RK4's phase error)
     # The energy is not the law: it changes by the well's work, which the balance still carries.
     assert np.ptp(kept.energy) > 0.1
 
