@@ -42,8 +42,8 @@ def test_frame_tree_is_the_files_frames_links_and_bodies(path):
         written = [k for k in JOINTS if k in f]
         if written:
             assert kinds[f["name"]] == written[0]
-        else:               # no joint: fixed, or moving when its translation or rotation holds a coordinate
-            coordinates = set(data.get("coordinates") or {})
+        else:               # no joint: fixed, or moving when its translation or rotation holds a coordinate or t
+            coordinates = set(data.get("coordinates") or {}) | {"t"}
             text = str(f.get("translation", "")) + str(f.get("rotation", ""))
             moves = bool(coordinates & set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", text)))
             assert kinds[f["name"]] == ("moving" if moves else "fixed"), f["name"]

@@ -22,7 +22,6 @@ from pathlib import Path
 import jinja2
 
 import andyc
-from andyc.spec.constraints import rheonomic_frames
 from andyc.errors import format_path
 from andyc.outputs import check_output, create_once, update_text, write_text
 from andyc.codegen.buildfiles import (PACKAGE, BuildResult, build_key, equations_path, jumps_path, module_name,
@@ -117,7 +116,8 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
                              for c in spec.constraints],
         "conserves_energy": spec.conserves_energy,
         "work_slots": model.work_names, "row_work": model.row_work,
-        "untracked_work": rheonomic_frames(spec.frames),
+        "untracked_work": [],       # (every element's work is derived: a frame moved along t, prescribed_motion)
+        "energy_laws": [law.text if law else None for law in _laws(spec)],
         "discrete": [x.name for x in spec.discrete],
         "has_closed_form": bool(spec.closed_form),
         **_hybrid_context(model),
@@ -153,7 +153,14 @@ def render_front(spec, key: str) -> str:
         initial_discrete={"unpack": _parameter_unpack(parameters, discrete), "values": [to_code(e) for e in discrete]},
         display=display(spec),
         closed_form_where=[[spec.source.line(("closed_form", n)), format_path(("closed_form", n))] for n in states]
-        if spec.closed_form else [], simulate=spec.simulate)
+        if spec.closed_form else [], simulate=spec.simulate,
+        energy_law_where=[[spec.source.line(law.where), format_path(law.where)] if law else None
+                          for law in _laws(spec)])
+
+
+def _laws(spec) -> list:
+    """The energy law of each flow (andyc.spec.energy_law), None where the built-in law holds."""
+    return list(spec.energy_laws) or [None] * len(spec.flows)
 
 
 def _gain_parameter(spec, gain) -> str | None:

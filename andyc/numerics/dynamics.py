@@ -289,7 +289,9 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
     With energy_tol >= 0, energy (eq. 5-6): with r = N L^T v, N = I - C^+ C the projector onto the
     constraints' null space, v <- v - L^-T r (E - e0 - W) / |r|^2 when |r|^2 (2T on the constraint
     manifold) exceeds energy_tol; W = the sum of x[NX:NX + NW], the work carried with the state (0 for a
-    model on which nothing does work: the law E = e0). One pass, no iteration. Returns a status.
+    model on which nothing does work: the law E = e0). A flow with a declared law Phi_e (the leaf
+    energy_law) takes r = N L^-1 dPhi_e/dv^T and the residual Phi_e - e0 instead: one Newton step on the law
+    within the constraints (exact for a law linear in v). One pass, no iteration. Returns a status.
     """
     normalize(model, x)
     if not constrain and energy_tol < 0.0:
@@ -314,11 +316,17 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
             x[nq + i] += dv[i]
     if energy_tol >= 0.0:
         r = S[model.s_r, :nv]
-        for i in range(nv):            # r = L^T v (the factor's diagonal holds 1 / L_ii)
-            s = x[nq + i] / M[i, i]
-            for k in range(i + 1, nv):
-                s += M[k, i] * x[nq + k]
-            r[i] = s
+        # A declared law Phi_e of the flow (andyc.spec.energy_law): r = L^-1 dPhi_e/dv^T, its residual Phi_e - e0
+        # (the run passes e0 = 0 there). Else the built-in E - e0 - W, whose gradient M v gives r = L^T v.
+        law = call(model.energy_law, (flow, t, x, u, p, d, S[model.s_r]))
+        if law == law:
+            solve_lower(M, r, nv)
+        else:
+            for i in range(nv):            # r = L^T v (the factor's diagonal holds 1 / L_ii)
+                s = x[nq + i] / M[i, i]
+                for k in range(i + 1, nv):
+                    s += M[k, i] * x[nq + k]
+                r[i] = s
         if constrain:
             c0, y0 = model.s_c, model.s_y
             for j in range(nr):        # y <- C r, for r <- r - C^+ C r
@@ -332,10 +340,13 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
         for i in range(nv):
             rr += r[i] * r[i]
         if rr > energy_tol:
-            target = e0                # the balance E = E0 + W (Braun & Goldfarb's energy law, W the work slots)
-            for i in range(model.nw):
-                target += x[model.nx + i]
-            scale = -(call(model.energy, (t, x, u, p, d)) - target) / rr
+            if law == law:
+                residual = law - e0
+            else:                      # the balance E = E0 + W (Braun & Goldfarb's energy law, W the work slots)
+                residual = call(model.energy, (t, x, u, p, d)) - e0
+                for i in range(model.nw):
+                    residual -= x[model.nx + i]
+            scale = -residual / rr
             for i in range(nv):
                 r[i] *= scale
             solve_upper(M, r, nv)

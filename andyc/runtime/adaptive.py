@@ -59,7 +59,7 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
         status = rhs_mode_into(model.ref, w.ref, t, y, u, p, d, current[0], xdot, IDEAL)
         if status != OK:
             raise _Stopped(t, status)
-        stage_powers(model.ref, w.ref, t, y, u, p, d, current[0], xdot)
+        stage_powers(model.ref, w.ref, t, y, u, p, d, current[0], xdot, IDEAL)
         return xdot.copy()
 
     n_out = int(math.floor(t_end / dt_out + 1e-9)) + 1

@@ -51,6 +51,8 @@ class CompiledModel:
     conserves_energy: bool = False
     work_names: tuple = ()      # the work slots carried after the state (andyc.runtime.work): elements, then 'jumps'
     untracked_work: tuple = ()  # frames moved by a link that depends on t (their driving work is not in the work)
+    energy_laws: tuple = ()     # per flow: its declared energy law as written (andyc.spec.energy_law), or None
+    energy_law_where: tuple = ()  # per flow: (line, document path) of that law, or None
     source: str = ""            # the model file's name
     constraint_where: tuple = ()  # (line, document path) of each row in the model file
     discrete_names: tuple = ()
@@ -241,7 +243,7 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
     if frames:
         integrator.evaluate_frames(m, log, p, np.zeros((1, len(model.frame_names), 12)))
     if model.nw or every:
-        integrator.evaluate_powers(m, w.ref, log, p, np.zeros((1, model.nw)))
+        integrator.evaluate_powers(m, w.ref, log, p, np.zeros((1, model.nw)), IDEAL)
     if model.nc or every:
         integrator.evaluate_constraints(m, w.ref, log, p, np.zeros((1, model.nh)), np.zeros((1, model.nc)),
                                         np.zeros((1, model.nc)))
@@ -258,7 +260,7 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
         if model.nw:
             xdot = np.zeros(model.nx + model.nw)
             numerics.dynamics.rhs_mode_into(m, w.ref, 0.0, x, u, p, d, flow, xdot, IDEAL)
-            integrator.stage_powers(m, w.ref, 0.0, x, u, p, d, flow, xdot)
+            integrator.stage_powers(m, w.ref, 0.0, x, u, p, d, flow, xdot, IDEAL)
     if adaptive and (model.nj or every):
         integrator.crosses(0, 1.0, -1.0)
         integrator.illinois_trial(0.0, 1.0, 1.0, -1.0, 1.0)

@@ -20,7 +20,7 @@ from andyc.runtime.events import finish_jump, follow_instant_jumps
 from andyc.runtime.inputs import inputs_at
 from andyc.runtime.options import Projection
 from andyc.runtime.status import INTERRUPTED, at, diverging_constraints, ending, failure, in_jump
-from andyc.runtime.work import JumpWork, with_work
+from andyc.runtime.work import JumpWork, law_offset, with_work
 
 MODE = {"rk4": IDEAL, "projection": IDEAL, "lagrange": LAGRANGE, "baumgarte": BAUMGARTE}
 
@@ -64,7 +64,7 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
     balance = JumpWork(model, x, out_u[0], p, d, t)
     flow, message = follow_instant_jumps(model, t, state, source, p, d, flow, jumps, w, mode)
     _no_instant_jump(tangent, jumps, 0)
-    e0 = balance.add(x, inputs_at(model, source, t, state, p, d, flow), d)
+    e0 = law_offset(model, flow, balance.add(x, inputs_at(model, source, t, state, p, d, flow), d))
     if tangent is not None:
         chunk = 1
     while i < n_steps and status == OK and message is None:
@@ -94,7 +94,7 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
             _no_instant_jump(tangent, jumps, n_jumps + 1)
             if message is None and source.into(model, t, state, p, d, flow, w.u) != OK:
                 status = INPUT_FAILED
-            e0 = balance.add(x, w.u, d)
+            e0 = law_offset(model, flow, balance.add(x, w.u, d))
         elif i > i0 and tangent is None:
             elapsed = time.perf_counter() - tic
             chunk = int(min(max(chunk * 0.25 / max(elapsed, 1e-6) * (i_end - i0) / (i - i0), 1000), 10_000_000))
