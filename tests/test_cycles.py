@@ -89,9 +89,10 @@ def gait_state(z):
                      math.cos(phi) * w_st, math.sin(phi) * w_st, -w_st, -w_sw])
 
 
-def gait_step(model, z):
+def gait_step(model, z, parameters=None):
     """z after the next heel strike (leg 2's; the roles swap), by the same rk4 as the cycle."""
     run = andyc.simulate(model, 5.0, dt=1e-3, method="rk4", x0=gait_state(z), d0=np.zeros(1), flow0="stance1",
+                         parameters=parameters,
                          events=andyc.Events(tol=1e-15, stop_after={"strike2": 1}), init=andyc.Init("as-is"),
                          progress=False)
     x = run.events["state_after"][0]
