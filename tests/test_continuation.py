@@ -53,6 +53,49 @@ def test_rimless_wheel_branch_is_the_closed_form(shipped_build, tmp_path):
     assert "period-1 branch: " in result.stdout and "wrote " + str(out.with_suffix(".png")) in result.stdout
 
 
+KICKED_BALL = """\
+name: kicked_ball
+description: A ball thrown up from the floor; each landing sends it up at mu + v^2 (a fold of its orbits at mu = 1/4).
+parameters: {g: 1.0, mu: 0.1}
+coordinates:
+  h: {initial: 0.5}
+gravity: [0, -g, 0]
+frames:
+  - {name: ball, parent: world, translation: [0, h, 0]}
+bodies:
+  - {name: mass, frame: ball, mass: 1.0}
+hybrid:
+  flows:
+    - {name: air}
+  jumps:
+    - {name: land, from: air, to: air, guard: h, direction: falling, reset: {h_dot: mu + h_dot**2}}
+"""
+
+
+def test_fold_of_a_kicked_ball(compiled, build_dir, tmp_path_factory):
+    """A ball that lands at speed u leaves at mu + u^2 and lands again at that speed (g = 1): its orbits are the
+    roots of u^2 - u + mu = 0, u = (1 -+ sqrt(1 - 4 mu))/2, with the period 2u and the multiplier of the map
+    v- -> -(mu + v-^2), 2u. The two meet at the fold mu = 1/4, u = 1/2 (multiplier 1). Continued from mu = 0.1
+    towards 0.3, the branch turns there and comes back on the other root; rk4 is exact on a parabola."""
+    path = tmp_path_factory.mktemp("fold") / "kicked_ball.yaml"
+    path.write_text(KICKED_BALL)
+    model = compiled(path)
+    andyc.build_derivatives(path, build_dir)
+    result = Continuer(model, "land", "mu", ds=0.05).run(0.1, 0.3)
+    (branch,) = result.branches
+    (fold,) = branch.specials
+    assert fold.kind == "fold" and abs(fold.point.parameter - 0.25) < 1e-10
+    assert abs(fold.point.period - 1.0) < 1e-8 and abs(fold.point.multipliers[0] - 1.0) < 1e-8
+    roots = {"upper": 0, "lower": 0}
+    for q in branch.points:
+        u = q.period / 2
+        assert abs(u * u - u + q.parameter) < 1e-11 and abs(q.multipliers[0] - 2 * u) < 1e-10
+        assert q.stable == (u < 0.5)
+        roots["upper" if u > 0.5 else "lower"] += 1
+    assert roots["upper"] >= 2 and roots["lower"] >= 2          # both sides of the fold
+    assert branch.points[-1].parameter < fold.point.parameter - 0.05    # and back
+
+
 def test_continuation_usage_errors(shipped_build, tmp_path):
     model = MODELS / "rimless_wheel.yaml"
     for args, message in ((["--continue", "gamma=0.04"], "write NAME=A:B"),

@@ -289,12 +289,14 @@ class Continuer:
     def _locate(self, a: Point, b: Point, ds: float, period: int, kind: str, test) -> Special | None:
         """The zero of test(point) on the branch between a (arclength s = 0 from a) and b (s = ds): the Illinois
         variant of regula falsi on s, a predictor-corrector step from a at each trial; until the bracket's width
-        in p is at most locate_tol (or in s at most 1e-13)."""
+        in p is at most locate_tol, and at a fold (where p hardly moves with s) its width in s too (or in s at
+        most 1e-13)."""
         lo, hi = [0.0, test(a), a], [ds, test(b), b]
         kept = 0
         for _ in range(80):
             width = abs(hi[2].parameter - lo[2].parameter)
-            if width <= self.locate_tol or abs(hi[0] - lo[0]) <= 1e-13 * max(1.0, ds):
+            arc = abs(hi[0] - lo[0])
+            if (width <= self.locate_tol and (kind != "fold" or arc <= self.locate_tol)) or arc <= 1e-13 * max(1.0, ds):
                 break
             s = hi[0] - hi[1] * (hi[0] - lo[0]) / (hi[1] - lo[1])
             if not min(lo[0], hi[0]) < s < max(lo[0], hi[0]):
