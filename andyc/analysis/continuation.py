@@ -98,6 +98,7 @@ class Special:
     period_count: int
     bracket: float           # the width in p of the last bracket
     index: int = 0           # it lies between the branch's points index - 1 and index
+    located: bool = True     # False: the bracket could not be narrowed to locate_tol (point: its better end)
 
 
 @dataclass
@@ -106,6 +107,7 @@ class Branch:
     points: list = field(default_factory=list)
     specials: list = field(default_factory=list)
     message: str = ""        # why it stopped
+    origin: Special | None = None   # the period doubling it was switched onto from
 
 
 @dataclass
@@ -136,8 +138,11 @@ class Continuation:
         return {"model": self.model, "section": self.section, "parameter": self.name, "from": self.start,
                 "to": self.end, "parameters": self.parameters,
                 "branches": [{"period_count": b.period_count, "message": b.message,
+                              "from": None if b.origin is None else {"kind": b.origin.kind,
+                                                                     self.name: float(b.origin.point.parameter)},
                               "points": [point(q) for q in b.points],
-                              "located": [{"kind": sp.kind, "bracket": sp.bracket, **point(sp.point)}
+                              "located": [{"kind": sp.kind, "bracket": sp.bracket, "located": sp.located,
+                                           **point(sp.point)}
                                           for sp in b.specials]} for b in self.branches]}
 
 
@@ -262,7 +267,7 @@ class Continuer:
                     special.index = len(branch.points)      # between points index - 1 and index
                     branch.specials.append(special)
                     self._report(special, period)
-                    if switch and special.kind == "period doubling":
+                    if switch and special.kind == "period doubling" and special.located:
                         doublings.append(special)
             if not inside:
                 branch.message = f"reached the end of the range of {self.name}"
@@ -284,7 +289,7 @@ class Continuer:
             found.append(self._locate(a, b, ds, period, "branch point", lambda q: q.tests[0]))
         if a.tests[1] * b.tests[1] < 0:
             found.append(self._locate(a, b, ds, period, "period doubling", lambda q: q.tests[1]))
-        return sorted((f for f in found if f is not None), key=lambda f: abs(f.point.parameter - a.parameter))
+        return sorted(found, key=lambda f: abs(f.point.parameter - a.parameter))
 
     def _locate(self, a: Point, b: Point, ds: float, period: int, kind: str, test) -> Special | None:
         """The zero of test(point) on the branch between a (arclength s = 0 from a) and b (s = ds): the Illinois
@@ -302,8 +307,8 @@ class Continuer:
             if not min(lo[0], hi[0]) < s < max(lo[0], hi[0]):
                 s = 0.5 * (lo[0] + hi[0])
             q = self.step(a, s, period)
-            if q is None:
-                return None
+            if q is None:         # (at a branch point the corrector's matrix is singular too)
+                break
             f = test(q)
             if f * hi[1] > 0:          # replaces hi; lo kept twice running: halve its value (Illinois)
                 hi = [s, f, q]
@@ -315,10 +320,9 @@ class Continuer:
                 kept = kept - 1 if kept < 0 else -1
                 if kept < -1:
                     hi[1] /= 2
-        else:
-            return None
-        best = min((lo, hi), key=lambda e: abs(e[1]))
-        return Special(kind, best[2], period, width)
+        best = min((lo, hi), key=lambda e: abs(test(e[2])))       # (e[1] may be Illinois-halved)
+        width = abs(hi[2].parameter - lo[2].parameter)
+        return Special(kind, best[2], period, width, located=bool(width <= self.locate_tol))
 
     # -- the whole run ------------------------------------------------------------------------------------------
     def run(self, start: float, end: float, period: int = 1, branch_switch: bool = True) -> Continuation:
@@ -355,6 +359,7 @@ class Continuer:
     def _switch(self, special: Special, child: Branch) -> None:
         """The period-2N branch from a located period doubling (see the module docstring)."""
         point, period = special.point, 2 * special.period_count
+        child.origin = special
         near = int(np.argmin(np.abs(point.multipliers + 1.0)))
         w = np.real(point.vectors[:, near])
         w = w / np.linalg.norm(w)
@@ -430,6 +435,9 @@ def special_line(name: str, sp: Special) -> str:
     mu = sp.point.multipliers
     target = -1.0 if sp.kind == "period doubling" else 1.0
     near = mu[int(np.argmin(np.abs(mu - target)))]
+    if not sp.located:
+        return (f"{sp.kind} near {name} = {sp.point.parameter:.12g}, not located (the bracket stayed {sp.bracket:.1e} "
+                f"wide: the corrector failed inside it); multiplier nearest {target:+g} there: {near.real:.9g}")
     return (f"{sp.kind} at {name} = {sp.point.parameter:.15g} (bracket {sp.bracket:.1e}); period "
             f"{sp.point.period:.12g} s; multiplier nearest {target:+g}: {near.real:.15g}"
             + (f" {'+' if near.imag >= 0 else '-'} {abs(near.imag):.3g}i" if near.imag else "")

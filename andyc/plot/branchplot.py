@@ -5,6 +5,8 @@ period doublings marked."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -43,6 +45,11 @@ def plot_branches(result, out, index: int | None = None) -> None:
         sequence = list(branch.points)          # the located points in their places: stability changes there
         for sp in sorted(branch.specials, key=lambda sp: -sp.index):
             sequence.insert(sp.index, sp)
+        if branch.origin is not None:           # a period-2N branch starts at its doubling: that orbit twice
+            o = branch.origin
+            twice = replace(o.point, visits=np.vstack([o.point.visits, o.point.visits]),
+                            step_times=np.tile(o.point.step_times, 2))
+            sequence.insert(0, replace(o, point=twice))
         for j in range(branch.period_count):    # each of the N visits of the section: the tines of a doubling
             for ax, value in ((diagram, lambda q: q.visits[j][index]), (times, lambda q: q.step_times[j])):
                 _stability_line(ax, sequence, value, colour, label)
