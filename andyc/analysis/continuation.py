@@ -24,13 +24,15 @@ in (y, p), and keeps its orientation (t . t_previous > 0). One step of length ds
                    [ t_y^T B   t_y^T y_p + t_p       ] [dp] = - [ n ],   y += B dz + y_p dp, p += dp,
 
                each iterate put back on the section. The bordered matrix is regular at folds (where M - I is
-               singular but r_p is not in its range), so the branch goes round them.
+               singular but r_p is not in its range), so the branch goes round them; it is singular at a branch
+               point (r_p in the range of the singular M - I), where the corrector fails.
     step       after 3 corrector steps or fewer ds grows by 1.5 (to --max-step); a corrector that fails (no
                convergence in 6 steps, a run that does not come back, a jump refused) halves ds and retries,
                down to --min-step.
 
 Test functions, evaluated at every point (Kuznetsov, "Elements of Applied Bifurcation Theory", 3rd ed.,
-Springer 2004, §10.2 and §10.3; Seydel, "Practical Bifurcation and Stability Analysis", 3rd ed., 2010, §5.2):
+Springer 2004, ch. 10; Seydel, "Practical Bifurcation and Stability Analysis", 3rd ed., Springer 2010, ch. 5
+and 7):
 
     fold            t_p changes sign (the parameter turns back); there det(M - I) = 0 too;
     branch point    det(M - I) changes sign where t_p does not (a multiplier crosses +1 without a fold: a pitchfork
@@ -40,14 +42,17 @@ Springer 2004, §10.2 and §10.3; Seydel, "Practical Bifurcation and Stability A
 
 Each change between two points is located on the branch by the Illinois variant of regula falsi on the
 arclength s from the earlier point (predictor and corrector at each trial s), until the bracket in p is below
---locate-tol (1e-10): so the point's parameter is known to that, and its test function vanishes there.
+--locate-tol (1e-10), and at a fold (where p hardly moves with s) the bracket in s too: so the point's
+parameter is known to that, and its test function vanishes there. When a trial's corrector fails (near a
+branch point) the bracket stays as it is and the point is reported as not located, near the better end.
 
 Period doubling: at the located point, the eigenvector v of the multiplier -1 (w = B v in y) is the direction of
 the period-2N orbit, which leaves it as a pitchfork of Q^2 (whose multiplier there is +1) with a tangent along
 (w, 0). The period-2N branch is started by the same predictor-corrector on Q^2 with the tangent (w/|w|, 0) (the
 branch switching of Kuznetsov §10.2.2): the arclength condition w . (y - y*) = ds keeps Newton off the period-N
-orbit, itself a fixed point of Q^2. It is then continued in the parameter's direction, to the end of the range.
-See also Allgower & Georg, "Introduction to Numerical Continuation Methods", SIAM 2003, ch. 2 and 9.
+orbit, itself a fixed point of Q^2. It is then continued along its tangent while p stays in the range. See also
+Allgower & Georg, "Introduction to Numerical Continuation Methods", SIAM 2003, ch. 2 (predictor-corrector), 6
+(step length) and 8-9 (bifurcation and turning points along a curve).
 """
 
 from __future__ import annotations
