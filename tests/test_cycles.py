@@ -13,6 +13,7 @@ from scipy.integrate import quad
 import andyc
 from andyc.analysis.cycles import find_cycle
 from tests.support import MODELS
+from tests.support.gaits import gait_step
 from tests.support.cli import invoke
 
 ALPHA, GAMMA = 0.3, 0.04                                  # the shipped wheel's, g = l = 1
@@ -79,23 +80,6 @@ def test_cycle_failures_say_why(shipped_build, tmp_path):
 
 PHI, W_STANCE, W_SWING, STEP_TIME = 0.2710286805, 1.0923835899, 0.3773739489, 0.7343464
 EIGENVALUES = np.array([-0.19973 + 0.54448j, -0.19973 - 0.54448j, 0.13157])
-
-
-def gait_state(z):
-    """The state just after a heel strike of leg 1 at the origin, from z = (half inter-leg angle, stance speed,
-    swing speed), walking downhill (+x)."""
-    phi, w_st, w_sw = z
-    return np.array([-math.sin(phi), math.cos(phi), phi, -phi,
-                     math.cos(phi) * w_st, math.sin(phi) * w_st, -w_st, -w_sw])
-
-
-def gait_step(model, z):
-    """z after the next heel strike (leg 2's; the roles swap), by the same rk4 as the cycle."""
-    run = andyc.simulate(model, 5.0, dt=1e-3, method="rk4", x0=gait_state(z), d0=np.zeros(1), flow0="stance1",
-                         events=andyc.Events(tol=1e-15, stop_after={"strike2": 1}), init=andyc.Init("as-is"),
-                         progress=False)
-    x = run.events["state_after"][0]
-    return np.array([x[3], -x[7], -x[6]])
 
 
 def test_compass_gait_cycle(compiled, shipped_build):

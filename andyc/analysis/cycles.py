@@ -77,14 +77,15 @@ class Cycle:
 
 def find_cycle(model, section: str, period: int = 1, parameters: dict | None = None, dt: float = 1e-3,
                tol: float = 1e-11, max_iterations: int = 20, t_max: float = 20.0, event_tol: float = 1e-14,
-               x0=None, d0=None, progress=None) -> Cycle:
+               x0=None, d0=None, progress=None, start=None) -> Cycle:
     """A periodic orbit of `model` through the jump `section` (see the module docstring), by Newton's method from
     the state just before the first occurrence of the jump in a run from (x0, d0) (default the model's initial
     state, put on its constraint manifold). tol: on the residual |B^T (Q(y) - y)|_inf. t_max: the longest a run
     may take to come back to the section `period` times. progress(iteration, residual): called at each iterate.
 
     The Cycle says whether it converged and, if not, why (the section never reached, no convergence), with the
-    residual of every iterate."""
+    residual of every iterate. start: a first iterate y = (x, d) just before the jump instead (put on the section;
+    andyc.analysis.continuation starts a branch of period 2 so)."""
     if section not in model.jump_names:
         raise CycleError(f"{model.name}: no jump named '{section}'; jumps: {', '.join(model.jump_names) or 'none'}")
     if period < 1:
@@ -97,14 +98,15 @@ def find_cycle(model, section: str, period: int = 1, parameters: dict | None = N
     result = Cycle(model.name, section, period, params, False, "", np.zeros(nx), np.zeros(nd),
                    list(model.state_names), list(model.discrete_names))
     derivatives = load_derivatives(model)
-    first = andyc.simulate(model, t_max, dt, "rk4", parameters=params, x0=x0, d0=d0, progress=False,
-                           init=andyc.Init("project"),
-                           events=andyc.Events(tol=event_tol, stop_after={section: 1}))
-    if not (first.finished and first.events["jump"].size and first.events["jump"][-1] == k):
+    first = None if start is not None else andyc.simulate(
+        model, t_max, dt, "rk4", parameters=params, x0=x0, d0=d0, progress=False, init=andyc.Init("project"),
+        events=andyc.Events(tol=event_tol, stop_after={section: 1}))
+    if first is not None and not (first.finished and first.events["jump"].size and first.events["jump"][-1] == k):
         result.message = (f"the run from the initial state did not reach jump '{section}' within t_max = {t_max:g} s "
                           f"({first.status})")
         return result
-    y = _before_last_jump(first, nd)
+    y = _before_last_jump(first, nd) if first is not None else _on_section(model, derivatives, source, k, p,
+                                                                           np.asarray(start, float))
     Q = PoincareMap(model, derivatives, k, p, period, dt, t_max, event_tol)
     for iteration in range(max_iterations + 1):
         image = Q(y)
@@ -140,12 +142,16 @@ def find_cycle(model, section: str, period: int = 1, parameters: dict | None = N
 @dataclass
 class Image:
     """Q(y): `y` (None when the run did not come back), its Jacobian DQ (None when not asked for), the state
-    `after` J at y (the start of the run), the run's `time` and `status`."""
+    `after` J at y (the start of the run), the run's `time` and `status`; with DQ, `parameter_jacobian` dQ/dp at
+    fixed y (J's and the run's); `visits`: the times of J's occurrences in the run (the last is `time`) and the
+    states (x, d) just after them, the first at t = 0 being `after`."""
     y: np.ndarray | None
     jacobian: np.ndarray | None
     after: np.ndarray
     time: float
     status: str
+    parameter_jacobian: np.ndarray | None = None
+    visits: tuple | None = None
 
 
 class PoincareMap:
@@ -174,8 +180,17 @@ class PoincareMap:
                              events=self.events)
         if not (run.finished and run.events["jump"].size and run.events["jump"][-1] == k):
             return Image(None, None, after, float(run.time[-1]), run.status)
-        DQ = run.sensitivities["before_jump"][:, :nx + nd] @ DJ[:nx + nd, :nx + nd] if jacobian else None
-        return Image(_before_last_jump(run, nd), DQ, after, float(run.events["time"][-1]), run.status)
+        ev = run.events
+        mine = ev["jump"] == k
+        visits = (np.concatenate([[0.0], ev["time"][mine]]),
+                  np.vstack([after, np.hstack([ev["state_after"][mine], ev["discrete_after"][mine]])]))
+        if not jacobian:
+            return Image(_before_last_jump(run, nd), None, after, float(run.events["time"][-1]), run.status,
+                         visits=visits)
+        ny, S = nx + nd, run.sensitivities["before_jump"]    # d(y')/d(x0, d0, p): the run from J(y)
+        DQ = S[:, :ny] @ DJ[:ny, :ny]
+        DQp = S[:, :ny] @ DJ[:ny, ny:ny + len(p)] + S[:, ny:]
+        return Image(_before_last_jump(run, nd), DQ, after, float(run.events["time"][-1]), run.status, DQp, visits)
 
 
 def _before_last_jump(run, nd: int) -> np.ndarray:
@@ -199,8 +214,9 @@ def _apply_jump(model, k, x, u, p, d) -> None:
         raise CycleError(f"{model.name}: jump '{model.jump_names[k]}' failed at the iterate (status {status})")
 
 
-def _section_rows(model, derivatives, flow: int, k: int, p, y):
-    """(h, dh/dy): the source flow's constraint rows (phi, c) and jump k's guard at y = (x, d)."""
+def _section_rows(model, derivatives, flow: int, k: int, p, y, parameters: bool = False):
+    """(h, dh/dy): the source flow's constraint rows (phi, c) and jump k's guard at y = (x, d); with parameters,
+    (h, dh/dy, dh/dp)."""
     nx, ny = model.nx, len(y)
     held = np.asarray(model.input_defaults, float)
     x, d = y[:nx], y[nx:]
@@ -210,8 +226,10 @@ def _section_rows(model, derivatives, flow: int, k: int, p, y):
     g, dg = derivatives.guard_terms(k, 0.0, x, held, p, d)
     hol = [r for r in rows if r < model.nh]
     h = np.concatenate([phi[hol], c[rows], [g]])
-    H = np.vstack([dphi[hol], dc[rows], dg[None]])[:, :ny]
-    return h, H
+    W = np.vstack([dphi[hol], dc[rows], dg[None]])
+    if parameters:
+        return h, W[:, :ny], W[:, ny:ny + len(p)]
+    return h, W[:, :ny]
 
 
 def _on_section(model, derivatives, flow, k, p, y, iterations: int = 8) -> np.ndarray:
