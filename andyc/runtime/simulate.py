@@ -82,7 +82,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     sensitivities: also compute the exact derivatives of the run's end state, Run.sensitivities: "x0" dx(T)/dx0,
     "d0" dx(T)/dd0, "p" dx(T)/dp (x0 and d0 held), "time" dT/d(x0, d0, p) (nonzero when the run ends
     at a jump, stop_after) and "discrete" dd(T)/d(x0, d0, p), through the same RK4 steps and the saltation matrix of each jump
-    (andyc.runtime.sensitivities: the rk4 method; needs the build's derivatives, andyc.build_derivatives).
+    (andyc.runtime.sensitivities: the rk4, lagrange and projection methods; needs the build's derivatives,
+    andyc.build_derivatives).
     """
     _check_option("events", events, Events)
     _check_option("init", init, Init)
@@ -111,8 +112,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     tangent = None
     if sensitivities:
         from andyc.runtime.sensitivities import Tangent, check, load_derivatives
-        check(model, method, source, controller)
-        tangent = Tangent(model, load_derivatives(model), p, source.held(flow))
+        check(model, method, source, controller, projection)
+        tangent = Tangent(model, load_derivatives(model), p, source.held(flow), method, projection)
     bar = Progress(f"{model.name} {method}", t_end, enabled=progress)
     interrupts = interrupts or Interrupts()
     start = time.perf_counter()
