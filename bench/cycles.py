@@ -18,8 +18,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _exact_step(Q, B, y):
-    image = Q(y)
-    return np.linalg.solve(B.T @ image.jacobian @ B - np.eye(B.shape[1]), -B.T @ (image.y - y))
+    image = Q(y, directions=B)          # as find_cycle: DQ B, the run carrying B's columns
+    return np.linalg.solve(B.T @ image.jacobian - np.eye(B.shape[1]), -B.T @ (image.y - y))
 
 
 def _difference_step(Q, B, y, eps=1e-6):

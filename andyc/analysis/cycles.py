@@ -107,15 +107,15 @@ def find_cycle(model, section: str, period: int = 1, parameters: dict | None = N
     y = _before_last_jump(first, nd)
     Q = PoincareMap(model, derivatives, k, p, period, dt, t_max, event_tol)
     for iteration in range(max_iterations + 1):
-        image = Q(y)
+        B, sym = section_basis(model, derivatives, source, k, p, y)
+        image = Q(y, directions=B)          # DQ B only: the run carries B's columns, not all of z's
         result.state, result.discrete, result.before = image.after[:nx], image.after[nx:], y
         if image.y is None:
             result.message = (f"iteration {iteration}: the run from the iterate did not come back to jump '{section}' "
                               f"{period} time(s) within t_max = {t_max:g} s ({image.status})")
             return result
-        Qy, DQ = image.y, image.jacobian
-        B, sym = section_basis(model, derivatives, source, k, p, y)
-        reduced = B.T @ DQ @ B
+        Qy = image.y
+        reduced = B.T @ image.jacobian
         residual = B.T @ (Qy - y)
         r = float(np.max(np.abs(residual), initial=0.0))
         result.history.append(r)
@@ -139,7 +139,8 @@ def find_cycle(model, section: str, period: int = 1, parameters: dict | None = N
 
 @dataclass
 class Image:
-    """Q(y): `y` (None when the run did not come back), its Jacobian DQ (None when not asked for), the state
+    """Q(y): `y` (None when the run did not come back), its Jacobian DQ (DQ V along directions V; None when not
+    asked for), the state
     `after` J at y (the start of the run), the run's `time` and `status`."""
     y: np.ndarray | None
     jacobian: np.ndarray | None
@@ -150,7 +151,8 @@ class Image:
 
 class PoincareMap:
     """Q of jump k, period N (see the module docstring): Q(y) -> Image, with DQ when jacobian=True (then the
-    run carries its sensitivities; without, it is the plain compiled loop)."""
+    run carries its sensitivities; without, it is the plain compiled loop); Q(y, directions=V) (len(y), k): the
+    Jacobian along V only, DQ V (the run then carries k columns: cheaper)."""
 
     def __init__(self, model, derivatives, k: int, p, period: int, dt: float, t_max: float, event_tol: float):
         self.model, self.derivatives, self.k, self.p = model, derivatives, k, np.asarray(p, float)
@@ -159,7 +161,7 @@ class PoincareMap:
         self.dt, self.t_max = dt, t_max
         self.events = andyc.Events(tol=event_tol, stop_after={model.jump_names[k]: period})
 
-    def __call__(self, y, jacobian: bool = True) -> Image:
+    def __call__(self, y, jacobian: bool = True, directions=None) -> Image:
         model, k, p = self.model, self.k, self.p
         nx, nd = model.nx, model.nd
         held = np.asarray(model.input_defaults, float)
@@ -169,12 +171,19 @@ class PoincareMap:
             DJ = Tangent(model, self.derivatives, p, held).jump(k, 0.0, x, d, np.eye(nx + nd + len(p) + 1))
         _apply_jump(model, k, x, held, p, d)
         after = np.concatenate([x, d])
+        want = jacobian
+        if jacobian and directions is not None:     # z = (x0, d0, p) along DJ V
+            want = np.zeros((nx + nd + len(p), np.shape(directions)[1]))
+            want[:nx + nd] = DJ[:nx + nd, :nx + nd] @ directions
         run = andyc.simulate(model, self.t_max, self.dt, "rk4", parameters=self.params, x0=x, d0=d,
-                             flow0=self.target, progress=False, sensitivities=jacobian, init=andyc.Init("as-is"),
+                             flow0=self.target, progress=False, sensitivities=want, init=andyc.Init("as-is"),
                              events=self.events)
         if not (run.finished and run.events["jump"].size and run.events["jump"][-1] == k):
             return Image(None, None, after, float(run.time[-1]), run.status)
-        DQ = run.sensitivities["before_jump"][:, :nx + nd] @ DJ[:nx + nd, :nx + nd] if jacobian else None
+        DQ = None
+        if jacobian:
+            DQ = (run.sensitivities["before_jump"] if directions is not None else
+                  run.sensitivities["before_jump"][:, :nx + nd] @ DJ[:nx + nd, :nx + nd])
         return Image(_before_last_jump(run, nd), DQ, after, float(run.events["time"][-1]), run.status)
 
 

@@ -1,7 +1,6 @@
-"""Exact sensitivities of a fixed-step RK4 run: dx(T)/dx0 and dx(T)/dp, through its jumps.
+"""Exact sensitivities of a fixed-step run (rk4, lagrange, projection): dx(T)/dx0 and dx(T)/dp, through its jumps.
 
-The run's trajectory is the compiled loop's own (andyc.runtime.fixed_step, stepping one grid step per call
-here); beside it this module carries the tangent T = d(x, d, p, t)/dz, z = (x0, d0, p), through the same discrete
+The run's trajectory is the compiled loop's own (andyc.runtime.fixed_step); beside it this module carries the tangent T = d(x, d, p, t)/dz, z = (x0, d0, p), through the same discrete
 map, with the exact first derivatives of the model's functions and the RK4 tangent step, compiled beside them
 (<name>_derivatives.py, andyc.codegen.derivatives); the jumps' Jacobians are assembled here, in NumPy.
 dx(T)/dp is at fixed x0 and d0. The active constraint rows must be independent (a saddle-point system solves
@@ -44,11 +43,26 @@ differs from that one by about |f| event_tol in x, and its finite differences ca
 their step; the derivative itself is exact to round-off. When the run ends at a jump (stop_after), the end
 time is the jump's: dT/dz (Run.sensitivities["time"]) is dt_e, and dx(T)/dz the state just after it.
 
-Not handled (refused with a message by `check`): the projection method (its projection's Jacobian is not
-derived), lagrange and baumgarte, the adaptive methods, nonholonomic or quaternion signals, inputs driven by
-expressions, tables or controllers, guards that read multipliers, contacts, and jumps that happen at once
-after another (their saltation is degenerate). The user's functions in <name>_jumps.py are taken to change
-nothing (they are not differentiated).
+The projection method (and quaternions under rk4): each step is the RK4 step followed by the correction map
+x -> P(x) of andyc_numerics/dynamics.py project (Braun & Goldfarb, "Simulation of constrained mechanical systems"
+Part II: quaternions to unit norm; the position correction, eq. 3; the velocity correction, eq. 4; with
+energy_correction the energy correction, eq. 5-6, to E = E0, E0 the energy at the start or just after the latest
+jump), so the step's tangent is P'(x) times the RK4 tangent, and the event steps' too (the located state is a
+projected step). P' is differentiated in the generated project_tangent (its docstring has the formulas): each
+correction solves a saddle-point system [[M, -A^T], [A, 0]], whose derivative is the same system with the
+derivatives of M, A and the right-hand side (at the point where each is evaluated) on the right. The lagrange
+method is rk4's with independent rows, so its tangent is the rk4 one.
+
+Speed: the tangent of a stretch of steps without a jump is taken in one compiled call (tangent_steps) after the
+loop's call that made them, from the stretch's first state (the states are recomputed there: equal to the loop's
+to round-off); with directions Z (simulate(sensitivities=Z)), only the k columns T Z are carried, and every
+stage's saddle-point system is solved for those k columns.
+
+Not handled (refused with a message by `check`): the baumgarte method (its soft terms are not differentiated),
+the adaptive methods, inputs driven by expressions, tables or controllers, guards that read multipliers,
+contacts, the energy correction of a model whose elements do work (the balance E - E0 - W: W is not
+differentiated), and jumps that happen at once after another (their saltation is degenerate). The user's
+functions in <name>_jumps.py are taken to change nothing (they are not differentiated).
 """
 
 from __future__ import annotations
@@ -115,13 +129,22 @@ class Tangent:
     RK4 step, as in andyc.runtime.fixed_step (the projection method: the constraint rows and, with
     energy_correction, the energy; quaternions to unit norm with projection.normalize)."""
 
-    def __init__(self, model, derivatives, p, u, method: str = "rk4", projection=None):
+    def __init__(self, model, derivatives, p, u, method: str = "rk4", projection=None, directions=None):
         self.model, self.D, self.p, self.u = model, derivatives, np.asarray(p, float), np.asarray(u, float)
         nx, nd, npar = model.nx, model.nd, len(p)
         self.nx, self.nd, self.nw = nx, nd, nx + nd + npar + 1
-        self.ncol = nx + nd + npar
-        T = np.zeros((self.nw, self.ncol))
-        T[:-1, :] = np.eye(self.ncol)
+        self.directions = None if directions is None else np.asarray(directions, float)
+        if self.directions is None:
+            self.ncol = nx + nd + npar
+            T = np.zeros((self.nw, self.ncol))
+            T[:-1, :] = np.eye(self.ncol)
+        else:                       # the derivatives along these directions of z only (columns)
+            if self.directions.ndim != 2 or self.directions.shape[0] != nx + nd + npar:
+                raise SimulationError(f"{model.name}: sensitivities' directions must be an array of shape "
+                                      f"({nx + nd + npar}, k) over z = (x0, d0, p); got {self.directions.shape}")
+            self.ncol = self.directions.shape[1]
+            T = np.zeros((self.nw, self.ncol))
+            T[:-1, :] = self.directions
         self.T = T
         m = model.module
         self.flow_rows = [np.array([r for r in m.FLOW_ROWS[f] if r >= 0], dtype=np.int64) for f in range(model.nf)]
@@ -242,9 +265,20 @@ class Tangent:
         return out
 
     def result(self) -> dict:
+        """The derivatives at the run's end (see _result; with directions, along them)."""
+        if self.directions is not None:
+            nx, nd, T = self.nx, self.nd, self.T
+            out = {"directions": T[:nx].copy(), "time": T[-1].copy(), "discrete": T[nx:nx + nd].copy()}
+            if self.before_jump is not None:
+                out["before_jump"] = self.before_jump
+            return out
+        return self._result()
+
+    def _result(self) -> dict:
         """At the run's end: dx/dx0 (nx, nx), dx/dd0 (nx, nd), dx/dp (nx, np); the time's dt/dz (nx + nd + np,)
         and the discrete states' dd/dz (nd, nx + nd + np), z = (x0, d0, p); after a jump, "before_jump":
-        d(x, d)/dz of the state just before the latest one (nx + nd, nx + nd + np)."""
+        d(x, d)/dz of the state just before the latest one (nx + nd, nx + nd + np). With directions Z (nx + nd +
+        np, k): "directions" dx/dz Z (nx, k), and "time", "discrete", "before_jump" along them (k columns)."""
         nx, nd, T = self.nx, self.nd, self.T
         out = {"x0": T[:nx, :nx].copy(), "d0": T[:nx, nx:nx + nd].copy(), "p": T[:nx, nx + nd:].copy(),
                "time": T[-1].copy(), "discrete": T[nx:nx + nd].copy()}
