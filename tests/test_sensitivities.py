@@ -56,7 +56,7 @@ def test_double_pendulum_rk4(compiled, shipped_build):
 
 
 def test_ball_in_bowl_projection(compiled, shipped_build):
-    """The projection method: after each step the quaternion to unit norm, the position (eq. 3), velocity (eq. 4)
+    """The projection method (and lagrange, below): after each step the quaternion to unit norm, the position (eq. 3), velocity (eq. 4)
     and energy (eq. 5-6) corrections, each differentiated. The differences start off the constraint manifold
     (x0 perturbed as-is): the first projection takes them back, and its derivative says how."""
     model = _derivatives(compiled, shipped_build, "ball_in_bowl")
@@ -70,6 +70,12 @@ def test_ball_in_bowl_projection(compiled, shipped_build):
     # the corrections matter: the rk4 method's derivative (no projection) is far from the projection's
     plain = andyc.simulate(model, 0.5, 1e-3, "rk4", sensitivities=True, progress=False).sensitivities
     assert _relative(plain["x0"], fx) > 1e-3
+    # lagrange: rk4 with independent rows, the same tangent (against its own runs' differences)
+    run = andyc.simulate(model, 0.3, 1e-3, "lagrange", sensitivities=True, progress=False)
+    fx, fp, _ = _central_differences(model, 0.3, run.state[0], run.discrete[0], model.parameters(None),
+                                     andyc.Events(), "lagrange")
+    assert _relative(run.sensitivities["x0"], fx) < 1e-7
+    assert _relative(run.sensitivities["p"], fp) < 1e-7
 
 
 def test_compass_gait_through_heel_strikes(compiled, shipped_build):
