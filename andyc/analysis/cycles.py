@@ -109,15 +109,15 @@ def find_cycle(model, section: str, period: int = 1, parameters: dict | None = N
                                                                            np.asarray(start, float))
     Q = PoincareMap(model, derivatives, k, p, period, dt, t_max, event_tol)
     for iteration in range(max_iterations + 1):
-        image = Q(y)
+        B, sym = section_basis(model, derivatives, source, k, p, y)
+        image = Q(y, directions=B)          # DQ B only: the run carries B's columns, not all of z's
         result.state, result.discrete, result.before = image.after[:nx], image.after[nx:], y
         if image.y is None:
             result.message = (f"iteration {iteration}: the run from the iterate did not come back to jump '{section}' "
                               f"{period} time(s) within t_max = {t_max:g} s ({image.status})")
             return result
-        Qy, DQ = image.y, image.jacobian
-        B, sym = section_basis(model, derivatives, source, k, p, y)
-        reduced = B.T @ DQ @ B
+        Qy = image.y
+        reduced = B.T @ image.jacobian
         residual = B.T @ (Qy - y)
         r = float(np.max(np.abs(residual), initial=0.0))
         result.history.append(r)
@@ -141,10 +141,10 @@ def find_cycle(model, section: str, period: int = 1, parameters: dict | None = N
 
 @dataclass
 class Image:
-    """Q(y): `y` (None when the run did not come back), its Jacobian DQ (None when not asked for), the state
-    `after` J at y (the start of the run), the run's `time` and `status`; with DQ, `parameter_jacobian` dQ/dp at
-    fixed y (J's and the run's); `visits`: the times of J's occurrences in the run (the last is `time`) and the
-    states (x, d) just after them, the first at t = 0 being `after`."""
+    """Q(y): `y` (None when the run did not come back), its Jacobian DQ (DQ V along directions V; None when not
+    asked for), the state `after` J at y (the start of the run), the run's `time` and `status`; with the whole
+    DQ, `parameter_jacobian` dQ/dp at fixed y (J's and the run's); `visits`: the times of J's occurrences in the
+    run (the last is `time`) and the states (x, d) just after them, the first at t = 0 being `after`."""
     y: np.ndarray | None
     jacobian: np.ndarray | None
     after: np.ndarray
@@ -156,7 +156,8 @@ class Image:
 
 class PoincareMap:
     """Q of jump k, period N (see the module docstring): Q(y) -> Image, with DQ when jacobian=True (then the
-    run carries its sensitivities; without, it is the plain compiled loop)."""
+    run carries its sensitivities; without, it is the plain compiled loop); Q(y, directions=V) (len(y), k): the
+    Jacobian along V only, DQ V (the run then carries k columns: cheaper)."""
 
     def __init__(self, model, derivatives, k: int, p, period: int, dt: float, t_max: float, event_tol: float):
         self.model, self.derivatives, self.k, self.p = model, derivatives, k, np.asarray(p, float)
@@ -165,7 +166,7 @@ class PoincareMap:
         self.dt, self.t_max = dt, t_max
         self.events = andyc.Events(tol=event_tol, stop_after={model.jump_names[k]: period})
 
-    def __call__(self, y, jacobian: bool = True) -> Image:
+    def __call__(self, y, jacobian: bool = True, directions=None) -> Image:
         model, k, p = self.model, self.k, self.p
         nx, nd = model.nx, model.nd
         held = np.asarray(model.input_defaults, float)
@@ -175,8 +176,12 @@ class PoincareMap:
             DJ = Tangent(model, self.derivatives, p, held).jump(k, 0.0, x, d, np.eye(nx + nd + len(p) + 1))
         _apply_jump(model, k, x, held, p, d)
         after = np.concatenate([x, d])
+        want = jacobian
+        if jacobian and directions is not None:     # z = (x0, d0, p) along DJ V
+            want = np.zeros((nx + nd + len(p), np.shape(directions)[1]))
+            want[:nx + nd] = DJ[:nx + nd, :nx + nd] @ directions
         run = andyc.simulate(model, self.t_max, self.dt, "rk4", parameters=self.params, x0=x, d0=d,
-                             flow0=self.target, progress=False, sensitivities=jacobian, init=andyc.Init("as-is"),
+                             flow0=self.target, progress=False, sensitivities=want, init=andyc.Init("as-is"),
                              events=self.events)
         if not (run.finished and run.events["jump"].size and run.events["jump"][-1] == k):
             return Image(None, None, after, float(run.time[-1]), run.status)
@@ -187,6 +192,9 @@ class PoincareMap:
         if not jacobian:
             return Image(_before_last_jump(run, nd), None, after, float(run.events["time"][-1]), run.status,
                          visits=visits)
+        if directions is not None:                  # the run carried DJ V: DQ V, and no dQ/dp
+            return Image(_before_last_jump(run, nd), run.sensitivities["before_jump"], after,
+                         float(run.events["time"][-1]), run.status, visits=visits)
         ny, S = nx + nd, run.sensitivities["before_jump"]    # d(y')/d(x0, d0, p): the run from J(y)
         DQ = S[:, :ny] @ DJ[:ny, :ny]
         DQp = S[:, :ny] @ DJ[:ny, ny:ny + len(p)] + S[:, ny:]

@@ -61,7 +61,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
              flow0: str | int | None = None, every: int = 1, frames=None, rtol: float = 1e-8, atol: float = 1e-10,
              controller=None, progress: bool | None = None, interrupts: Interrupts | None = None,
              events: Events = Events(), init: Init = Init(), projection: Projection = Projection(),
-             sensitivities: bool = False) -> Run:
+             sensitivities=False) -> Run:
     """Integrate `model` from t = 0 to t_end and return the logged Run.
 
     dt is the step of the fixed-step methods and the output spacing of the adaptive ones; every N logs one
@@ -83,7 +83,10 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     sensitivities: also compute the exact derivatives of the run's end state, Run.sensitivities: "x0" dx(T)/dx0,
     "d0" dx(T)/dd0, "p" dx(T)/dp (x0 and d0 held), "time" dT/d(x0, d0, p) (nonzero when the run ends
     at a jump, stop_after) and "discrete" dd(T)/d(x0, d0, p), through the same RK4 steps and the saltation matrix of each jump
-    (andyc.runtime.sensitivities: the rk4 method; needs the build's derivatives, andyc.build_derivatives).
+    (andyc.runtime.sensitivities: the rk4, lagrange and projection methods; needs the build's derivatives,
+    andyc.build_derivatives). sensitivities may instead be an array Z (nx + nd + np, k) of directions in
+    z = (x0, d0, p): then only the derivatives along them are carried (cheaper when k is small), in
+    Run.sensitivities["directions"] = dx(T)/dz Z, and "time", "discrete" and "before_jump" with k columns.
     """
     _check_option("events", events, Events)
     _check_option("init", init, Init)
@@ -111,10 +114,11 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
         _require_free_speed(model, x, u, p, d, flow)
         _check_declared_law(model, x, u, p, d, flow, init)
     tangent = None
-    if sensitivities:
+    directions = None if isinstance(sensitivities, bool) else np.asarray(sensitivities, float)
+    if directions is not None or sensitivities:
         from andyc.runtime.sensitivities import Tangent, check, load_derivatives
-        check(model, method, source, controller)
-        tangent = Tangent(model, load_derivatives(model), p, source.held(flow))
+        check(model, method, source, controller, projection)
+        tangent = Tangent(model, load_derivatives(model), p, source.held(flow), method, projection, directions)
     bar = Progress(f"{model.name} {method}", t_end, enabled=progress)
     interrupts = interrupts or Interrupts()
     start = time.perf_counter()
