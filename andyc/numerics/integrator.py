@@ -30,13 +30,8 @@ from collections import namedtuple
 from .compiler import jit
 from .dynamics import enabled_value, guard_value, jump, multipliers, project, rhs_mode_into
 from .model import borrowed, call
-from .status import (DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, REST_SPEED, RISING,
-                     SLIP_STOP)
-
-ON_ZERO = 1e-12         # a gap this close to zero (relative to the state's scale beyond 1) is on zero
-OPEN_SIDE = math.inf    # the value a lifting gap on zero starts a step with (advance): positive, of no known size,
-#                         so that locate bisects until a trial finds it open (regula falsi from a value of 0+
-#                         would try the step's start again and again)
+from .status import (DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, ON_ZERO, OPEN_SIDE,
+                     REST_SPEED, RISING, SLIP_STOP)
 
 Options = namedtuple("Options", "mode project constrain e0 energy_tol event_tol")
 Options.__doc__ = """How a run integrates: mode (IDEAL, LAGRANGE or BAUMGARTE: how constraint forces are found),

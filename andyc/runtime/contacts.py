@@ -50,7 +50,7 @@ from itertools import product
 import numpy as np
 
 from andyc.errors import SimulationError
-from andyc.numerics.status import MESSAGES, PAINLEVE, REST_SPEED
+from andyc.numerics.status import MESSAGES, ON_ZERO, OPEN_SIDE, PAINLEVE, REST_SPEED
 
 SIMULTANEOUS = 1e-9     # s: an open contact takes part when its gap closes within this time at its speed
 TOUCHING = 1e-12        # a contact whose gap is at most this at the start, at rest, starts closed
@@ -247,6 +247,19 @@ def _painleve(model, t, x, u, p, d, i: int, state: int, mu: float) -> None:
     sigma = 1.0 if state == SLIP_POS else -1.0
     if not normal @ np.linalg.solve(M, normal - sigma * mu * tangent) > 0.0:
         raise SimulationError(f"contact '{model.contact_names[i]}' at the start: {MESSAGES[PAINLEVE]}")
+
+
+def open_side(model, t, x, u, p, d, g0: dict) -> None:
+    """The adaptive methods' start of a segment (as the compiled integrator.advance's): each contact impact guard in
+    g0 (jump -> value) whose gap is on zero (|gap| <= ON_ZERO, relative beyond 1) and opening (normal speed above
+    REST_SPEED: it left an impact) starts at OPEN_SIDE, so that its coming down within the step is located."""
+    opening = [m for m in g0 if model.jump_contact and model.jump_contact[m] >= 0
+               and abs(g0[m]) <= ON_ZERO * max(1.0, float(np.max(np.abs(x))))]
+    if opening:
+        _, _, c, _ = _terms(model, t, x, u, p, d)
+        for m in opening:
+            if c[model.contact_rows[model.jump_contact[m]]] > REST_SPEED:
+                g0[m] = OPEN_SIDE
 
 
 def slip_speeds(model, t, x, u, p, d) -> np.ndarray:
