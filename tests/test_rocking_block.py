@@ -5,7 +5,7 @@ A rectangular block, half-width b, half-height h (R = sqrt(b^2 + h^2), alpha = a
 a bottom corner), rocks on its two bottom corners, unilateral contacts that stick and do not bounce. About one
 corner, at tilt th in [0, alpha),
 
-    I_O th'' = -m g R sin(alpha - th)                                            (Housner eq. 4)
+    I_O th'' = -m g R sin(alpha - th)                                          
 
 and energy gives th'(th)^2 = k (cos(alpha - th) - cos(alpha - A)), k = 2 m g R / I_O, for the amplitude A (the
 centre's height is R cos(alpha - th)). The time from the amplitude to level (a quarter of the free-rocking period
@@ -20,8 +20,10 @@ Its integrand is infinite at th = A (as 1 / sqrt(A - th)); with th = A - s^2 and
 
 which scipy.integrate.quad takes to round-off (the difference of cosines is never formed: no cancellation near
 s = 0). At the level pose the other corner strikes; keeping the angular momentum about it (the striking corner's
-impulse has no moment there, the lifting one none at all) gives Housner's eq. 20, th'+ = r th'-,
-r = 1 - (3/2) sin^2 alpha. So the block is released at th0 and strikes first at T(th0)/4; after impact n it
+impulse has no moment there, the lifting one none at all) gives Housner's ratio th'+ = r th'-,
+r = 1 - (3/2) sin^2 alpha: about the striking corner O', before the impact H = I_G w + m r_O'G x (w x r_OG) =
+w m R^2 (1/3 + cos 2 alpha) (r_O'G and r_OG, both of length R, are 2 alpha apart), after it I_O w+ = (4/3) m R^2 w+,
+so r = (1 + 3 cos 2 alpha) / 4 = 1 - (3/2) sin^2 alpha. So the block is released at th0 and strikes first at T(th0)/4; after impact n it
 leaves at r^n th'_1 (th'_1 from energy at th0), rises to the amplitude A_n of that energy and strikes again
 2 T(A_n)/4 later. The half-cycles shrink geometrically (A_n ~ r^(2n), T ~ sqrt(A)), so the impacts accumulate at
 a finite time, where the block rests on both corners.
