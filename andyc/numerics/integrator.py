@@ -30,8 +30,8 @@ from collections import namedtuple
 from .compiler import jit
 from .dynamics import enabled_value, guard_value, jump, multipliers, project, rhs_mode_into
 from .model import borrowed, call
-from .status import (BAUMGARTE, DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, REST_SPEED,
-                     RISING, SLIP_STOP)
+from .status import (BAUMGARTE, DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, ON_ZERO,
+                     OPEN_SIDE, REST_SPEED, RISING, SLIP_STOP)
 
 Options = namedtuple("Options", "mode project constrain e0 energy_tol event_tol")
 Options.__doc__ = """How a run integrates: mode (IDEAL, LAGRANGE or BAUMGARTE: how constraint forces are found),
@@ -229,9 +229,19 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
         scale = max(scale, abs(x[j]))
     if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
         return i, row, INPUT_FAILED, t, flow, -1
+    have_rate = False
     for n in range(model.nj):
         if source[n] == flow:
             g0[n] = guard_value(model, w, n, t, x, u, p, d)
+            # A contact leaving an impact (a bounce, or a rocking block's pivot corner lifted when the other
+            # strikes) starts with its gap a rounding from zero, either side. A rounding below zero, moving up,
+            # would hide its coming down again within the step (a block's late, short rocks), and one above would
+            # have locate try the step's start again and again: it starts on the open side, of no known size.
+            if model.jump_contact[n] >= 0 and abs(g0[n]) <= ON_ZERO * scale:
+                if not have_rate:
+                    have_rate = rhs_mode_into(model, w, t, x, u, p, d, flow, w.xdot, opts.mode) == OK
+                if have_rate and call(model.guard_rate, (n, t, x, u, p, d, w.xdot)) > REST_SPEED:
+                    g0[n] = OPEN_SIDE
     while i < i_end:
         t_next = t0 + (i + 1) * dt
         h = t_next - t

@@ -17,6 +17,7 @@ import numpy as np
 
 from andyc.numerics.status import IDEAL, INPUT_FAILED, OK
 from andyc.runtime.compiled import work
+from andyc.runtime.contacts import open_side
 from andyc.runtime.events import apply_jump, follow_instant_jumps
 from andyc.runtime.status import INTERRUPTED, at, ending, failure, nonfinite, solver_failed
 from andyc.runtime.work import JumpWork, with_work
@@ -86,6 +87,7 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
             solver = scipy_method(method)(fun, t, x, t_end, rtol=rtol, atol=atol)
             watched = [m for m in range(model.nj) if module.JUMP_SOURCE[m] == flow]
             g0 = {m: module.guard(m, t, x, inputs(t, x), p, d) for m in watched}
+            open_side(model, t, x[:nx], inputs(t, x), p, d, g0)     # a gap leaving an impact: on its open side
             while solver.status == "running":
                 message = interrupts.reason()
                 if message is not None:

@@ -3,7 +3,9 @@
 A contact's impact jump (its gap crossing zero, falling) carries no compiled impact map; the drivers call
 resolve_impact right after it, before the user's jump function and the record. Every contact touching at
 that instant takes part: the closed ones (the flow's bitmask) and the open ones whose gap would close within
-SIMULTANEOUS seconds at their normal speed (a rod falling flat onto two supports strikes both at once).
+SIMULTANEOUS seconds at their normal speed (a rod falling flat onto two supports strikes both at once), or
+whose gap is at most TOUCHING (the contact whose guard fired: a slow approach, a rocking block's corner late in
+its decay, is located with its gap a rounding above zero, more than SIMULTANEOUS times its speed).
 Their impulses solve the impact as a linear complementarity problem (Pfeiffer & Glocker, Multibody Dynamics
 with Unilateral Contacts, 1996, ch. 7; Newton's law per contact):
 
@@ -22,7 +24,8 @@ integrator's `instant` fire its jump): right after a liftoff its gap is a roundi
 Modes after the impact: a touching contact whose normal speed after is at most REST_SPEED closes (e = 0, or a
 rebound too slow to matter); the others are open. When the jump times accumulate (Zeno: the EventLog's
 test, the same that stops a hand-written bouncing ball), the impact is solved plastic (e = 0 for every
-contact), so the contacts close and the run goes on from the accumulation point: the ball comes to rest.
+contact), and the touching contacts are then set at rest (_at_rest), so the run goes on from the accumulation
+point: the ball comes to rest, and so does a rocking block on both its corners.
 
 With friction (andyc.spec.contacts: planar Coulomb, a stick row J_t, the slip speed s = J_t v), each touching
 contact with friction takes part in one of four ways: no impulse, a sticking impulse (its stick row too:
@@ -47,7 +50,7 @@ from itertools import product
 import numpy as np
 
 from andyc.errors import SimulationError
-from andyc.numerics.status import MESSAGES, PAINLEVE, REST_SPEED
+from andyc.numerics.status import MESSAGES, ON_ZERO, OPEN_SIDE, PAINLEVE, REST_SPEED
 
 SIMULTANEOUS = 1e-9     # s: an open contact takes part when its gap closes within this time at its speed
 TOUCHING = 1e-12        # a contact whose gap is at most this at the start, at rest, starts closed
@@ -89,7 +92,7 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool) -> int:
     contact_row = set(rows) | {r for r in stick if r >= 0}
     bilateral = [r for r in model.active_rows(flow) if r not in contact_row]
     touching = [i for i, r in enumerate(rows)
-                if states[i] or (c[r] < -REST_SPEED and phi[r] <= SIMULTANEOUS * -c[r])]
+                if states[i] or (c[r] < -REST_SPEED and phi[r] <= max(SIMULTANEOUS * -c[r], TOUCHING))]
     used = rows + bilateral + [r for r in stick if r >= 0]
     scale = max(1.0, float(np.max(np.abs(c[used])))) if used else 1.0
     tol = 1e-10 * scale
@@ -144,11 +147,30 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool) -> int:
         raise FloatingPointError(f"no consistent contact impulses at t = {t}")
     dv, after = best
     x[nq:nq + nv] += dv
+    if plastic:
+        return _at_rest(model, t, x, u, p, d, [rows[i] for i in touching] + bilateral
+                        + [stick[i] for i in touching if stick[i] >= 0 and abs(after[stick[i]]) <= REST_SPEED])
     states = [0] * len(rows)
     for i in touching:
         if after[rows[i]] <= REST_SPEED:
             states[i] = 1 if stick[i] < 0 else _slip_state(after[stick[i]])
     return model.contact_flow(states)
+
+
+def _at_rest(model, t, x, u, p, d, R: list) -> int:
+    """The impact times accumulate (Zeno): at their accumulation point the touching contacts are at rest, as the
+    ball that stops bouncing or the rocking block whose corners strike ever faster and ever slower (Housner's
+    rocking loses a fixed share of its speed at each impact, so its half-cycles shrink geometrically). The
+    plastic impact alone leaves the corner that did not strike lifting (no impulse can stop a block rocking
+    about one corner without pulling at the other), at a speed that the impacts that remain would take away,
+    so the rows R (the touching contacts' gaps, the stick rows of those not slipping, the flow's other rows) are
+    set at rest by the least M-norm change of x's speeds, in place (a change of the size of the speed that is
+    left), and the run goes on in the mode of a run starting there (initial_mode: no contact pulls)."""
+    nq, nv = model.nq, model.nv
+    M, _, c, A = _terms(model, t, x, u, p, d)
+    Minv, J = np.linalg.inv(M), A[R]
+    x[nq:nq + nv] -= Minv @ J.T @ np.linalg.lstsq(J @ Minv @ J.T, c[R], rcond=None)[0]
+    return initial_mode(model, t, x, u, p, d)
 
 
 def _slip_state(slip: float) -> int:
@@ -225,6 +247,19 @@ def _painleve(model, t, x, u, p, d, i: int, state: int, mu: float) -> None:
     sigma = 1.0 if state == SLIP_POS else -1.0
     if not normal @ np.linalg.solve(M, normal - sigma * mu * tangent) > 0.0:
         raise SimulationError(f"contact '{model.contact_names[i]}' at the start: {MESSAGES[PAINLEVE]}")
+
+
+def open_side(model, t, x, u, p, d, g0: dict) -> None:
+    """The adaptive methods' start of a segment (as the compiled integrator.advance's): each contact impact guard in
+    g0 (jump -> value) whose gap is on zero (|gap| <= ON_ZERO, relative beyond 1) and opening (normal speed above
+    REST_SPEED: it left an impact) starts at OPEN_SIDE, so that its coming down within the step is located."""
+    opening = [m for m in g0 if model.jump_contact and model.jump_contact[m] >= 0
+               and abs(g0[m]) <= ON_ZERO * max(1.0, float(np.max(np.abs(x))))]
+    if opening:
+        _, _, c, _ = _terms(model, t, x, u, p, d)
+        for m in opening:
+            if c[model.contact_rows[model.jump_contact[m]]] > REST_SPEED:
+                g0[m] = OPEN_SIDE
 
 
 def slip_speeds(model, t, x, u, p, d) -> np.ndarray:
