@@ -53,9 +53,9 @@ from andyc.spec.scope import Scope
 
 IMPACT, LIFTOFF, SLIP, STOP = "impact", "liftoff", "slip", "stop"
 OPEN, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3      # a contact's state (without friction: 0 open, 1 closed)
-SLIP = 2                                           # spatial friction: 0 open, 1 stick, 2 slip (one state)
+SLIDE = 2                                          # spatial friction: 0 open, 1 stick, 2 slip (one state)
 STATE_SUFFIX = {STICK: "_stick", SLIP_POS: "_slip_pos", SLIP_NEG: "_slip_neg"}
-SPATIAL_SUFFIX = {STICK: "_stick", SLIP: "_slip"}
+SPATIAL_SUFFIX = {STICK: "_stick", SLIDE: "_slip"}
 MAX_MODES = 16                                     # flows: 4 contacts without friction, 2 with
 
 
@@ -189,10 +189,12 @@ def _spatial_jumps(add, c: Contact, w: dict, s: int, k: int, i: int, other, stic
     s . d, d the slip's direction at the start of the integration step, kept in the discrete states `direction`
     by the integrator: numerics.dynamics.slip_direction; a linear crossing at the stop, where |s|^2 only touches
     zero), its target decided by the runtime (stick inside the cone, else slip on)."""
+    if len(stick.multipliers) != 2:         # one friction name for two tangents: reported (andyc.spec.constraints)
+        return
     t1, t2 = (lams[name][0] for name in stick.multipliers)
     used = {n_sym: c.multiplier, t1: stick.multipliers[0], t2: stick.multipliers[1]}
     if s == STICK:
-        add(f"{c.name}_slip", SLIP, k, other(SLIP), c.friction ** 2 * n_sym ** 2 - t1 ** 2 - t2 ** 2, FALLING, i,
+        add(f"{c.name}_slip", SLIP, k, other(SLIDE), c.friction ** 2 * n_sym ** 2 - t1 ** 2 - t2 ** 2, FALLING, i,
             used=used, text=_text(f"({w['friction']})**2*{c.multiplier}**2 - {stick.multipliers[0]}**2 - "
                                   f"{stick.multipliers[1]}**2", "none"))
         return
