@@ -53,8 +53,8 @@ def initial_slip(v0, w0):
 
 
 @pytest.mark.parametrize("spin, method", [
-    ((0.0, 0.0, 0.0), "rk4"), ((0.0, 0.0, 0.0), "DOP853"), ((10.0, 0.0, 0.0), "DOP853"),
-    ((10.0, -15.0, 5.0), "DOP853")], ids=["no-spin-rk4", "no-spin", "side-spin", "spin-all-axes"])
+    ((0.0, 0.0, 0.0), "rk4"), ((10.0, 0.0, 0.0), "rk4"), ((0.0, 0.0, 0.0), "DOP853"), ((10.0, 0.0, 0.0), "DOP853"),
+    ((10.0, -15.0, 5.0), "DOP853")], ids=["no-spin-rk4", "side-spin-rk4", "no-spin", "side-spin", "spin-all-axes"])
 def test_ball_thrown_obliquely_with_spin_rolls_from_t_star(ball, spin, method):
     """v0 = (2, 1) with spin w0: the slip keeps its direction u0/|u0| while it slides (the path curves when u0 is
     not along v0), the ball rolls from t* = 2 |u0| / (7 mu g) on at v = v0 - (2/7) u0 (the module docstring)."""
@@ -297,3 +297,60 @@ def test_a_bad_second_tangent_is_reported_by_check(tmp_path, second, message):
     assert f"{bad}:{line_number(text, '    slip: [')}: contacts[0].slip[1]: {message}" in result.output
     result = invoke("check", str(MODELS / "block_incline_spatial.yaml"))
     assert result.exit_code == 0, result.output
+
+
+# -- sticking, then slipping where the friction reaches the cone -------------------------------------------
+
+PUCK = """\
+name: puck_pushed
+parameters: {m: 1.0, g: 9.81, mu: 0.4, c: 8.0, b: 0.6}
+coordinates:
+  x: {initial: 0}
+  y: {initial: 0}
+  z: {initial: 0}
+gravity: [0, 0, -g]
+frames:
+  - {name: slide_x, parent: world, prismatic: x, axis: x}
+  - {name: slide_y, parent: slide_x, prismatic: y, axis: y}
+  - {name: puck, parent: slide_y, prismatic: z, axis: z}
+bodies:
+  - {name: mass, frame: puck, mass: m}
+forces:
+  - {name: push, frame: puck, vector: [c*t*cos(b), c*t*sin(b), 0]}
+contacts:
+  - {name: floor, gap: puck.z, slip: [puck.vx, puck.vy], friction: mu}
+"""
+
+
+@pytest.fixture(scope="module")
+def puck(compiled, tmp_path_factory):
+    path = tmp_path_factory.mktemp("puck") / "puck_pushed.yaml"
+    path.write_text(PUCK)
+    return compiled(path)
+
+
+@pytest.mark.parametrize("method", ["rk4", "DOP853"])
+def test_a_puck_pushed_harder_and_harder_sticks_then_slips_along_the_push(puck, method):
+    """A force c t along (cos b, sin b) on a puck at rest on the floor: it sticks (friction -c t) until |lam_t|
+    reaches mu m g at t1 = mu m g / c (the jump floor_slip, guard mu^2 lam_n^2 - |lam_t|^2), then slips along the
+    push, its slip starting against the sticking force: m s'' = c t - mu m g, s = c (t - t1)^3 / (6 m)."""
+    b, c = 0.6, 8.0
+    run = andyc.simulate(puck, 1.0, dt=1e-3, method=method, rtol=1e-12, atol=1e-12, progress=False)
+    t1 = 0.4 * G / c
+    assert run.finished and run.event_names() == ["floor_slip"] and abs(run.events["time"][0] - t1) < 1e-10
+    before, after = run.time < t1, run.time > t1
+    assert np.all(run.contact_modes[before, 0] == STICK) and np.all(run.contact_modes[after, 0] == SLIP)
+    assert np.max(np.abs(run.state[before, :3])) < 1e-12
+    push = np.array([math.cos(b), math.sin(b)])
+    expected = c * (run.time[after] - t1) ** 3 / 6
+    xy = np.stack([run.column("x"), run.column("y")], axis=1)[after]
+    # (DOP853 starts the slip with steps its error control sizes by atol = 1e-12 on speeds of that order: 3e-10 m)
+    assert np.max(np.abs(xy - expected[:, None] * push)) < (1e-10 if method == "rk4" else 1e-9)
+    friction = np.stack([run.friction_forces[:, 0], run.friction_forces_2[:, 0]], axis=1)
+    assert np.max(np.abs(friction[before] + c * run.time[before, None] * push)) < 1e-10
+    assert np.allclose(np.linalg.norm(friction[after], axis=1), 0.4 * G, rtol=0, atol=1e-10)
+    # along -push: at the slip's first samples the slip is slow (1e-6 m/s) and its direction within 1e-5 rad of the
+    # push (rk4 holds the direction predicted at each step's end while the slip is too slow for its step:
+    # numerics.dynamics.slip_direction), an error that the friction itself damps as the slip grows: 1e-10 at 1 s
+    assert np.max(np.abs(friction[after] + 0.4 * G * push)) < 1e-4
+    assert np.max(np.abs(friction[-1] + 0.4 * G * push)) < 1e-10

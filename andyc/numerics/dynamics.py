@@ -14,7 +14,7 @@ from .compiler import jit
 from .linalg import (add_rows_transposed, cholesky, correction, ltdl, ltdl_solve, solve_gram, solve_lower, solve_upper,
                      whiten)
 from .model import call
-from .status import BAUMGARTE, DEPENDENT, IDEAL, OK, PAINLEVE, RANK_TOL, SINGULAR_MASS, SLIP_TINY
+from .status import BAUMGARTE, DEPENDENT, HOLD, IDEAL, OK, PAINLEVE, RANK_TOL, SINGULAR_MASS, SLIP_TINY
 
 
 @jit
@@ -136,16 +136,17 @@ def flow_slips(model, flow, nr):
 @jit(inline="always")
 def slip_unit(model, d, flow, r, S):
     """(u1, u2) the unit slip direction of the contact with spatial friction whose normal row is the flow's r-th
-    (its stick rows t, t + 1: FLOW_SLIP[flow, r] = t + 1; its slip s = (c_t, c_t+1) in S's cv row; d_ref the
-    direction kept in d at FLOW_SLIP_DIR[flow, r] - 1, set at each step's start by slip_direction): sigma s / |s|,
-    sigma = sign(s . d_ref), so that within a step the friction keeps its direction through a slip that ends
-    there (as a planar slip's sigma is fixed in its flow) and the stop's guard s . d_ref crosses zero; d_ref itself
-    when |s| <= SLIP_TINY (a slip starting from rest, its direction set by the runtime; or the stop itself)."""
+    (its stick rows t, t + 1: FLOW_SLIP[flow, r] = t + 1; its slip s = (c_t, c_t+1) in S's cv row; in d from
+    FLOW_SLIP_DIR[flow, r] - 1 = k: d_ref = (d[k], d[k + 1]), the direction at the step's start, and d[k + 2],
+    1 while the step holds it; both set by slip_direction): sigma s / |s|, sigma = sign(s . d_ref), so that within
+    a step the friction keeps its direction through a slip that ends there (as a planar slip's sigma is fixed in
+    its flow) and the stop's guard s . d_ref crosses zero; d_ref itself when the step holds it, or when
+    |s| <= SLIP_TINY (a slip starting from rest, its direction set by the runtime)."""
     t = model.flow_slip[flow, r] - 1
     k = model.flow_slip_dir[flow, r] - 1
     s1, s2 = S[model.s_cv, t], S[model.s_cv, t + 1]
     n = math.sqrt(s1 * s1 + s2 * s2)
-    if n <= SLIP_TINY:
+    if n <= SLIP_TINY or d[k + 2] != 0.0:
         return d[k], d[k + 1]
     if s1 * d[k] + s2 * d[k + 1] < 0.0:
         n = -n
@@ -153,25 +154,66 @@ def slip_unit(model, d, flow, r, S):
 
 
 @jit
-def slip_direction(model, w, t, x, u, p, d, flow):
+def slip_direction(model, w, t, x, u, p, d, flow, h, mode):
     """At a step's start in `flow`: each contact with spatial friction slipping there gets its slip's direction,
-    s / |s|, into its two discrete states (FLOW_SLIP_DIR), unless |s| <= SLIP_TINY (then they keep the direction
-    the runtime set: a slip from rest). Returns whether the flow has such a contact (the caller then re-evaluates
-    the stop's guard, s . d)."""
+    s / |s|, into its discrete states (FLOW_SLIP_DIR: d[k], d[k + 1]), unless |s| <= SLIP_TINY (then they keep
+    the direction the runtime set: a slip from rest). Returns whether the flow has such a contact (the caller then
+    re-evaluates the stop's guard, s . d).
+
+    With a fixed step h > 0 it may hold a direction over the step instead (d[k + 2] = 1, slip_unit): the
+    direction relaxes towards the slip at the rate mu lam_n |J_t M^-1 J_t^T| / |s| (the friction's pull on a
+    sideways slip, over the slip), which near |s| = 0 is far beyond an explicit step's stability bound. Where h
+    times that rate exceeds HOLD, the step holds the direction of s + h a_free, a_free the slip's acceleration
+    less the friction's (a_free = a + mu lam_n J_t M^-1 J_t^T u): the friction then opposes the slip at the step's
+    end, as an implicit (backward Euler) step of the direction would have it, which is stable. A slip that keeps
+    its direction (a ball's, a_free = 0) is then exact; one that turns (a block across a slope) is followed to
+    first order over the few steps before it stops, or after it starts."""
     found = False
+    S, nq, nv = w.S, model.nq, model.nv
     for r in range(model.flow_nrows[flow]):
         k = model.flow_slip_dir[flow, r] - 1
         if k < 0:
             continue
-        if not found:
-            call(model.constraints_into, (t, x, u, p, d, w.S))
-            found = True
+        found = True
+        call(model.constraints_into, (t, x, u, p, d, S))
         row = model.flow_slip[flow, r] - 1
-        s1, s2 = w.S[model.s_cv, row], w.S[model.s_cv, row + 1]
+        s1, s2 = S[model.s_cv, row], S[model.s_cv, row + 1]
         n = math.sqrt(s1 * s1 + s2 * s2)
         if n > SLIP_TINY:
             d[k] = s1 / n
             d[k + 1] = s2 / n
+        d[k + 2] = 0.0
+        if h <= 0.0:
+            continue
+        d[k + 2] = 1.0                  # (evaluated holding it, as the step would)
+        if rhs_mode_into(model, w, t, x, u, p, d, flow, w.xdot, mode) != OK:
+            continue
+        z1, z2 = S[model.s_dv, :nv], S[model.s_r, :nv]      # J_t L^-T, whitened with M's factor L (linalg.whiten)
+        for i in range(nv):
+            v1, v2 = S[model.s_a + row, i], S[model.s_a + row + 1, i]
+            for m in range(i):
+                v1 -= w.M[i, m] * z1[m]
+                v2 -= w.M[i, m] * z2[m]
+            z1[i] = v1 * w.M[i, i]
+            z2[i] = v2 * w.M[i, i]
+        g11, g12, g22 = 0.0, 0.0, 0.0
+        a1, a2 = S[model.s_kappa, row], S[model.s_kappa, row + 1]      # the slip's acceleration, A dv/dt + kappa
+        for i in range(nv):
+            g11 += z1[i] * z1[i]
+            g12 += z1[i] * z2[i]
+            g22 += z2[i] * z2[i]
+            a1 += S[model.s_a + row, i] * w.xdot[nq + i]
+            a2 += S[model.s_a + row + 1, i] * w.xdot[nq + i]
+        pull = S[model.s_e, model.flow_slip_mu[flow, r]] * S[model.s_y, r]       # mu lam_n
+        if h * abs(pull) * (g11 + g22) <= HOLD * n:
+            d[k + 2] = 0.0
+            continue
+        p1 = s1 + h * (a1 + pull * (g11 * d[k] + g12 * d[k + 1]))
+        p2 = s2 + h * (a2 + pull * (g12 * d[k] + g22 * d[k + 1]))
+        size = math.sqrt(p1 * p1 + p2 * p2)
+        if size > SLIP_TINY:
+            d[k] = p1 / size
+            d[k + 1] = p2 / size
     return found
 
 

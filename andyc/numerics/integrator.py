@@ -225,7 +225,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
         h = t_next - t
         if h > 1e-14 * max(1.0, abs(t_next)):
             counts[0] += 1
-            if slip_direction(model, w, t, x, u, p, d, flow):   # a spatial slip: its direction at the step's start
+            if slip_direction(model, w, t, x, u, p, d, flow, h, opts.mode):  # a spatial slip's direction, held?
                 for n in range(model.nj):
                     if source[n] == flow and model.jump_contact[n] == SLIP_STOP:
                         g0[n] = guard_value(model, w, n, t, x, u, p, d)

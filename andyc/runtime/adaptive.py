@@ -111,7 +111,7 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
                 bar(t_stop)
                 if hit is None:
                     t, x = solver.t, solver.y.copy()
-                    if slip_direction(model.ref, w.ref, t, x, inputs(t, x), p, d, flow):    # a spatial slip
+                    if slip_direction(model.ref, w.ref, t, x, inputs(t, x), p, d, flow, 0.0, IDEAL):    # a spatial slip
                         g0.update({m: module.guard(m, t, x, inputs(t, x), p, d) for m in watched
                                    if module.JUMP_CONTACT[m] == SLIP_STOP})
                     continue

@@ -174,9 +174,10 @@ class Run:
                 slip = np.stack([self.slip_speeds[:, i], self.slip_speeds_2[:, i]], axis=1)
                 size = np.hypot(slip[:, 0], slip[:, 1])
                 known = f"{self.contact_names[i]}_slip_dir_1"
-                if known in self.discrete_names:        # a slip from rest: the direction the run kept
+                if known in self.discrete_names:        # a slip from rest, or a step that held it: the run's
                     k = self.discrete_names.index(known)
-                    direction = np.where((size > 0)[:, None], slip / np.where(size > 0, size, 1.0)[:, None],
+                    own = (size > 0) & (self.discrete[:, k + 2] == 0)
+                    direction = np.where(own[:, None], slip / np.where(size > 0, size, 1.0)[:, None],
                                          self.discrete[:, k:k + 2])
                 else:
                     direction = slip / np.where(size > 0, size, 1.0)[:, None]

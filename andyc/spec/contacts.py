@@ -198,7 +198,7 @@ def _spatial_jumps(add, c: Contact, w: dict, s: int, k: int, i: int, other, stic
             used=used, text=_text(f"({w['friction']})**2*{c.multiplier}**2 - {stick.multipliers[0]}**2 - "
                                   f"{stick.multipliers[1]}**2", "none"))
         return
-    d1, d2 = (next(x.symbol for x in scope.discrete if x.name == name) for name in c.direction)
+    d1, d2 = (next(x.symbol for x in scope.discrete if x.name == name) for name in c.direction[:2])
     stop = add(f"{c.name}_stop", STOP, k, other(STICK), stick.rows[0] * d1 + stick.rows[1] * d2, FALLING, i,
                c.friction, stick.quantities,
                text=_text(f"({w['slip'][0]})*{c.direction[0]} + ({w['slip'][1]})*{c.direction[1]}", "none"))
@@ -206,9 +206,10 @@ def _spatial_jumps(add, c: Contact, w: dict, s: int, k: int, i: int, other, stic
 
 
 def _slip_direction(name: str, where: tuple, scope: Scope) -> tuple:
-    """The two discrete states of a contact with spatial friction that hold its slip's direction (unit, in its
-    tangents' coordinates; 0 until it slips): `<contact>_slip_dir_1`, `_2`."""
-    names = (f"{name}_slip_dir_1", f"{name}_slip_dir_2")
+    """The discrete states of a contact with spatial friction that keep its slip's direction (unit, in its
+    tangents' coordinates; 0 until it slips): `<contact>_slip_dir_1`, `_2`, and `<contact>_slip_held`, 1 while a
+    fixed step holds that direction (andyc.numerics.dynamics.slip_direction)."""
+    names = (f"{name}_slip_dir_1", f"{name}_slip_dir_2", f"{name}_slip_held")
     for n in names:
         if n in scope.declared:
             scope.report.error(where + ("name",), f"contact '{name}' with spatial friction needs the name '{n}' "
