@@ -77,7 +77,8 @@ def test_ball_thrown_obliquely_with_spin_rolls_from_t_star(ball, spin, method):
     # (rk4 at dt = 1e-3 follows the spinning ball's slip to its truncation error, 1e-9 m/s; it ends where it must)
     assert np.max(np.abs(slip[sliding] - expected)) < (1e-8 if method == "rk4" else 1e-10)
     friction = np.stack([run.friction_forces[:, 0], run.friction_forces_2[:, 0]], axis=1)
-    assert np.max(np.abs(friction[sliding] + MU * G * u0 / np.linalg.norm(u0))) < 1e-10
+    # (rk4: over the last steps of the slip, which hold a predicted direction, 1e-7 N)
+    assert np.max(np.abs(friction[sliding] + MU * G * u0 / np.linalg.norm(u0))) < (1e-7 if method == "rk4" else 1e-10)
     assert np.max(np.abs(friction[rolling])) < 1e-12           # rolling on the flat needs no friction
     assert np.max(np.abs(run.normal_forces[:, 0] - G)) < 1e-10
     if spin[0]:                                                 # the path curves: v turns from v0 to v0 - 2/7 u0
