@@ -31,10 +31,22 @@ s+ sigma >= 0): Newton's law in the normal direction, Coulomb's on the tangentia
 Newton-Coulomb impact, planar; the cases are enumerated as the active sets are, sticking before sliding). The
 contact then closes sticking if its slip speed after is at most REST_SPEED, else slipping its way.
 
+Spatial friction (two tangents, slip s = (s1, s2), andyc.spec.contacts): the tangential impulse lies in the disk
+|P_t| <= mu P_n. The cases: no impulse; a sticking impulse (both stick rows: s+ = 0) if it is inside the disk;
+else sliding, P_t = -mu P_n u along the slip's direction before the impact, u = s-/|s-| (without a slip before,
+against the sticking impulse), with s+ . u >= 0 (the slip is not reversed). For a ball, whose tangential inverse
+inertia at the contact is isotropic, the slip keeps its direction through the impact and this is Coulomb's law
+integrated over it (Brach 1991, ch. 3, in the plane of u); for other bodies the slip's direction turns during a
+sliding impact, which this law (the direction frozen at its start) does not follow. The contact then closes
+sticking if |s+| <= REST_SPEED, else slipping along s+.
+
 resolve_stop decides where a slip ends (its slip speed crossing zero): the contact sticks if the friction force
 it needs there is inside the cone, |lam_t| <= mu lam_n; otherwise it slips the other way (lam_t > mu lam_n: the
 other forces push it backwards). The other contacts whose slip is zero then too stop with it, each deciding by
 its own cone; the rest keep their states (this is not the full complementarity problem of the accelerations).
+A contact with spatial friction sticks if |lam_t| <= mu lam_n, else slips on against lam_t (its direction into
+the discrete states that keep it); a stick that reaches the cone's edge (its `_slip` jump) starts its slip the same
+way (start_slip).
 
 initial_mode picks the mode a run starts in: the contacts touching at rest, less those that would pull, each
 with friction sticking if it does not slip and the friction it needs is inside the cone, else slipping.
@@ -100,7 +112,7 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool) -> int:
     # each touching contact: 0 no impulse, 1 active (sticking, with friction), 2 / 3 sliding forwards / backwards
     # (spatial friction: 0 none, 1 sticking, 2 sliding against the slip before, _slide_direction)
     choices = [range(3) if spatial[i] else range(4) if stick[i] >= 0 else range(2) for i in touching]
-    slide = {i: _slide_direction(model, t, x, u, p, d, flow, i, c, A, Minv, bilateral, e[i])
+    slide = {i: _slide_direction(model, i, c, A, Minv, bilateral, e[i])
              for i in touching if spatial[i]}
     cases = sorted(product(*choices), key=lambda case: (sum(o > 0 for o in case), sum(o > 1 for o in case), case))
     best = None
@@ -172,7 +184,7 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool) -> int:
     return model.contact_flow(states)
 
 
-def _slide_direction(model, t, x, u, p, d, flow, i, c, A, Minv, bilateral, e) -> np.ndarray:
+def _slide_direction(model, i: int, c, A, Minv, bilateral: list, e: float) -> np.ndarray:
     """The unit direction along which contact i (spatial friction) slides at an impact: its slip before, s-/|s-|;
     without one (|s-| <= REST_SPEED), against the tangential impulse that would stop it, -P_t/|P_t| (the sticking
     impulse, outside the cone). (1, 0) if neither has a direction."""
