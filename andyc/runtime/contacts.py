@@ -178,7 +178,7 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool) -> int:
             continue
         if spatial[i]:
             slip = after[stick[i]:stick[i] + 2]
-            states[i] = STICK if np.hypot(*slip) <= REST_SPEED else _set_direction(model, d, i, slip)
+            states[i] = _stuck(model, d, i) if np.hypot(*slip) <= REST_SPEED else _set_direction(model, d, i, slip)
         else:
             states[i] = 1 if stick[i] < 0 else _slip_state(after[stick[i]])
     return model.contact_flow(states)
@@ -209,7 +209,14 @@ def _set_direction(model, d, i: int, direction) -> int:
     (numerics.dynamics.slip_unit reads them while the slip is slower than SLIP_TINY). Returns SLIP."""
     k = _direction_index(model, i)
     d[k:k + 2] = np.asarray(direction, dtype=float) / np.hypot(*direction)
+    d[k + 2] = 0.0          # (not held: the integrator decides at its next step)
     return SLIP
+
+
+def _stuck(model, d, i: int) -> int:
+    """Contact i (spatial friction) sticks: no step holds its slip's direction (its discrete state to 0); STICK."""
+    d[_direction_index(model, i) + 2] = 0.0
+    return STICK
 
 
 def _spatial_cone_state(model, d, i: int, lam, mu: float) -> int:
@@ -218,7 +225,7 @@ def _spatial_cone_state(model, d, i: int, lam, mu: float) -> int:
     t1 = model.contact_stick_rows[i]
     lam_t, lam_n = lam[t1:t1 + 2], lam[model.contact_rows[i]]
     if np.hypot(*lam_t) <= mu * lam_n + 1e-12 * max(1.0, abs(lam_n)):
-        return STICK
+        return _stuck(model, d, i)
     return _set_direction(model, d, i, -lam_t)
 
 
