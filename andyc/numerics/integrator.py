@@ -28,7 +28,7 @@ import math
 from collections import namedtuple
 
 from .compiler import jit
-from .dynamics import enabled_value, guard_value, jump, multipliers, project, rhs_mode_into
+from .dynamics import enabled_value, guard_value, jump, multipliers, project, rhs_mode_into, slip_direction
 from .model import borrowed, call
 from .status import (BAUMGARTE, DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, ON_ZERO,
                      OPEN_SIDE, REST_SPEED, RISING, SLIP_STOP)
@@ -247,6 +247,10 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
         h = t_next - t
         if h > 1e-14 * max(1.0, abs(t_next)):
             counts[0] += 1
+            if slip_direction(model, w, t, x, u, p, d, flow, h, opts.mode):  # a spatial slip's direction, held?
+                for n in range(model.nj):
+                    if source[n] == flow and model.jump_contact[n] == SLIP_STOP:
+                        g0[n] = guard_value(model, w, n, t, x, u, p, d)
             status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale)
             if status != OK:
                 return i, row, status, t, flow, -1

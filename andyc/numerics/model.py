@@ -57,7 +57,7 @@ SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj", "nw", "nt")
 ROWS = ("s_a", "s_c", "s_w") + tuple(f"s_{name}" for name in VECTORS)  # the first row of each part of S
 TABLES = ("quaternions",                            # index in x of each quaternion signal's w
           "flow_rows", "flow_nrows", "flow_nhrows",  # active rows of each flow (holonomic first), then -1
-          "flow_slip", "flow_slip_mu",               # per flow and row: a slipping contact's friction (slip_rows)
+          "flow_slip", "flow_slip_mu", "flow_slip_dir",  # per flow and row: a slipping contact's friction (slip_rows)
           "impact_rows", "impact_nrows",             # rows taking each jump's impact
           "jump_source", "jump_target", "jump_direction", "jump_priority", "jump_order", "jump_multipliers",
           "jump_contact",                            # the contact whose impact jump k is, or -1
@@ -202,7 +202,8 @@ else:
 
 
 @jit
-def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, impact_rows,
+def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, flow_slip_dir,
+           impact_rows,
            impact_nrows, jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers,
            jump_contact, row_work, mass_parent, mass_order, leaves):
     (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
@@ -213,14 +214,15 @@ def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_sl
                  rows[0], rows[1], rows[2], rows[3], rows[4], rows[5], rows[6], rows[7], rows[8], rows[9], rows[10],
                  rows[11], rows[12],
                  borrowed(quaternions), borrowed(flow_rows), borrowed(flow_nrows), borrowed(flow_nhrows),
-                 borrowed(flow_slip), borrowed(flow_slip_mu),
+                 borrowed(flow_slip), borrowed(flow_slip_mu), borrowed(flow_slip_dir),
                  borrowed(impact_rows), borrowed(impact_nrows), borrowed(jump_source), borrowed(jump_target),
                  borrowed(jump_direction), borrowed(jump_priority), borrowed(jump_order), borrowed(jump_multipliers),
                  borrowed(jump_contact), borrowed(row_work), borrowed(mass_parent), borrowed(mass_order),
                  dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
                  constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form,
                  energy_law, drive_power,
-                 (quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, impact_rows, impact_nrows,
+                 (quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, flow_slip_dir, impact_rows,
+                  impact_nrows,
                   jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact,
                   row_work, mass_parent, mass_order))
 

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from andyc.numerics.status import IDEAL, INPUT_FAILED, OK
+from andyc.numerics.status import IDEAL, INPUT_FAILED, OK, SLIP_STOP
 from andyc.runtime.compiled import work
 from andyc.runtime.contacts import open_side
 from andyc.runtime.events import apply_jump, follow_instant_jumps
@@ -39,6 +39,7 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
     stats)."""
     module, rhs_mode_into = model.module, model.numerics.dynamics.rhs_mode_into
     stage_powers = model.numerics.integrator.stage_powers
+    slip_direction = model.numerics.dynamics.slip_direction
     w = work(model)
     nx = model.nx
     x = with_work(model, x)         # the state, then the work of each slot: extra components of the solver's y
@@ -112,6 +113,9 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
                 bar(t_stop)
                 if hit is None:
                     t, x = solver.t, solver.y.copy()
+                    if slip_direction(model.ref, w.ref, t, x, inputs(t, x), p, d, flow, 0.0, IDEAL):    # a spatial slip
+                        g0.update({m: module.guard(m, t, x, inputs(t, x), p, d) for m in watched
+                                   if module.JUMP_CONTACT[m] == SLIP_STOP})
                     continue
                 k, t, x_before = hit
                 x = x_before.copy()

@@ -69,17 +69,25 @@ class CompiledModel:
     contact_rows: tuple = ()    # the constraint row of each contact's gap
     jump_contact: tuple = ()    # per jump: the contact whose impact it is (andyc.runtime.contacts resolves it), or
     #                             SLIP_STOP (a slip's end, andyc.numerics.status), or -1
-    contact_stick_rows: tuple = ()  # the stick row of each contact with friction, or -1
+    contact_stick_rows: tuple = ()  # the stick row of each contact with friction (spatial: the first of two), or -1
+    contact_tangents: tuple = ()  # per contact: 0 frictionless, 1 planar, 2 spatial friction (stick rows t, t + 1)
     jump_kinds: tuple = ()      # per jump: (kind, contact) of a contact's jump (andyc.spec.contacts), ("", -1) else
 
     @property
     def contact_radix(self) -> list:
-        """The number of states of each contact: 2 (open, closed), 4 with friction (open, stick, slip +, slip -)."""
-        return radices([r >= 0 for r in self.contact_stick_rows] if self.contact_stick_rows
-                       else [False] * len(self.contact_names))
+        """The number of states of each contact: 2 (open, closed), 4 with planar friction (open, stick, slip +,
+        slip -), 3 with spatial friction (open, stick, slip)."""
+        return radices(self.tangents)
+
+    @property
+    def tangents(self) -> list:
+        """Per contact: 0 frictionless, 1 planar, 2 spatial friction."""
+        return (list(self.contact_tangents) or [int(r >= 0) for r in self.contact_stick_rows]
+                or [0] * len(self.contact_names))
 
     def contact_states(self, flow: int) -> list:
-        """Each contact's state in `flow` (andyc.spec.contacts: 0 open, 1 closed or sticking, 2 / 3 slipping)."""
+        """Each contact's state in `flow` (andyc.spec.contacts: 0 open, 1 closed or sticking, 2 / 3 slipping; spatial
+        friction: 2 slipping)."""
         return states_of(int(flow), self.contact_radix)
 
     def contact_flow(self, states: list) -> int:

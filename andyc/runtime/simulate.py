@@ -240,7 +240,7 @@ class _Assembly:
         phi, c, lam = np.empty((n, model.nh)), np.empty((n, model.nc)), np.empty((n, model.nc))
         if model.nc:
             integrator.evaluate_constraints(model.ref, work(model).ref, log, p, phi, c, lam)
-        slip = slip_speeds(model, t_log, x_log, u_log, p, d_log) if model.contact_names else None
+        slip, slip_2 = slip_speeds(model, t_log, x_log, u_log, p, d_log) if model.contact_names else (None, None)
         frames_out, rotations = {}, {}
         if frame_names:
             poses = np.empty((n, len(model.frame_names), 12))
@@ -270,7 +270,7 @@ class _Assembly:
                    display=model.display, contact_names=list(model.contact_names),
                    contact_rows=list(model.contact_rows), contact_stick_rows=list(model.contact_stick_rows),
                    contact_mu=list(friction_coefficients(model, p)) if model.contact_names else [],
-                   slip_speeds=slip)
+                   slip_speeds=slip, slip_speeds_2=slip_2, contact_tangents=model.tangents)
 
 
 def _check_size(model: CompiledModel, t_end: float, dt: float, every: int) -> None:

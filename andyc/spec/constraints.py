@@ -91,13 +91,21 @@ def build_constraints(written: list, scope: Scope, quantities: FrameQuantities,
     ones first (DESIGN.md run layout; a contact's row is holonomic); multiplier names checked."""
     constraints = [_constraint(("constraints", i), c, scope, quantities) for i, c in enumerate(written)]
     constraints += [_constraint(("contacts", i), c, scope, quantities) for i, c in enumerate(contacts)]
-    # A contact with friction: its stick row, the slip speed = 0 (nonholonomic), active while it sticks.
+    # A contact with friction: its stick row, the slip speed = 0 (nonholonomic), active while it sticks; spatial
+    # friction (slip: a list of two tangential speeds): one constraint of two rows.
     constraints += [_constraint(("contacts", i), {"name": f"{c['name']}_stick", "slip": c["slip"],
-                                                  "multiplier": c.get("friction_multiplier", f"friction_{c['name']}")},
+                                                  "multiplier": c.get("friction_multiplier", _friction_names(c))},
                                 scope, quantities) for i, c in enumerate(contacts) if "slip" in c]
     constraints.sort(key=lambda c: not c.holonomic)
     _check_multipliers(constraints, {"constraints": written, "contacts": contacts}, scope)
     return constraints
+
+
+def _friction_names(contact: dict):
+    """The default names of a contact's friction forces: friction_<contact>, or friction_<contact>_1 and _2 (two
+    tangents)."""
+    base = f"friction_{contact['name']}"
+    return [f"{base}_1", f"{base}_2"] if isinstance(contact["slip"], list) else base
 
 
 def _constraint(where: tuple, c: dict, scope: Scope, quantities: FrameQuantities) -> Constraint:
@@ -185,8 +193,9 @@ def _constraint(where: tuple, c: dict, scope: Scope, quantities: FrameQuantities
     elif isinstance(multipliers, str):
         multipliers = [multipliers]
     if len(multipliers) != len(rows):
-        scope.report.error(where + ("multiplier",), f"{len(multipliers)} multiplier name(s) for {len(rows)} "
-                           f"constraint row(s)", f"give one name per row ({len(rows)})")
+        scope.report.error(where + ("friction_multiplier" if key == "slip" else "multiplier",),
+                           f"{len(multipliers)} multiplier name(s) for {len(rows)} constraint row(s)",
+                           f"give one name per row ({len(rows)})")
     gains = c.get("gains") or {}
     if "stiffness" in gains and not holonomic:
         scope.report.error(where + ("gains", "stiffness"), "a nonholonomic constraint has no stiffness (ANDY eq. "
