@@ -102,7 +102,8 @@ def check(model, method: str, source, controller, projection=None) -> None:
     """Refuse, with the reason, a run whose sensitivities this module does not compute (see the docstring)."""
     why = None
     m = model.module
-    work = [w for w in getattr(model, "work_names", ()) if w != "jumps"]
+    # the slots that can do work in these methods ('baumgarte' holds the soft terms' work: 0 but in that method)
+    work = [w for w in getattr(model, "work_names", ()) if w not in ("jumps", "baumgarte")]
     if method not in ("rk4", "lagrange", "projection"):
         why = (f"method '{method}': sensitivities follow the rk4, lagrange and projection methods only (the "
                f"{'baumgarte terms are' if method == 'baumgarte' else 'adaptive methods are'} not differentiated); "
