@@ -1,5 +1,7 @@
 """The contacts section of bench/run.py (issue 21): steps per second of runs whose contacts open and close,
-the cost of a contact's impact against a hand-written jump of the same motion, and one impact's solve alone."""
+the cost of contact handling per step against the same model without its contacts (item 8: the resting ball,
+the rocking block; alternated rounds in one run, min and max), the cost of a contact's impact against a
+hand-written jump of the same motion, and one impact's solve alone."""
 
 from __future__ import annotations
 
@@ -23,9 +25,64 @@ def _steps_per_second(run) -> float:
     return (s["steps"] + s["event_trial_steps"]) / s["wall_seconds"]
 
 
+def _without_contacts(path: Path, tmp: Path) -> Path:
+    """The model file at `path` with its `contacts:` section (and what follows: expectations) left out, as
+    <name>_free.yaml in tmp: the same bodies and frames, moving freely."""
+    text = path.read_text().split("\ncontacts:\n")[0] + "\n"
+    name = path.stem + "_free"
+    out = tmp / f"{name}.yaml"
+    out.write_text(text.replace(f"name: {path.stem}\n", f"name: {name}\n"))
+    return out
+
+
+def _us_per_step(model, t_end, dt, options) -> tuple:
+    """(microseconds per RK4 step, trial steps of event location included; the run) of one run."""
+    run = andyc.simulate(model, t_end, dt=dt, every=1000, progress=False, **options)
+    s = run.stats
+    return s["wall_seconds"] / (s["steps"] + s["event_trial_steps"]) * 1e6, run
+
+
+CONTACT_COST = (
+    # label, model, its options; the same model without contacts runs the same t_end and dt with no options
+    ("resting ball (on the ground from the start, contact closed: one row, its liftoff guard on the normal "
+     "force)", "bouncing_ball_contact", 10.0, 1e-3, {"parameters": {"h0": 0.0}}),
+    ("rocking block (two corners with friction: 16 modes; rocks, then rests on both)", "rocking_block", 5.0,
+     1e-3, {"method": "projection"}),
+)
+
+
+def contact_cost(tmp: Path, build: Path, rounds: int = 7) -> None:
+    """Item 8 of issue 21: steps per second with contacts, and the cost of contact handling per step: the same
+    model with its contacts section left out (its bodies moving freely, same steps), timed alternately in each
+    round (with, without), min and max over the rounds."""
+    print(f"  cost of contact handling per step (RK4 steps incl. event-location trials; {rounds} rounds, "
+          "alternated with the same model without its contacts; min .. max):")
+    for label, name, t_end, dt, options in CONTACT_COST:
+        path = ROOT / "models" / f"{name}.yaml"
+        model = andyc.compile_model(path, build)[0]
+        free = andyc.compile_model(_without_contacts(path, tmp), build)[0]
+        free_options = {k: v for k, v in options.items() if k != "parameters"}
+        _us_per_step(model, 10 * dt, dt, options), _us_per_step(free, 10 * dt, dt, free_options)     # compile
+        with_us, without_us, extra = [], [], []
+        for _ in range(rounds):
+            a, run = _us_per_step(model, t_end, dt, options)
+            b, _ = _us_per_step(free, t_end, dt, free_options)
+            with_us.append(a)
+            without_us.append(b)
+            extra.append(a - b)
+        print(f"    {label}, {t_end:g} s at dt = {dt:g} ({options.get('method', 'rk4')}): "
+              f"{run.stats['jumps']} jumps; with contacts {1e6 / max(with_us):.3g} .. {1e6 / min(with_us):.3g} "
+              f"steps/s ({min(with_us):.2f} .. {max(with_us):.2f} us/step), without {min(without_us):.2f} .. "
+              f"{max(without_us):.2f} us/step; contact handling {min(extra):.2f} .. {max(extra):.2f} us/step "
+              f"(x{min(a / b for a, b in zip(with_us, without_us)):.2f} .. "
+              f"x{max(a / b for a, b in zip(with_us, without_us)):.2f})")
+    print("    walker with contacts: not measured (no passive walker with unilateral feet that walks 20 steps yet)")
+
+
 def contacts_benchmark(tmp: Path) -> None:
     """Issue 21: runs with contacts, and what contact handling costs against the same motion without it."""
     build = tmp / "contacts_build"
+    contact_cost(tmp, build)
     ball = andyc.compile_model(ROOT / "models" / "bouncing_ball_contact.yaml", build)[0]
     plain = andyc.compile_model(ROOT / "models" / "bouncing_ball.yaml", build)[0]
     rod = andyc.compile_model(ROOT / "models" / "rod_drop.yaml", build)[0]

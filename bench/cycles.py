@@ -1,5 +1,6 @@
 """The cycles section of bench/run.py (issue 22, item 7): one Newton step of `andyc cycle` on a walker with the
-exact Jacobian (one run carrying its sensitivities: the RK4 stages and the saltation matrices) against the same
+exact Jacobian (one run carrying its sensitivities along the section's coordinates, as find_cycle does: the RK4
+stages and the saltation matrices, the tangent of each chunk of steps in one compiled call) against the same
 step with a finite-difference Jacobian (central differences of the compiled map along each of the section's
 coordinates: 2 k + 1 plain runs), alternated in one run, at the fixed point, min and max over the repeats."""
 
@@ -18,8 +19,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _exact_step(Q, B, y):
-    image = Q(y)
-    return np.linalg.solve(B.T @ image.jacobian @ B - np.eye(B.shape[1]), -B.T @ (image.y - y))
+    image = Q(y, directions=B)          # as find_cycle: DQ B, the run carrying B's columns
+    return np.linalg.solve(B.T @ image.jacobian - np.eye(B.shape[1]), -B.T @ (image.y - y))
 
 
 def _difference_step(Q, B, y, eps=1e-6):
@@ -58,7 +59,7 @@ def walker_benchmark(tmp: Path, name: str, section: str, repeats: int) -> None:
             tic = time.perf_counter()
             steps[label] = step(Q, B, y)
             times[label].append(time.perf_counter() - tic)
-    for label, runs in (("exact", "1 run with sensitivities"),
+    for label, runs in (("exact", f"1 run with sensitivities along the section's {B.shape[1]} coordinates"),
                         ("differences", f"{2 * B.shape[1] + 1} plain runs, central differences")):
         t = times[label]
         print(f"  one Newton step, {label} Jacobian ({runs}): min {min(t):.3f} s, max {max(t):.3f} s "

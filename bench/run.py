@@ -468,7 +468,7 @@ def main(argv=None):
             if "contacts" in only:
                 from contacts import contacts_benchmark
 
-                section("contacts (issue 21): resting ball, rod on two supports, hopper; RK4, best of 5")
+                section("contacts (issue 21): resting ball, rocking block, rod on two supports, hopper, friction")
                 contacts_benchmark(tmp)
             if "cycles" in only:
                 from cycles import cycles_benchmark

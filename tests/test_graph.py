@@ -42,8 +42,8 @@ def test_frame_tree_is_the_files_frames_links_and_bodies(path):
         written = [k for k in JOINTS if k in f]
         if written:
             assert kinds[f["name"]] == written[0]
-        else:               # no joint: fixed, or moving when its translation or rotation holds a coordinate
-            coordinates = set(data.get("coordinates") or {})
+        else:               # no joint: fixed, or moving when its translation or rotation holds a coordinate or t
+            coordinates = set(data.get("coordinates") or {}) | {"t"}
             text = str(f.get("translation", "")) + str(f.get("rotation", ""))
             moves = bool(coordinates & set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", text)))
             assert kinds[f["name"]] == ("moving" if moves else "fixed"), f["name"]
@@ -87,16 +87,19 @@ def _contact_modes_of_file(data) -> tuple:
     impact of every open contact (its gap falling through zero; the impact solver picks the mode after), a liftoff
     of every closed one (its normal force, the multiplier, falling through zero) to the flow without it, and with
     friction: from stick a slip each way (mu lam_n +- lam_t falling through zero), from a slip its stop (the slip
-    speed through zero, falling forwards, rising backwards) to stick."""
+    speed through zero, falling forwards, rising backwards) to stick. Spatial friction (slip: a list of two):
+    open, stick, slip; from stick a slip where mu^2 lam_n^2 - lam_1^2 - lam_2^2 falls through zero, from slip its
+    stop where s . d does (d the slip's direction, two discrete states)."""
     contacts = data["contacts"]
     own = {c["name"] for c in data.get("constraints") or []}
     suffix = ["", "_stick", "_slip_pos", "_slip_neg"]
-    choices = [range(4) if "friction" in c else range(2) for c in contacts]
+    spatial = [isinstance(c.get("slip"), list) for c in contacts]
+    choices = [range(3) if s else range(4) if "friction" in c else range(2) for c, s in zip(contacts, spatial)]
     nodes, edges = set(), set()
 
     def name_of(states):
-        return "+".join(c["name"] + (suffix[s] if "friction" in c else "")
-                        for c, s in zip(contacts, states) if s) or "open"
+        return "+".join(c["name"] + (("", "_stick", "_slip")[s] if flat else suffix[s] if "friction" in c else "")
+                        for c, s, flat in zip(contacts, states, spatial) if s) or "open"
 
     for states in itertools.product(*choices):
         name = name_of(states)
@@ -111,6 +114,13 @@ def _contact_modes_of_file(data) -> tuple:
                 continue
             edges.add((name, other(0), normal, "falling"))
             if "friction" not in c:
+                continue
+            if spatial[k]:
+                f1, f2 = c.get("friction_multiplier", [f"friction_{c['name']}_{j}" for j in (1, 2)])
+                d1, d2 = f"{c['name']}_slip_dir_1", f"{c['name']}_slip_dir_2"
+                edges.add((name, other(2), f"({c['friction']})**2*{normal}**2 - {f1}**2 - {f2}**2", "falling")
+                          if states[k] == 1 else (name, other(1), f"({c['slip'][0]})*{d1} + ({c['slip'][1]})*{d2}",
+                                                  "falling"))
                 continue
             friction = c.get("friction_multiplier", f"friction_{c['name']}")
             if states[k] == 1:

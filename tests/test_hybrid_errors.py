@@ -205,7 +205,7 @@ def test_jump_without_a_required_field(tmp_path, field, line):
     ("      guard: foot.y\n", "      gaurd: foot.y\n", "hybrid.jumps[0].gaurd",
      "direction, enabled, from, guard, impact, name, priority, reset, to"),
     ("      constraints: [ground, pin]\n", "      constraint: [ground, pin]\n", "hybrid.flows[1].constraint",
-     "constraints, inputs, name"),
+     "constraints, energy_law, inputs, name"),
     ("  initial: flight\n", "  intial: flight\n", "hybrid.intial", "flows, initial, jumps"),
     ("  jumps:\n", "  jump:\n", "hybrid.jump", "flows, initial, jumps"),
 ], ids=["jump-gaurd", "flow-constraint", "hybrid-intial", "hybrid-jump"])

@@ -1,6 +1,7 @@
 """Exact sensitivities of a run (andyc.runtime.sensitivities): dx(T)/dx0 and dx(T)/dp against central
 differences of the same runs (the compiled loop, without sensitivities), issue 22 item 1: the double pendulum
-(rk4, no jumps), the compass gait across three heel strikes (saltation matrices) and the bouncing ball (impacts
+(rk4, no jumps), the ball in a bowl (the projection method: the constraint and energy corrections after every
+step, a quaternion, quasi-velocities and nonholonomic rows), the compass gait across three heel strikes (saltation matrices) and the bouncing ball (impacts
 with restitution). The run file keeps them; a method they do not follow is refused."""
 
 import numpy as np
@@ -20,10 +21,10 @@ def _derivatives(compiled, shipped_build, name):
     return model
 
 
-def _central_differences(model, t_end, x0, d0, p0, events):
-    """dx(T)/dx0 and dx(T)/dp, and dT/d(x0, p), by central differences of plain rk4 runs (extrapolated)."""
+def _central_differences(model, t_end, x0, d0, p0, events, method="rk4"):
+    """dx(T)/dx0 and dx(T)/dp, and dT/d(x0, p), by central differences of plain runs (extrapolated)."""
     def end(x, p):
-        run = andyc.simulate(model, t_end, 1e-3, "rk4", x0=x, d0=d0, parameters=dict(zip(model.parameter_names, p)),
+        run = andyc.simulate(model, t_end, 1e-3, method, x0=x, d0=d0, parameters=dict(zip(model.parameter_names, p)),
                              events=events, init=andyc.Init("as-is"), progress=False)
         return np.append(run.state[-1], run.time[-1])
 
@@ -52,6 +53,29 @@ def test_double_pendulum_rk4(compiled, shipped_build):
     assert _relative(S["x0"], fx) < 1e-7
     assert _relative(S["p"], fp) < 1e-7
     assert np.all(S["time"] == 0.0)           # a run to a fixed t_end
+
+
+def test_ball_in_bowl_projection(compiled, shipped_build):
+    """The projection method (and lagrange, below): after each step the quaternion to unit norm, the position (eq. 3), velocity (eq. 4)
+    and energy (eq. 5-6) corrections, each differentiated. The differences start off the constraint manifold
+    (x0 perturbed as-is): the first projection takes them back, and its derivative says how."""
+    model = _derivatives(compiled, shipped_build, "ball_in_bowl")
+    run = andyc.simulate(model, 0.5, 1e-3, "projection", sensitivities=True, progress=False)
+    S = run.sensitivities
+    fx, fp, _ = _central_differences(model, 0.5, run.state[0], run.discrete[0], model.parameters(None),
+                                     andyc.Events(), "projection")
+    assert S["x0"].shape == (13, 13)
+    assert _relative(S["x0"], fx) < 1e-7
+    assert _relative(S["p"], fp) < 1e-7
+    # the corrections matter: the rk4 method's derivative (no projection) is far from the projection's
+    plain = andyc.simulate(model, 0.5, 1e-3, "rk4", sensitivities=True, progress=False).sensitivities
+    assert _relative(plain["x0"], fx) > 1e-3
+    # lagrange: rk4 with independent rows, the same tangent (against its own runs' differences)
+    run = andyc.simulate(model, 0.3, 1e-3, "lagrange", sensitivities=True, progress=False)
+    fx, fp, _ = _central_differences(model, 0.3, run.state[0], run.discrete[0], model.parameters(None),
+                                     andyc.Events(), "lagrange")
+    assert _relative(run.sensitivities["x0"], fx) < 1e-7
+    assert _relative(run.sensitivities["p"], fp) < 1e-7
 
 
 def test_compass_gait_through_heel_strikes(compiled, shipped_build):
@@ -87,7 +111,7 @@ def test_bouncing_ball_restitution(compiled, shipped_build):
 
 def test_run_file_and_refusals(compiled, shipped_build, tmp_path):
     """andyc sim --sensitivities writes /sensitivities into the HDF5 run file (the CSV says it does not hold
-    them); the projection method is refused with the reason (its projection's Jacobian is not derived)."""
+    them); the baumgarte method is refused with the reason (its soft terms are not differentiated)."""
     _derivatives(compiled, shipped_build, "double_pendulum")
     h5, csv = tmp_path / "dp.h5", tmp_path / "dp.csv"
     result = invoke("sim", MODELS / "double_pendulum.yaml", "--t-end", 0.2, "--sensitivities", "-o", h5, "-o", csv,
@@ -99,7 +123,7 @@ def test_run_file_and_refusals(compiled, shipped_build, tmp_path):
     again = andyc.simulate(model, 0.2, 1e-3, "rk4", sensitivities=True, progress=False)
     assert np.array_equal(run.sensitivities["x0"], again.sensitivities["x0"])
     assert np.array_equal(run.sensitivities["p"], again.sensitivities["p"])
-    refused = invoke("sim", MODELS / "double_pendulum.yaml", "--t-end", 0.2, "--method", "projection",
+    refused = invoke("sim", MODELS / "double_pendulum.yaml", "--t-end", 0.2, "--method", "baumgarte",
                      "--sensitivities", "-o", tmp_path / "p.h5", "--build-dir", shipped_build)
     assert refused.exit_code == 2
-    assert "projection method's Jacobian is not derived" in refused.output
+    assert "method 'baumgarte': sensitivities follow the rk4, lagrange and projection methods only" in refused.output

@@ -77,14 +77,15 @@ class Cycle:
 
 def find_cycle(model, section: str, period: int = 1, parameters: dict | None = None, dt: float = 1e-3,
                tol: float = 1e-11, max_iterations: int = 20, t_max: float = 20.0, event_tol: float = 1e-14,
-               x0=None, d0=None, progress=None) -> Cycle:
+               x0=None, d0=None, progress=None, start=None) -> Cycle:
     """A periodic orbit of `model` through the jump `section` (see the module docstring), by Newton's method from
     the state just before the first occurrence of the jump in a run from (x0, d0) (default the model's initial
     state, put on its constraint manifold). tol: on the residual |B^T (Q(y) - y)|_inf. t_max: the longest a run
     may take to come back to the section `period` times. progress(iteration, residual): called at each iterate.
 
     The Cycle says whether it converged and, if not, why (the section never reached, no convergence), with the
-    residual of every iterate."""
+    residual of every iterate. start: a first iterate y = (x, d) just before the jump instead (put on the section;
+    andyc.analysis.continuation starts a branch of period 2 so)."""
     if section not in model.jump_names:
         raise CycleError(f"{model.name}: no jump named '{section}'; jumps: {', '.join(model.jump_names) or 'none'}")
     if period < 1:
@@ -97,25 +98,26 @@ def find_cycle(model, section: str, period: int = 1, parameters: dict | None = N
     result = Cycle(model.name, section, period, params, False, "", np.zeros(nx), np.zeros(nd),
                    list(model.state_names), list(model.discrete_names))
     derivatives = load_derivatives(model)
-    first = andyc.simulate(model, t_max, dt, "rk4", parameters=params, x0=x0, d0=d0, progress=False,
-                           init=andyc.Init("project"),
-                           events=andyc.Events(tol=event_tol, stop_after={section: 1}))
-    if not (first.finished and first.events["jump"].size and first.events["jump"][-1] == k):
+    first = None if start is not None else andyc.simulate(
+        model, t_max, dt, "rk4", parameters=params, x0=x0, d0=d0, progress=False, init=andyc.Init("project"),
+        events=andyc.Events(tol=event_tol, stop_after={section: 1}))
+    if first is not None and not (first.finished and first.events["jump"].size and first.events["jump"][-1] == k):
         result.message = (f"the run from the initial state did not reach jump '{section}' within t_max = {t_max:g} s "
                           f"({first.status})")
         return result
-    y = _before_last_jump(first, nd)
+    y = _before_last_jump(first, nd) if first is not None else _on_section(model, derivatives, source, k, p,
+                                                                           np.asarray(start, float))
     Q = PoincareMap(model, derivatives, k, p, period, dt, t_max, event_tol)
     for iteration in range(max_iterations + 1):
-        image = Q(y)
+        B, sym = section_basis(model, derivatives, source, k, p, y)
+        image = Q(y, directions=B)          # DQ B only: the run carries B's columns, not all of z's
         result.state, result.discrete, result.before = image.after[:nx], image.after[nx:], y
         if image.y is None:
             result.message = (f"iteration {iteration}: the run from the iterate did not come back to jump '{section}' "
                               f"{period} time(s) within t_max = {t_max:g} s ({image.status})")
             return result
-        Qy, DQ = image.y, image.jacobian
-        B, sym = section_basis(model, derivatives, source, k, p, y)
-        reduced = B.T @ DQ @ B
+        Qy = image.y
+        reduced = B.T @ image.jacobian
         residual = B.T @ (Qy - y)
         r = float(np.max(np.abs(residual), initial=0.0))
         result.history.append(r)
@@ -139,18 +141,23 @@ def find_cycle(model, section: str, period: int = 1, parameters: dict | None = N
 
 @dataclass
 class Image:
-    """Q(y): `y` (None when the run did not come back), its Jacobian DQ (None when not asked for), the state
-    `after` J at y (the start of the run), the run's `time` and `status`."""
+    """Q(y): `y` (None when the run did not come back), its Jacobian DQ (DQ V along directions V; None when not
+    asked for), the state `after` J at y (the start of the run), the run's `time` and `status`; with the whole
+    DQ, `parameter_jacobian` dQ/dp at fixed y (J's and the run's); `visits`: the times of J's occurrences in the
+    run (the last is `time`) and the states (x, d) just after them, the first at t = 0 being `after`."""
     y: np.ndarray | None
     jacobian: np.ndarray | None
     after: np.ndarray
     time: float
     status: str
+    parameter_jacobian: np.ndarray | None = None
+    visits: tuple | None = None
 
 
 class PoincareMap:
     """Q of jump k, period N (see the module docstring): Q(y) -> Image, with DQ when jacobian=True (then the
-    run carries its sensitivities; without, it is the plain compiled loop)."""
+    run carries its sensitivities; without, it is the plain compiled loop); Q(y, directions=V) (len(y), k): the
+    Jacobian along V only, DQ V (the run then carries k columns: cheaper)."""
 
     def __init__(self, model, derivatives, k: int, p, period: int, dt: float, t_max: float, event_tol: float):
         self.model, self.derivatives, self.k, self.p = model, derivatives, k, np.asarray(p, float)
@@ -159,7 +166,7 @@ class PoincareMap:
         self.dt, self.t_max = dt, t_max
         self.events = andyc.Events(tol=event_tol, stop_after={model.jump_names[k]: period})
 
-    def __call__(self, y, jacobian: bool = True) -> Image:
+    def __call__(self, y, jacobian: bool = True, directions=None) -> Image:
         model, k, p = self.model, self.k, self.p
         nx, nd = model.nx, model.nd
         held = np.asarray(model.input_defaults, float)
@@ -169,13 +176,29 @@ class PoincareMap:
             DJ = Tangent(model, self.derivatives, p, held).jump(k, 0.0, x, d, np.eye(nx + nd + len(p) + 1))
         _apply_jump(model, k, x, held, p, d)
         after = np.concatenate([x, d])
+        want = jacobian
+        if jacobian and directions is not None:     # z = (x0, d0, p) along DJ V
+            want = np.zeros((nx + nd + len(p), np.shape(directions)[1]))
+            want[:nx + nd] = DJ[:nx + nd, :nx + nd] @ directions
         run = andyc.simulate(model, self.t_max, self.dt, "rk4", parameters=self.params, x0=x, d0=d,
-                             flow0=self.target, progress=False, sensitivities=jacobian, init=andyc.Init("as-is"),
+                             flow0=self.target, progress=False, sensitivities=want, init=andyc.Init("as-is"),
                              events=self.events)
         if not (run.finished and run.events["jump"].size and run.events["jump"][-1] == k):
             return Image(None, None, after, float(run.time[-1]), run.status)
-        DQ = run.sensitivities["before_jump"][:, :nx + nd] @ DJ[:nx + nd, :nx + nd] if jacobian else None
-        return Image(_before_last_jump(run, nd), DQ, after, float(run.events["time"][-1]), run.status)
+        ev = run.events
+        mine = ev["jump"] == k
+        visits = (np.concatenate([[0.0], ev["time"][mine]]),
+                  np.vstack([after, np.hstack([ev["state_after"][mine], ev["discrete_after"][mine]])]))
+        if not jacobian:
+            return Image(_before_last_jump(run, nd), None, after, float(run.events["time"][-1]), run.status,
+                         visits=visits)
+        if directions is not None:                  # the run carried DJ V: DQ V, and no dQ/dp
+            return Image(_before_last_jump(run, nd), run.sensitivities["before_jump"], after,
+                         float(run.events["time"][-1]), run.status, visits=visits)
+        ny, S = nx + nd, run.sensitivities["before_jump"]    # d(y')/d(x0, d0, p): the run from J(y)
+        DQ = S[:, :ny] @ DJ[:ny, :ny]
+        DQp = S[:, :ny] @ DJ[:ny, ny:ny + len(p)] + S[:, ny:]
+        return Image(_before_last_jump(run, nd), DQ, after, float(run.events["time"][-1]), run.status, DQp, visits)
 
 
 def _before_last_jump(run, nd: int) -> np.ndarray:
@@ -199,8 +222,9 @@ def _apply_jump(model, k, x, u, p, d) -> None:
         raise CycleError(f"{model.name}: jump '{model.jump_names[k]}' failed at the iterate (status {status})")
 
 
-def _section_rows(model, derivatives, flow: int, k: int, p, y):
-    """(h, dh/dy): the source flow's constraint rows (phi, c) and jump k's guard at y = (x, d)."""
+def _section_rows(model, derivatives, flow: int, k: int, p, y, parameters: bool = False):
+    """(h, dh/dy): the source flow's constraint rows (phi, c) and jump k's guard at y = (x, d); with parameters,
+    (h, dh/dy, dh/dp)."""
     nx, ny = model.nx, len(y)
     held = np.asarray(model.input_defaults, float)
     x, d = y[:nx], y[nx:]
@@ -210,8 +234,10 @@ def _section_rows(model, derivatives, flow: int, k: int, p, y):
     g, dg = derivatives.guard_terms(k, 0.0, x, held, p, d)
     hol = [r for r in rows if r < model.nh]
     h = np.concatenate([phi[hol], c[rows], [g]])
-    H = np.vstack([dphi[hol], dc[rows], dg[None]])[:, :ny]
-    return h, H
+    W = np.vstack([dphi[hol], dc[rows], dg[None]])
+    if parameters:
+        return h, W[:, :ny], W[:, ny:ny + len(p)]
+    return h, W[:, :ny]
 
 
 def _on_section(model, derivatives, flow, k, p, y, iterations: int = 8) -> np.ndarray:

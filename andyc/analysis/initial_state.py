@@ -73,20 +73,36 @@ def initial_problems(model: SymbolicModel, init: str = "check", tol: float = 1e-
 def _slip_along_normal(model: SymbolicModel, x, u, p, d) -> list[Diagnostic]:
     """A contact with friction whose slip row is a multiple of its gap's (|cos| within PARALLEL of 1, or no row at
     all) at the initial state: its `slip` is not a tangential speed (sticking would hold the gap twice: dependent
-    rows), e.g. `slip: block.vy` for `gap: block.y`."""
+    rows), e.g. `slip: block.vy` for `gap: block.y`. Spatial friction (two slip rows): each, and the second
+    parallel to the first (the two would not span the tangent plane)."""
     C, out = model.constraints, []
+    nv = C.A.shape[1]
     for c in model.spec.contacts:
         if not c.stick:
             continue
         n, t = C.rows.index(c.constraint), C.rows.index(c.stick)
-        values = values_at(model, list(C.A[n, :]) + list(C.A[t, :]), x, u, p, d)
-        normal, tangent = values[:C.A.shape[1]], values[C.A.shape[1]:]
-        size = np.linalg.norm(normal) * np.linalg.norm(tangent)
-        cos = abs(normal @ tangent) / size if size > 0 else 1.0
-        if cos > 1.0 - PARALLEL:
-            out.append(model.spec.source.diag(
-                c.where + ("slip",), f"the slip speed of contact '{c.name}' is along its gap's normal at the initial "
-                f"state (its row is {'zero' if size == 0 else 'a multiple of the gap row'}): it is not a tangential "
-                f"speed", "write the speed of the contact point along the tangent, perpendicular to the normal: "
-                "e.g. slip: block.vx for gap: block.y"))
+        rows = [n] + [t + j for j in range(c.tangents)]
+        values = values_at(model, [a for r in rows for a in C.A[r, :]], x, u, p, d)
+        normal, tangents = values[:nv], [values[nv * (j + 1):nv * (j + 2)] for j in range(c.tangents)]
+        for j, tangent in enumerate(tangents):
+            path = c.where + ("slip",) + ((j,) if c.tangents == 2 else ())
+            which = "" if c.tangents == 1 else ("first ", "second ")[j]
+            if _parallel(normal, tangent):
+                out.append(model.spec.source.diag(
+                    path, f"the {which}slip speed of contact '{c.name}' is along its gap's normal at the initial "
+                    f"state (its row is {'zero' if not tangent.any() else 'a multiple of the gap row'}): it is not a "
+                    f"tangential speed", "write the speed of the contact point along the tangent, perpendicular to "
+                    "the normal: e.g. slip: block.vx for gap: block.y"))
+            elif j == 1 and _parallel(tangents[0], tangent):
+                out.append(model.spec.source.diag(
+                    path, f"the second slip speed of contact '{c.name}' is along its first at the initial state (its "
+                    "row is a multiple of the first's): the two do not span the tangent plane", "write the contact "
+                    "point's speed along a second tangent, perpendicular to the first and to the normal: e.g. slip: "
+                    "[block.vx, block.vy] for gap: block.z"))
     return out
+
+
+def _parallel(a, b) -> bool:
+    """Rows a and b along one line (|cos| within PARALLEL of 1), or either zero."""
+    size = np.linalg.norm(a) * np.linalg.norm(b)
+    return size == 0 or abs(a @ b) / size > 1.0 - PARALLEL

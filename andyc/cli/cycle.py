@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
+from pathlib import Path
 
 import click
 
@@ -27,18 +29,43 @@ from andyc.outputs import check_folder, check_output, write_text
               help="The longest a run may take to come back to the section, s.")
 @click.option("--event-tol", default=1e-14, show_default=True, type=Number(0, 1, low_open=True),
               help="Event location tolerance, s (round-off: the map's root, see andyc.runtime.sensitivities).")
+@click.option("--continue", "continue_range", default=None, metavar="NAME=A:B",
+              help="Continue the orbit in the parameter NAME from A to B (pseudo-arclength), locate its folds and "
+                   "period doublings and follow the period-2N orbit from each doubling.")
+@click.option("--step", "ds", default=0.01, show_default=True, type=POSITIVE,
+              help="--continue: the first step along the branch (Euclidean length in the state and the parameter).")
+@click.option("--min-step", "ds_min", default=1e-6, show_default=True, type=POSITIVE,
+              help="--continue: stop when a step this short fails.")
+@click.option("--max-step", "ds_max", default=0.1, show_default=True, type=POSITIVE,
+              help="--continue: the longest step.")
+@click.option("--max-points", default=200, show_default=True, type=COUNT, help="--continue: points per branch at most.")
+@click.option("--locate-tol", default=1e-10, show_default=True, type=POSITIVE,
+              help="--continue: locate folds and period doublings to this in the parameter.")
+@click.option("--branch/--no-branch", "branch_switch", default=True, show_default=True,
+              help="--continue: follow the period-2N orbit from each period doubling.")
+@click.option("--plot-state", default=None, metavar="NAME",
+              help="--continue: the state (just after the jump) the bifurcation diagram draws (default: the one that "
+                   "varies most).")
 @click.option("-o", "--out", default=None, metavar="FILE.json",
-              help="Where to write the result (default: runs/<name>_cycle_<JUMP>.json).")
+              help="Where to write the result (default: runs/<name>_cycle_<JUMP>.json; with --continue "
+                   "runs/<name>_continuation_<JUMP>_<NAME>.json, with the branch table FILE.csv and the plot FILE.png "
+                   "beside it).")
 @build_dir_option()
-def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, out, build_dir):
+def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, continue_range, ds, ds_min, ds_max,
+          max_points, locate_tol, branch_switch, plot_state, out, build_dir):
     """Find FILE's periodic orbit through the jump JUMP: Newton's method on the Poincaré map with its exact
     Jacobian (rk4 sensitivities and saltation matrices); print the fixed point just after the jump, the period,
     the Floquet multipliers and the residual of each iterate, and write them as JSON. Exit 1 when it does not
-    converge or the section is never reached."""
+    converge or the section is never reached.
+
+    With --continue NAME=A:B, follow the orbit from NAME = A to B by pseudo-arclength continuation, print each
+    point and the located folds, branch points and period doublings, and write the branches as JSON and CSV with
+    a plot (bifurcation diagram and multipliers). Exit 1 when no orbit is found at A."""
     import andyc
     from andyc.analysis.cycles import CycleError, find_cycle
 
     parameters = parse_sets(at, "--at")
+    swept = _continue_range(continue_range) if continue_range is not None else None
     if out is not None:
         check_output(out, [file], "cycle file")
     check_folder(build_dir, [file])
@@ -50,6 +77,10 @@ def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, 
     if unknown:
         raise click.BadParameter(f"no parameter named {', '.join(unknown)}; parameters: "
                                  f"{', '.join(model.parameter_names)}", param_hint="--at")
+    if swept is not None:
+        return _continuation(file, build_dir, model, section, period, parameters, swept, out, plot_state,
+                             dict(dt=dt, tol=tol, t_max=t_max, event_tol=event_tol, ds=ds, ds_min=ds_min,
+                                  ds_max=ds_max, max_points=max_points, locate_tol=locate_tol), branch_switch)
     out = out or f"runs/{model.name}_cycle_{section}.json"
     check_output(out, [file, model.path], "cycle file")
     try:
@@ -65,6 +96,76 @@ def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, 
     write_text(out, json.dumps(result.as_dict(), indent=1) + "\n")
     click.echo(f"wrote {out}")
     if not result.converged:
+        sys.exit(1)
+
+
+def _continue_range(text: str) -> tuple:
+    """NAME=A:B -> (NAME, A, B); a usage error otherwise."""
+    name, sep, span = text.partition("=")
+    parts = span.split(":")
+    try:
+        if not sep or not name.strip() or len(parts) != 2:
+            raise ValueError
+        a, b = float(parts[0]), float(parts[1])
+    except ValueError:
+        raise click.BadParameter(f"'{text}': write NAME=A:B, e.g. slope=0.05:0.1", param_hint="--continue") from None
+    if not (math.isfinite(a) and math.isfinite(b)) or a == b:
+        raise click.BadParameter(f"'{text}': A and B must be finite and differ", param_hint="--continue")
+    return name.strip(), a, b
+
+
+def _continuation(file, build_dir, model, section, period, parameters, swept, out, plot_state, options,
+                  branch_switch):
+    """andyc cycle --continue: the branches, printed as they come, then written (JSON, CSV, PNG)."""
+    import numpy as np
+
+    import andyc
+    from andyc.analysis.continuation import Continuer, Point, describe, save_csv, special_line
+    from andyc.analysis.cycles import CycleError
+
+    name, a, b = swept
+    if name not in model.parameter_names:
+        raise click.BadParameter(f"no parameter named {name}; parameters: {', '.join(model.parameter_names)}",
+                                 param_hint="--continue")
+    if name in parameters:
+        raise click.BadParameter(f"{name} is continued; do not also set it with --at", param_hint="--at")
+    names = list(model.state_names) + list(model.discrete_names)
+    if plot_state is not None and plot_state not in names:
+        raise click.BadParameter(f"no state named {plot_state}; states: {', '.join(names)}", param_hint="--plot-state")
+    out = Path(out or f"runs/{model.name}_continuation_{section}_{name}.json")
+    table, figure = out.with_suffix(".csv"), out.with_suffix(".png")
+    for path, what in ((out, "continuation file"), (table, "branch table"), (figure, "plot")):
+        check_output(path, [file, model.path], what)
+
+    def show(obj, n):
+        if isinstance(obj, Point):
+            mods = np.abs(obj.multipliers)
+            click.echo(f"  period {n}: {name} = {obj.parameter:.12g}, period {obj.period:.9g} s, max |mu| "
+                       f"{mods.max(initial=0.0):.6g} ({'stable' if obj.stable else 'unstable'}), "
+                       f"{obj.iterations} corrector step(s)")
+        else:
+            click.echo(f"  -> {special_line(name, obj)}")
+
+    try:
+        andyc.build_derivatives(file, build_dir)
+        held = ", ".join(f"{k} = {v:g}" for k, v in parameters.items()) or "the defaults"
+        click.echo(f"{model.name}: periodic orbits through '{section}' (period {period}) continued in {name} from "
+                   f"{a:g} to {b:g}; other parameters at {held}")
+        result = Continuer(model, section, name, parameters, progress=show, **options).run(a, b, period,
+                                                                                          branch_switch)
+    except (SimulationError, CycleError) as exc:
+        raise Refused(str(exc))
+    click.echo(describe(result))
+    write_text(out, json.dumps(result.as_dict(), indent=1) + "\n")
+    click.echo(f"wrote {out}")
+    if result.branches[0].points:
+        from andyc.plot.branchplot import plot_branches
+
+        save_csv(result, table)
+        click.echo(f"wrote {table}")
+        plot_branches(result, figure, None if plot_state is None else names.index(plot_state))
+        click.echo(f"wrote {figure}")
+    else:
         sys.exit(1)
 
 

@@ -57,7 +57,8 @@ from andyc.runtime.methods import MAX_STEPS, METHODS
               help="Stop the run after this much wall time, keeping its samples (also when a controller never "
                    "returns).")
 @click.option("--sensitivities", is_flag=True, default=False,
-              help="Also compute the exact dx(T)/dx0 and dx(T)/dp (rk4; through the jumps' saltation matrices), "
+              help="Also compute the exact dx(T)/dx0 and dx(T)/dp (rk4, lagrange, projection; through the jumps' saltation "
+                   "matrices), "
                    "into the HDF5 run file's /sensitivities.")
 @build_dir_option("--out-dir")
 @format_option

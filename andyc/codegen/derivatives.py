@@ -8,13 +8,16 @@ andyc.symbolic.sensitivities:
     flow_terms(t, x, u, p, d)          M, dM (NV, NV, NW); G, dG; the constraint rows' A, dA (NC, NV, NW),
                                        kappa, dkappa, c, dc, and the holonomic rows' phi, dphi (NH, NW) (as the
                                        leaves `dynamics` and `constraints_into`)
+    signal_terms(t, x, u, p, d)        the signals' rates s (NS,) and ds (NS, NW) (the leaf `signal_rates`)
+    energy_terms(t, x, u, p, d)        the energy E and dE (NW,) (the leaf `energy`; the projection's eq. 5-6)
     guard_terms(k, t, x, u, p, d)      jump k's guard g and dg (NW,)
     reset_terms(k, t, x, u, p, d)      jump k's resets: the index in W of each target, its value, its gradient
     restitution_terms(k, t, x, u, p, d)   the restitution e of jump k's impact and de (NW,)
 
 and, from the template templates/derivatives.py.j2 (the same for every model), `rates` (f and df/dW in a
-flow) and `rk4_tangent` (the RK4 step and its tangent), which call flow_terms. flow_terms, rates and
-rk4_tangent are compiled by Numba and cached beside the file (a function handed another as an argument is
+flow), `rk4_tangent` (the RK4 step and its tangent), `project_tangent` (the projection method's corrections and
+their tangent) and `tangent_steps` (the steps of a stretch without jumps, in one call), which call flow_terms.
+Those and the terms above are compiled by Numba and cached beside the file (a function handed another as an argument is
 not cached by Numba, so the tangent step lives here, beside the model's flow_terms); the jump terms, called
 once per jump, stay Python. BUILD_KEY ties the file to the build's equations.
 """
@@ -58,12 +61,14 @@ def render(model: SymbolicModel, key: str) -> str:
                   + [(f"kappa[{r}]", e) for r, e in enumerate(cons.kappa)]
                   + [(f"c[{r}]", e) for r, e in enumerate(cons.c)]
                   + [(f"phi[{r}]", e) for r, e in enumerate(cons.phi)])
-    nq = len(model.q)
+    nq, ns = len(model.q), len(model.signals)
     index = {**{c.name: i for i, c in enumerate(model.spec.coordinates)},
              **{name: nq + i for i, name in enumerate(model.spec.speed_names)},
-             **{x.name: nq + n + i for i, x in enumerate(model.spec.discrete)}}
+             **{x.name: nq + n + ns + i for i, x in enumerate(model.spec.discrete)}}
     jump_exprs = [e for j in h.jumps for e in (j.guard, j.restitution, *(e for _, e in j.resets))]
-    fg = ForwardGradients(model, [e for _, e in flow_items] + jump_exprs, variables(model))
+    signal_items = [(f"s[{i}]", e) for i, e in enumerate(model.signal_rates)]
+    fg = ForwardGradients(model, [e for _, e in flow_items + signal_items] + jump_exprs + [model.energy],
+                          variables(model))
     pool = dict(model.assignments)
     pool.update(fg.assignments)
 
@@ -78,7 +83,15 @@ def render(model: SymbolicModel, key: str) -> str:
              f"    kappa, dkappa = np.zeros({cons.nc}), np.zeros(({cons.nc}, NW))",
              f"    c, dc = np.zeros({cons.nc}), np.zeros(({cons.nc}, NW))",
              f"    phi, dphi = np.zeros({cons.nh}), np.zeros(({cons.nh}, NW))",
-             *body(flow_items, None), "    return M, dM, G, dG, A, dA, kappa, dkappa, c, dc, phi, dphi", "", ""]
+             *body(flow_items, None), "    return M, dM, G, dG, A, dA, kappa, dkappa, c, dc, phi, dphi", "", "",
+             "@njit(cache=True, error_model=\"numpy\")",
+             "def signal_terms(t, x, u, p, d):",
+             f"    s, ds = np.zeros({ns}), np.zeros(({ns}, NW))",
+             *body(signal_items, "s, ds"), "", "",
+             "@njit(cache=True, error_model=\"numpy\")",
+             "def energy_terms(t, x, u, p, d):",
+             "    E, dE = 0.0, np.zeros(NW)",
+             *body([("E", model.energy)], "E, dE"), "", ""]
     for name, make in (("guard_terms", lambda j: [("g", j.guard)]),
                        ("restitution_terms", lambda j: [("e", j.restitution)])):
         out = name[:1] if name == "guard_terms" else "e"

@@ -23,7 +23,6 @@ from pathlib import Path
 import jinja2
 
 import andyc
-from andyc.spec.constraints import rheonomic_frames
 from andyc.errors import format_path
 from andyc.outputs import check_output, create_once, update_text, write_text
 from andyc.codegen.buildfiles import (PACKAGE, BuildResult, build_key, equations_path, jumps_path, module_name,
@@ -66,24 +65,29 @@ def _hybrid_context(model: SymbolicModel) -> dict:
         "contacts": [c.name for c in model.spec.contacts],
         "contact_rows": [model.constraints.rows.index(c.constraint) for c in model.spec.contacts],
         "contact_stick_rows": [model.constraints.rows.index(c.stick) if c.stick else -1 for c in model.spec.contacts],
+        "contact_tangents": [c.tangents for c in model.spec.contacts],
         "jump_kinds": [[j.kind, j.contact] for j in model.spec.jumps],
         **_slip_tables(model),
     }
 
 
 def _slip_tables(model: SymbolicModel) -> dict:
-    """FLOW_SLIP and FLOW_SLIP_MU (NF, NC), for each flow's r-th active row: a slipping contact's normal row gets
-    -sigma (t + 1), t its stick row, sigma = +1 slipping forwards, and the index of the jump whose coefficient is its
-    mu (andyc.numerics.dynamics.slip_rows); 0 elsewhere."""
+    """FLOW_SLIP, FLOW_SLIP_MU and FLOW_SLIP_DIR (NF, NC), for each flow's r-th active row: a slipping contact's
+    normal row gets -sigma (t + 1), t its stick row, sigma = +1 slipping forwards (spatial friction: t + 1, t the
+    first of its two stick rows), the index of the jump whose coefficient is its mu, and (spatial) 1 + the index in
+    d of the first of the two discrete states holding its slip's direction (andyc.numerics.dynamics.slip_rows);
+    0 elsewhere."""
     rows, nc, h = model.constraints.rows, model.constraints.nc, model.hybrid
     jump_index = {j.name: k for k, j in enumerate(model.spec.jumps)}
-    slip, slip_mu = [[0] * nc for _ in h.flow_rows], [[0] * nc for _ in h.flow_rows]
+    discrete = [x.name for x in model.spec.discrete]
+    slip, slip_mu, slip_dir = ([[0] * nc for _ in h.flow_rows] for _ in range(3))
     for k, flow in enumerate(model.spec.flows):
-        for normal, stick, sigma, stop in flow.slip:
+        for normal, stick, sigma, stop, direction in flow.slip:
             r = h.flow_rows[k].index(rows.index(normal))
-            slip[k][r] = -sigma * (rows.index(stick) + 1)
+            slip[k][r] = -sigma * (rows.index(stick) + 1) if sigma else rows.index(stick) + 1
             slip_mu[k][r] = jump_index[stop]
-    return {"flow_slip": slip, "flow_slip_mu": slip_mu}
+            slip_dir[k][r] = discrete.index(direction) + 1 if direction else 0
+    return {"flow_slip": slip, "flow_slip_mu": slip_mu, "flow_slip_dir": slip_dir}
 
 
 def _forward_context(model: SymbolicModel) -> dict:
@@ -122,7 +126,8 @@ def render(model: SymbolicModel, key: str, c: bool = False) -> tuple[str, dict, 
                              for c in spec.constraints],
         "conserves_energy": spec.conserves_energy,
         "work_slots": model.work_names, "row_work": model.row_work,
-        "untracked_work": rheonomic_frames(spec.frames),
+        "untracked_work": [],       # (every element's work is derived: a frame moved along t, prescribed_motion)
+        "energy_laws": [law.text if law else None for law in _laws(spec)],
         "discrete": [x.name for x in spec.discrete],
         "has_closed_form": bool(spec.closed_form),
         **_hybrid_context(model),
@@ -160,7 +165,14 @@ def render_front(spec, key: str) -> str:
         initial_discrete={"unpack": _parameter_unpack(parameters, discrete), "values": [to_code(e) for e in discrete]},
         display=display(spec),
         closed_form_where=[[spec.source.line(("closed_form", n)), format_path(("closed_form", n))] for n in states]
-        if spec.closed_form else [], simulate=spec.simulate)
+        if spec.closed_form else [], simulate=spec.simulate,
+        energy_law_where=[[spec.source.line(law.where), format_path(law.where)] if law else None
+                          for law in _laws(spec)])
+
+
+def _laws(spec) -> list:
+    """The energy law of each flow (andyc.spec.energy_law), None where the built-in law holds."""
+    return list(spec.energy_laws) or [None] * len(spec.flows)
 
 
 def _gain_parameter(spec, gain) -> str | None:

@@ -38,6 +38,11 @@ DOCS = {
     "enabled": "Enabling condition of jump k: >= 0 where it may happen; lam as in guard.",
     "reset": "Resets of jump k, into x and d, all from the values before the jump.",
     "flow_inputs": "Input values a flow sets, into U (NF, NU); other entries are left as they are.",
+    "energy_law": "The declared energy law Phi_e(t, q, v) of flow k (Braun & Goldfarb eq. 5-6): returns its value and "
+                  "writes dPhi_e/dv into grad[:NV]; NaN where the flow keeps the built-in law E - E0 - W (with prescribed "
+                  "motion: E - W, the state x followed by the work, and dE/dv = M v + a_t).",
+    "drive_power": "The power that drives the links depending on t (andyc/symbolic/work.py), from dv/dt in "
+                   "xdot[NQ:NQ + NV], into xdot[NX + its work slot].",
     "closed_form": "x(t), the exact solution the model declares (closed_form:), at held inputs u and parameters p.",
     "model_inputs": "The inputs as the model drives them (INPUT_EXPRESSIONS in the module), as an input callback: "
                     "the flow's held values from data[flow * NU:], then each expression the flow does not override.",
@@ -150,6 +155,12 @@ def leaves(model: SymbolicModel) -> Leaves:
         out.add("constraint_gains", "p, S", [(S(at['ks'], i), e) for i, e in enumerate(cons.stiffness)]
                 + [(S(at['kd'], i), e) for i, e in enumerate(cons.damping)])
     _hybrid(out, model, at)
+    _energy_law(out, model)
+    if model.prescribed:
+        slot, a, b = model.prescribed
+        nx = len(model.q) + n + len(model.signals)
+        out.add("drive_power", f"{STATE}, xdot",
+                [(f"xdot[{nx + slot}]", b + sum((a[i] * model.hybrid.vdot[i] for i in range(n)), sp.Integer(0)))])
     if spec.closed_form:
         out.add("closed_form", "t, u, p, x", [(f"x[{i}]", spec.closed_form[name]) for i, name in enumerate(state_names(spec))])
     _inputs(out, model)
@@ -174,6 +185,41 @@ def _hybrid(out: Leaves, model: SymbolicModel, at: dict) -> None:
     out.add_per_jump("reset", STATE, [([(index[s], e) for s, e in j.resets], None) for j in h.jumps], "None")
     S = _flat("S", at["width"])
     out.add("restitution", "p, S", [(S(at['e'], k), j.restitution) for k, j in enumerate(h.jumps)])
+
+
+def _energy_law(out: Leaves, model: SymbolicModel) -> None:
+    """energy_law(k, STATE, grad): one branch per flow with a declared law (andyc.spec.energy_law), each with its own
+    cse; a model without one uses the stub (NaN: the built-in law, which the numerics evaluate with dE/dv = M v).
+    A model with prescribed motion (links that depend on t) has the kinetic term a_t . v too, so dE/dv = M v + a_t:
+    its flows with the built-in law return E - W (W the work slots after x) and that gradient."""
+    if not any(model.energy_laws) and not model.prescribed:
+        return
+    code, c, operations = [], [], 0
+    n = model.dof
+    nx, nw = len(model.q) + n + len(model.signals), len(model.work_names)
+    for k, law in enumerate(model.energy_laws or [None] * len(model.hybrid.flows)):
+        if law is None and not model.prescribed:
+            continue
+        if law is None:
+            a = model.prescribed[1]
+            value, grad = model.energy, [sum(model.M[i, j] * model.v[j] for j in range(n)) + a[i] for i in range(n)]
+        else:
+            value, grad = law
+        body = function_body([("g", value)] + [(f"grad[{i}]", e) for i, e in enumerate(grad)], out.pool)
+        code += [f"    if k == {k}:", *_code(model, body, None, 8)]
+        if law is None:
+            code += ["        for i in range(NW):", "            g -= x[NX + i]"]
+        code += ["        return g"]
+        branch = _c(model, body, None, 8)
+        if c is not None and branch is not None:
+            less = ["        double e = g;", f"        for (int i = 0; i < {nw}; i++) e -= x[{nx} + i];"] if law is None else \
+                ["        double e = g;"]
+            c += [f"    if (k == {k}) {{", *branch, *less, "        return e;", "    }"]
+        else:
+            c = None
+        operations += body.operations
+    out._append("energy_law", f"k, {STATE}, grad", code + ["    return math.nan"], operations,
+                c=None if c is None else c + ["    return NAN;"])
 
 
 def _inputs(out: Leaves, model: SymbolicModel) -> None:

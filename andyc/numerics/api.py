@@ -84,6 +84,11 @@ def _closed_form(model, t, u, p, x):
     call(model.closed_form, (t, u, p, x))
 
 
+@jit
+def _energy_law(model, k, t, x, u, p, d, grad):
+    return call(model.energy_law, (k, t, x, u, p, d, grad))
+
+
 def _vector(x) -> np.ndarray:
     return np.ascontiguousarray(x, dtype=np.float64)
 
@@ -130,6 +135,15 @@ class Functions:
         M, G = np.zeros((nv, nv)), np.zeros(self.sizes["ng"])     # (the leaf writes the elements' powers after G)
         _dynamics(self.model, float(t), _vector(x), u, p, d, M, G)
         return G[:nv].copy()
+
+    def energy_law(self, t, x, u=None, p=None, d=None, flow=None):
+        """(Phi_e, dPhi_e/dv (NV,)) of the energy law `flow` declares (energy_law:), or (NaN, zeros) where the
+        flow keeps the built-in law E - E0 - W."""
+        x = _vector(x)
+        u = self.driven(t, x, u, p, d, flow)
+        p, u, d, flow = self._args(u, p, d, flow)
+        grad = np.zeros(self.sizes["nv"])
+        return _energy_law(self.model, flow, float(t), x, u, p, d, grad), grad
 
     def rhs(self, t, x, u=None, p=None, d=None, flow=None):
         """dx/dt in `flow`, for scipy.integrate.solve_ivp, with the ideal constraint forces of the flow's rows."""

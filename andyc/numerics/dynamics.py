@@ -14,7 +14,7 @@ from .compiler import jit
 from .linalg import (add_rows_transposed, cholesky, correction, ltdl, ltdl_solve, solve_gram, solve_lower, solve_upper,
                      whiten)
 from .model import call
-from .status import BAUMGARTE, DEPENDENT, IDEAL, OK, PAINLEVE, RANK_TOL, SINGULAR_MASS
+from .status import BAUMGARTE, DEPENDENT, HOLD, IDEAL, OK, PAINLEVE, RANK_TOL, SINGULAR_MASS, SLIP_TINY
 
 
 @jit
@@ -29,7 +29,7 @@ def rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode):
     if model.flow_nrows[flow] > 0:
         status = whitened_equations(model, t, x, u, p, d, M, G, S)
         if status == OK:
-            status = constraint_force(model, p, flow, mode, M, G, S)
+            status = constraint_force(model, p, d, flow, mode, M, G, S)
             solve_upper(M, G, nv)
     elif model.nt > 0:                  # a = M^-1 G along the tree of M (LTDL, Featherstone 2005)
         call(model.dynamics, (t, x, u, p, d, M, G))
@@ -80,7 +80,7 @@ def constraint_system(model, flow, L, g, S):
 
 
 @jit(inline="always")
-def constraint_force(model, p, flow, mode, L, g, S):
+def constraint_force(model, p, d, flow, mode, L, g, S):
     """g <- g + C^T lam over the rows of `flow`, in whitened speeds: with M = L L^T and g = L^-1 G on entry,
     dv/dt = L^-T g on return. Needs A, kappa (and for BAUMGARTE phi, c) in S; returns a status.
 
@@ -93,7 +93,7 @@ def constraint_force(model, p, flow, mode, L, g, S):
     """
     nr = constraint_system(model, flow, L, g, S)
     if flow_slips(model, flow, nr):
-        slip_rows(model, p, flow, L, S, nr)
+        slip_rows(model, p, d, flow, L, S, nr)
         if not solve_slipping(model, flow, S, nr):
             return PAINLEVE
         if mode == BAUMGARTE:
@@ -133,14 +133,100 @@ def flow_slips(model, flow, nr):
     return False
 
 
+@jit(inline="always")
+def slip_unit(model, d, flow, r, S):
+    """(u1, u2) the unit slip direction of the contact with spatial friction whose normal row is the flow's r-th
+    (its stick rows t, t + 1: FLOW_SLIP[flow, r] = t + 1; its slip s = (c_t, c_t+1) in S's cv row; in d from
+    FLOW_SLIP_DIR[flow, r] - 1 = k: d_ref = (d[k], d[k + 1]), the direction at the step's start, and d[k + 2],
+    1 while the step holds it; both set by slip_direction): sigma s / |s|, sigma = sign(s . d_ref), so that within
+    a step the friction keeps its direction through a slip that ends there (as a planar slip's sigma is fixed in
+    its flow) and the stop's guard s . d_ref crosses zero; d_ref itself when the step holds it, or when
+    |s| <= SLIP_TINY (a slip starting from rest, its direction set by the runtime)."""
+    t = model.flow_slip[flow, r] - 1
+    k = model.flow_slip_dir[flow, r] - 1
+    s1, s2 = S[model.s_cv, t], S[model.s_cv, t + 1]
+    n = math.sqrt(s1 * s1 + s2 * s2)
+    if n <= SLIP_TINY or d[k + 2] != 0.0:
+        return d[k], d[k + 1]
+    if s1 * d[k] + s2 * d[k + 1] < 0.0:
+        n = -n
+    return s1 / n, s2 / n
+
+
 @jit
-def slip_rows(model, p, flow, L, S, nr):
+def slip_direction(model, w, t, x, u, p, d, flow, h, mode):
+    """At a step's start in `flow`: each contact with spatial friction slipping there gets its slip's direction,
+    s / |s|, into its discrete states (FLOW_SLIP_DIR: d[k], d[k + 1]), unless |s| <= SLIP_TINY (then they keep
+    the direction the runtime set: a slip from rest). Returns whether the flow has such a contact (the caller then
+    re-evaluates the stop's guard, s . d).
+
+    With a fixed step h > 0 it may hold a direction over the step instead (d[k + 2] = 1, slip_unit): the
+    direction relaxes towards the slip at the rate mu lam_n |J_t M^-1 J_t^T| / |s| (the friction's pull on a
+    sideways slip, over the slip), which near |s| = 0 is far beyond an explicit step's stability bound. Where h
+    times that rate exceeds HOLD, the step holds the direction of s + h a_free, a_free the slip's acceleration
+    less the friction's (a_free = a + mu lam_n J_t M^-1 J_t^T u): the friction then opposes the slip at the step's
+    end, as an implicit (backward Euler) step of the direction would have it, which is stable. A slip that keeps
+    its direction (a ball's, a_free = 0) is then exact; one that turns (a block across a slope) is followed to
+    first order over the few steps before it stops, or after it starts."""
+    found = False
+    S, nq, nv = w.S, model.nq, model.nv
+    for r in range(model.flow_nrows[flow]):
+        k = model.flow_slip_dir[flow, r] - 1
+        if k < 0:
+            continue
+        found = True
+        call(model.constraints_into, (t, x, u, p, d, S))
+        row = model.flow_slip[flow, r] - 1
+        s1, s2 = S[model.s_cv, row], S[model.s_cv, row + 1]
+        n = math.sqrt(s1 * s1 + s2 * s2)
+        if n > SLIP_TINY:
+            d[k] = s1 / n
+            d[k + 1] = s2 / n
+        d[k + 2] = 0.0
+        if h <= 0.0:
+            continue
+        d[k + 2] = 1.0                  # (evaluated holding it, as the step would)
+        if rhs_mode_into(model, w, t, x, u, p, d, flow, w.xdot, mode) != OK:
+            continue
+        z1, z2 = S[model.s_dv, :nv], S[model.s_r, :nv]      # J_t L^-T, whitened with M's factor L (linalg.whiten)
+        for i in range(nv):
+            v1, v2 = S[model.s_a + row, i], S[model.s_a + row + 1, i]
+            for m in range(i):
+                v1 -= w.M[i, m] * z1[m]
+                v2 -= w.M[i, m] * z2[m]
+            z1[i] = v1 * w.M[i, i]
+            z2[i] = v2 * w.M[i, i]
+        g11, g12, g22 = 0.0, 0.0, 0.0
+        a1, a2 = S[model.s_kappa, row], S[model.s_kappa, row + 1]      # the slip's acceleration, A dv/dt + kappa
+        for i in range(nv):
+            g11 += z1[i] * z1[i]
+            g12 += z1[i] * z2[i]
+            g22 += z2[i] * z2[i]
+            a1 += S[model.s_a + row, i] * w.xdot[nq + i]
+            a2 += S[model.s_a + row + 1, i] * w.xdot[nq + i]
+        pull = S[model.s_e, model.flow_slip_mu[flow, r]] * S[model.s_y, r]       # mu lam_n
+        if h * abs(pull) * (g11 + g22) <= HOLD * n:
+            d[k + 2] = 0.0
+            continue
+        p1 = s1 + h * (a1 + pull * (g11 * d[k] + g12 * d[k + 1]))
+        p2 = s2 + h * (a2 + pull * (g12 * d[k] + g22 * d[k + 1]))
+        size = math.sqrt(p1 * p1 + p2 * p2)
+        if size > SLIP_TINY:
+            d[k] = p1 / size
+            d[k + 1] = p2 / size
+    return found
+
+
+@jit
+def slip_rows(model, p, d, flow, L, S, nr):
     """D = B L^-T into S's W block (its first nr rows; the symmetric solve's Gram matrix, unused in a flow that
     slips), the force directions of the flow's rows, whitened (C = A L^-T in S): B = A but for the normal row of a
     slipping contact, whose force is its normal force plus Coulomb's friction, -sigma mu lam_n along its tangent
     (sigma = +1 slipping forwards, -1 backwards): B_r = A_r - sigma mu J_t, J_t the contact's stick row
     (FLOW_SLIP[flow, r] = -sigma (t + 1), t that row; mu the coefficient of jump FLOW_SLIP_MU[flow, r], the
-    slip's end, in S's e row). Only for a flow that slips (flow_slips): the others keep the symmetric solve."""
+    slip's end, in S's e row). Spatial friction (FLOW_SLIP_DIR[flow, r] > 0; stick rows t, t + 1): the friction
+    -mu lam_n u along the slip's direction u (slip_unit), B_r = A_r - mu (u1 J_t + u2 J_t+1). Only for a flow that
+    slips (flow_slips): the others keep the symmetric solve."""
     nv, w0, c0 = model.nv, model.s_w, model.s_c
     call(model.restitution, (p, S))
     for r in range(nr):
@@ -150,12 +236,18 @@ def slip_rows(model, p, flow, L, S, nr):
                 S[w0 + r, i] = S[c0 + r, i]
             continue
         row = model.s_a + abs(code) - 1
-        for i in range(nv):             # J_t L^-T, as linalg.whiten
-            s = S[row, i]
+        u1, u2 = 1.0, 0.0
+        if model.flow_slip_dir[flow, r] > 0:
+            u1, u2 = slip_unit(model, d, flow, r, S)
+        for i in range(nv):             # J_t L^-T (spatial: (u1 J_t + u2 J_t+1) L^-T), as linalg.whiten
+            s = u1 * S[row, i]
+            if u2 != 0.0:
+                s += u2 * S[row + 1, i]
             for j in range(i):
                 s -= L[i, j] * S[w0 + r, j]
             S[w0 + r, i] = s * L[i, i]
-        scale = S[model.s_e, model.flow_slip_mu[flow, r]] * (1.0 if code > 0 else -1.0)
+        spatial = model.flow_slip_dir[flow, r] > 0
+        scale = S[model.s_e, model.flow_slip_mu[flow, r]] * (1.0 if code > 0 and not spatial else -1.0)
         for i in range(nv):
             S[w0 + r, i] = S[c0 + r, i] + scale * S[w0 + r, i]
 
@@ -204,7 +296,7 @@ def multipliers(model, w, t, x, u, p, d, flow, lam):
         return status
     nr = constraint_system(model, flow, M, G, S)
     if flow_slips(model, flow, nr):
-        slip_rows(model, p, flow, M, S, nr)
+        slip_rows(model, p, d, flow, M, S, nr)
         solve_slipping(model, flow, S, nr)
     else:
         solve_gram(model, S, nr, True)
@@ -289,7 +381,9 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
     With energy_tol >= 0, energy (eq. 5-6): with r = N L^T v, N = I - C^+ C the projector onto the
     constraints' null space, v <- v - L^-T r (E - e0 - W) / |r|^2 when |r|^2 (2T on the constraint
     manifold) exceeds energy_tol; W = the sum of x[NX:NX + NW], the work carried with the state (0 for a
-    model on which nothing does work: the law E = e0). One pass, no iteration. Returns a status.
+    model on which nothing does work: the law E = e0). A flow with a declared law Phi_e (the leaf
+    energy_law) takes r = N L^-1 dPhi_e/dv^T and the residual Phi_e - e0 instead: one Newton step on the law
+    within the constraints (exact for a law linear in v). One pass, no iteration. Returns a status.
     """
     normalize(model, x)
     if not constrain and energy_tol < 0.0:
@@ -314,11 +408,17 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
             x[nq + i] += dv[i]
     if energy_tol >= 0.0:
         r = S[model.s_r, :nv]
-        for i in range(nv):            # r = L^T v (the factor's diagonal holds 1 / L_ii)
-            s = x[nq + i] / M[i, i]
-            for k in range(i + 1, nv):
-                s += M[k, i] * x[nq + k]
-            r[i] = s
+        # A declared law Phi_e of the flow (andyc.spec.energy_law): r = L^-1 dPhi_e/dv^T, its residual Phi_e - e0
+        # (the run passes e0 = 0 there). Else the built-in E - e0 - W, whose gradient M v gives r = L^T v.
+        law = call(model.energy_law, (flow, t, x, u, p, d, S[model.s_r]))
+        if law == law:
+            solve_lower(M, r, nv)
+        else:
+            for i in range(nv):            # r = L^T v (the factor's diagonal holds 1 / L_ii)
+                s = x[nq + i] / M[i, i]
+                for k in range(i + 1, nv):
+                    s += M[k, i] * x[nq + k]
+                r[i] = s
         if constrain:
             c0, y0 = model.s_c, model.s_y
             for j in range(nr):        # y <- C r, for r <- r - C^+ C r
@@ -332,10 +432,13 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
         for i in range(nv):
             rr += r[i] * r[i]
         if rr > energy_tol:
-            target = e0                # the balance E = E0 + W (Braun & Goldfarb's energy law, W the work slots)
-            for i in range(model.nw):
-                target += x[model.nx + i]
-            scale = -(call(model.energy, (t, x, u, p, d)) - target) / rr
+            if law == law:
+                residual = law - e0
+            else:                      # the balance E = E0 + W (Braun & Goldfarb's energy law, W the work slots)
+                residual = call(model.energy, (t, x, u, p, d)) - e0
+                for i in range(model.nw):
+                    residual -= x[model.nx + i]
+            scale = -residual / rr
             for i in range(nv):
                 r[i] *= scale
             solve_upper(M, r, nv)

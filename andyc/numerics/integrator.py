@@ -28,10 +28,10 @@ import math
 from collections import namedtuple
 
 from .compiler import jit
-from .dynamics import enabled_value, guard_value, jump, multipliers, project, rhs_mode_into
+from .dynamics import enabled_value, guard_value, jump, multipliers, project, rhs_mode_into, slip_direction
 from .model import borrowed, call
-from .status import (DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, REST_SPEED, RISING,
-                     SLIP_STOP)
+from .status import (BAUMGARTE, DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, ON_ZERO,
+                     OPEN_SIDE, REST_SPEED, RISING, SLIP_STOP)
 
 Options = namedtuple("Options", "mode project constrain e0 energy_tol event_tol")
 Options.__doc__ = """How a run integrates: mode (IDEAL, LAGRANGE or BAUMGARTE: how constraint forces are found),
@@ -59,26 +59,38 @@ def update_inputs(inputs, t, x, p, d, flow, u, data):
 
 
 @jit(inline="always")
-def stage_powers(model, w, t, x, u, p, d, flow, xdot):
+def stage_powers(model, w, t, x, u, p, d, flow, xdot, mode):
     """xdot[NX:NX + NW] = the power of each work slot at (t, x) (andyc/symbolic/work.py), right after
-    rhs_mode_into in `flow`: the elements' from the dynamics leaf (it wrote them after G), each working
+    rhs_mode_into in `flow` with `mode`: the elements' from the dynamics leaf (it wrote them after G), each working
     constraint row's -lam (c - A v) from the multipliers the flow's constraint solve left in S's y row and the
-    row's A and c in S. So the work W is integrated with the motion."""
+    row's A and c in S. So the work W is integrated with the motion.
+
+    In the BAUMGARTE mode the rows' forces A^T lam (lam with the soft terms, ANDY eq. 15) also act off the
+    constraint manifold, where c != 0: each row's whole power lam A v is counted, a working row's in its
+    constraint's slot (lam c more), another's in the slot `baumgarte` (ROW_WORK = -2 - that slot; -1: none)."""
     nx, nv, nq = model.nx, model.nv, model.nq
     if model.nw == 0:
         return
     G, S = w.G, w.S
     for i in range(model.nw):           # (the leaf writes the elements' slots only: the others stay 0 in G)
         xdot[nx + i] = G[nv + i]
+    call(model.drive_power, (t, x, u, p, d, xdot))      # (reads dv/dt in xdot: after rhs_mode_into)
     for r in range(model.flow_nrows[flow]):
         row = model.flow_rows[flow, r]
         slot = model.row_work[row]
-        if slot < 0:
+        if slot == -1 or (slot < -1 and mode != BAUMGARTE):
             continue
-        b = S[model.s_cv, row]
+        c = S[model.s_cv, row]
+        av = 0.0
         for j in range(nv):
-            b -= S[model.s_a + row, j] * x[nq + j]
-        xdot[nx + slot] -= S[model.s_y, r] * b
+            av += S[model.s_a + row, j] * x[nq + j]
+        lam = S[model.s_y, r]
+        if slot >= 0:
+            xdot[nx + slot] -= lam * (c - av)
+            if mode == BAUMGARTE:
+                xdot[nx + slot] += lam * c
+        else:
+            xdot[nx - 2 - slot] += lam * av
 
 
 @jit
@@ -107,7 +119,7 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale):
         status = rhs_mode_into(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
         if status != OK:
             return status
-        stage_powers(model, w, t + c * h, xt, u, p, d, flow, k[s])
+        stage_powers(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
     total = 0.0
     grown = 0.0
     for j in range(nx):
@@ -217,14 +229,28 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
         scale = max(scale, abs(x[j]))
     if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
         return i, row, INPUT_FAILED, t, flow, -1
+    have_rate = False
     for n in range(model.nj):
         if source[n] == flow:
             g0[n] = guard_value(model, w, n, t, x, u, p, d)
+            # A contact leaving an impact (a bounce, or a rocking block's pivot corner lifted when the other
+            # strikes) starts with its gap a rounding from zero, either side. A rounding below zero, moving up,
+            # would hide its coming down again within the step (a block's late, short rocks), and one above would
+            # have locate try the step's start again and again: it starts on the open side, of no known size.
+            if model.jump_contact[n] >= 0 and abs(g0[n]) <= ON_ZERO * scale:
+                if not have_rate:
+                    have_rate = rhs_mode_into(model, w, t, x, u, p, d, flow, w.xdot, opts.mode) == OK
+                if have_rate and call(model.guard_rate, (n, t, x, u, p, d, w.xdot)) > REST_SPEED:
+                    g0[n] = OPEN_SIDE
     while i < i_end:
         t_next = t0 + (i + 1) * dt
         h = t_next - t
         if h > 1e-14 * max(1.0, abs(t_next)):
             counts[0] += 1
+            if slip_direction(model, w, t, x, u, p, d, flow, h, opts.mode):  # a spatial slip's direction, held?
+                for n in range(model.nj):
+                    if source[n] == flow and model.jump_contact[n] == SLIP_STOP:
+                        g0[n] = guard_value(model, w, n, t, x, u, p, d)
             status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale)
             if status != OK:
                 return i, row, status, t, flow, -1
@@ -356,20 +382,16 @@ def evaluate_constraints(model, w, log, p, phi, c, lam):
 
 
 @jit
-def evaluate_powers(model, w, log, p, out):
-    """The power of each work slot at the logged samples, out (N, NW); a constraint's with the ideal multipliers
-    of the sample's flow (see dynamics.multipliers), the jumps' 0."""
+def evaluate_powers(model, w, log, p, out, mode):
+    """The power of each work slot at the logged samples, out (N, NW), from the right-hand side in the run's `mode`
+    (a constraint's with its multipliers, soft terms included in the BAUMGARTE mode; the drive's with dv/dt), the
+    jumps' 0."""
     nx, xdot = model.nx, w.k[0]
     for r in range(log.t.shape[0]):
         t, x, u, d, flow = log.t[r], log.x[r], log.u[r], log.d[r], log.flow[r]
-        if model.flow_nrows[flow] > 0:
-            if multipliers(model, w, t, x, u, p, d, flow, w.lam) != OK:
-                out[r, :] = math.nan
-                continue
-            for n in range(model.flow_nrows[flow]):          # (multipliers leaves them in y, as the rhs does)
-                w.S[model.s_y, n] = w.lam[model.flow_rows[flow, n]]
-        else:
-            call(model.dynamics, (t, x, u, p, d, w.M, w.G))
-        stage_powers(model, w, t, x, u, p, d, flow, xdot)
+        if rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode) != OK:
+            out[r, :] = math.nan
+            continue
+        stage_powers(model, w, t, x, u, p, d, flow, xdot, mode)
         for i in range(model.nw):
             out[r, i] = xdot[nx + i]

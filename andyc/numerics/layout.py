@@ -38,4 +38,4 @@ def scratch_layout(nv: int, nc: int, nj: int) -> dict:
 
 # The leaves that return a number (the others write into their arrays): their C return type, for the
 # leaves of either backend (model.py's LEAVES; andyc/codegen/c_leaves.py).
-RETURNS = ("energy", "power", "guard", "guard_rate", "enabled")
+RETURNS = ("energy", "power", "guard", "guard_rate", "enabled", "energy_law")

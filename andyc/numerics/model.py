@@ -37,6 +37,10 @@ marked STATE; k is a jump's index; S is the scratch of layout.py:
     reset(k, STATE)                           jump k's resets, into x and d
     flow_inputs(p, U)                         input values each flow sets, into U (NF, NU)
     closed_form(t, u, p, x)                   the exact solution the model declares, into x
+    energy_law(k, STATE, grad) -> Phi_e       flow k's declared energy law and dPhi_e/dv into grad (NV); NaN
+                                              where the flow keeps the built-in law (dynamics.project)
+    drive_power(STATE, xdot)                  the power driving the links that depend on t, from dv/dt in xdot,
+                                              into xdot[NX + its work slot] (integrator.stage_powers)
 
 and the input callbacks every integrator takes (inputs.py: the model's own expressions, model_inputs,
 and what a run drives beyond them):
@@ -55,7 +59,7 @@ SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj", "nw", "nt")
 ROWS = ("s_a", "s_c", "s_w") + tuple(f"s_{name}" for name in VECTORS)  # the first row of each part of S
 TABLES = ("quaternions",                            # index in x of each quaternion signal's w
           "flow_rows", "flow_nrows", "flow_nhrows",  # active rows of each flow (holonomic first), then -1
-          "flow_slip", "flow_slip_mu",               # per flow and row: a slipping contact's friction (slip_rows)
+          "flow_slip", "flow_slip_mu", "flow_slip_dir",  # per flow and row: a slipping contact's friction (slip_rows)
           "impact_rows", "impact_nrows",             # rows taking each jump's impact
           "jump_source", "jump_target", "jump_direction", "jump_priority", "jump_order", "jump_multipliers",
           "jump_contact",                            # the contact whose impact jump k is, or -1
@@ -63,7 +67,7 @@ TABLES = ("quaternions",                            # index in x of each quatern
           "mass_parent", "mass_order")               # the tree of M: parent of each speed; children first
 LEAF_NAMES = ("dynamics", "dynamics_constraints", "constraints_into", "signal_rates", "energy", "power",
               "frame_poses", "constraint_gains", "restitution", "guard", "guard_rate", "enabled", "reset",
-              "flow_inputs", "closed_form")
+              "flow_inputs", "closed_form", "energy_law", "drive_power")
 WORK = {    # the arrays of Work: name -> shape, from the sizes and the scratch layout
     "M": ("nv", "nv"), "G": ("ng",), "S": ("rows", "width"),
     "k": (4, "na"), "xt": ("na",), "x1": ("na",), "xb": ("na",), "xc": ("na",), "x_event": ("na",),
@@ -97,6 +101,8 @@ if NUMBA:
         "reset": types.void(_i8, *_STATE),
         "flow_inputs": types.void(_P, _P),
         "closed_form": types.void(_f8, _P, _P, _P),
+        "energy_law": _f8(_i8, *_STATE, _P),
+        "drive_power": types.void(*_STATE, _P),
     }
     INPUTS_SIGNATURE = _i8(_f8, _ARRAYS, _ARRAYS, _ARRAYS, _i8, _ARRAYS, _ARRAYS)
 
@@ -238,23 +244,27 @@ else:
 
 
 @jit
-def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, impact_rows,
+def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, flow_slip_dir,
+           impact_rows,
            impact_nrows, jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers,
            jump_contact, row_work, mass_parent, mass_order, leaves):
     (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
-     constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form) = leaves
+     constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form, energy_law,
+     drive_power) = leaves
     return Model(sizes[0], sizes[1], sizes[2], sizes[3], sizes[4], sizes[5], sizes[6], sizes[7], sizes[8], sizes[9],
                  sizes[10], sizes[11],
                  rows[0], rows[1], rows[2], rows[3], rows[4], rows[5], rows[6], rows[7], rows[8], rows[9], rows[10],
                  rows[11], rows[12],
                  borrowed(quaternions), borrowed(flow_rows), borrowed(flow_nrows), borrowed(flow_nhrows),
-                 borrowed(flow_slip), borrowed(flow_slip_mu),
+                 borrowed(flow_slip), borrowed(flow_slip_mu), borrowed(flow_slip_dir),
                  borrowed(impact_rows), borrowed(impact_nrows), borrowed(jump_source), borrowed(jump_target),
                  borrowed(jump_direction), borrowed(jump_priority), borrowed(jump_order), borrowed(jump_multipliers),
                  borrowed(jump_contact), borrowed(row_work), borrowed(mass_parent), borrowed(mass_order),
                  dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
                  constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form,
-                 (quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, impact_rows, impact_nrows,
+                 energy_law, drive_power,
+                 (quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, flow_slip_dir, impact_rows,
+                  impact_nrows,
                   jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact,
                   row_work, mass_parent, mass_order))
 

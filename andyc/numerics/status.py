@@ -29,5 +29,11 @@ RAISED, WRONG_SHAPE = 1.0, 2.0
 GROWTH_LIMIT = 1e3  # a step that grows the state past this factor of its largest so far: DIVERGED
 RANK_TOL = 1e-8     # singular values below RANK_TOL * the largest count as zero (redundant rows, singular poses)
 REST_SPEED = 1e-9   # a contact approaching slower than this takes no impact; one this slow after an impact closes
+ON_ZERO = 1e-12     # a gap this close to zero (relative to the state's scale beyond 1) is on zero
+OPEN_SIDE = float("inf")    # what a gap on zero that is opening starts a step with (integrator.advance,
+#                             runtime.adaptive): positive, of no known size, so that the root search bisects until
+#                             a trial finds it open (regula falsi from 0+ would try the step's start again and again)
+HOLD = 0.5          # a fixed step holds a spatial slip's direction where h times its rate exceeds this (slip_direction)
+SLIP_TINY = 1e-13   # m/s: a spatial slip at most this slow has no direction of its own (dynamics.slip_unit)
 SLIP_STOP = -2      # JUMP_CONTACT of a contact's slip ending (andyc.spec.contacts): not an impact, and at once
 #                     (integrator.instant) only when its slip speed reverses faster than a rounding

@@ -1,6 +1,8 @@
 """Leaves that do nothing, for the parts a model has none of (no constraints, no signals, no jumps, no
 flow inputs, no closed form): Model takes a function of each kind, and these compile once for all."""
 
+import math
+
 from .model import leaf
 
 
@@ -56,4 +58,14 @@ def flow_inputs(p, U):
 
 @leaf("closed_form")
 def closed_form(t, u, p, x):
+    return None
+
+
+@leaf("energy_law")
+def energy_law(k, t, x, u, p, d, grad):
+    return math.nan
+
+
+@leaf("drive_power")
+def drive_power(t, x, u, p, d, xdot):
     return None

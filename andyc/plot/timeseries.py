@@ -264,12 +264,16 @@ def _quaternions(ax, run: Run, bases: list) -> None:
 
 def _contacts(ax, run: Run) -> None:
     """Each contact's normal force (0 while open), and the spans where it is closed shaded in its colour; with
-    friction its friction force along +tangent too, dashed in the same colour."""
+    friction its friction force along +tangent too, dashed in the same colour (spatial friction: along the second
+    tangent dotted)."""
     closed, force, friction = run.contact_closed, run.normal_forces, run.friction_forces
     for i, name in enumerate(run.contact_names):
         ax.plot(run.time, force[:, i], color=f"C{i}", lw=1, label=f"normal force {name}")
         if i in run.frictional:
             ax.plot(run.time, friction[:, i], color=f"C{i}", lw=1, ls="--", label=f"friction force {name}")
+        if run.contact_tangents[i] == 2:
+            ax.plot(run.time, run.friction_forces_2[:, i], color=f"C{i}", lw=1, ls=":",
+                    label=f"friction force {name}, 2nd tangent")
         ax.fill_between(run.time, 0, 1, where=closed[:, i] == 1, step="post", color=f"C{i}", alpha=0.12,
                         transform=ax.get_xaxis_transform(), lw=0)
     ax.set_ylabel("contacts: normal" + (" and friction" if run.frictional else "") + " force, N")

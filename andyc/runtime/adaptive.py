@@ -15,8 +15,9 @@ import math
 
 import numpy as np
 
-from andyc.numerics.status import IDEAL, INPUT_FAILED, OK
+from andyc.numerics.status import IDEAL, INPUT_FAILED, OK, SLIP_STOP
 from andyc.runtime.compiled import work
+from andyc.runtime.contacts import open_side
 from andyc.runtime.events import apply_jump, follow_instant_jumps
 from andyc.runtime.status import INTERRUPTED, at, ending, failure, nonfinite, solver_failed
 from andyc.runtime.work import JumpWork, with_work
@@ -38,6 +39,7 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
     stats)."""
     module, rhs_mode_into = model.module, model.numerics.dynamics.rhs_mode_into
     stage_powers = model.numerics.integrator.stage_powers
+    slip_direction = model.numerics.dynamics.slip_direction
     w = work(model)
     nx = model.nx
     x = with_work(model, x)         # the state, then the work of each slot: extra components of the solver's y
@@ -59,7 +61,7 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
         status = rhs_mode_into(model.ref, w.ref, t, y, u, p, d, current[0], xdot, IDEAL)
         if status != OK:
             raise _Stopped(t, status)
-        stage_powers(model.ref, w.ref, t, y, u, p, d, current[0], xdot)
+        stage_powers(model.ref, w.ref, t, y, u, p, d, current[0], xdot, IDEAL)
         return xdot.copy()
 
     n_out = int(math.floor(t_end / dt_out + 1e-9)) + 1
@@ -86,6 +88,7 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
             solver = scipy_method(method)(fun, t, x, t_end, rtol=rtol, atol=atol)
             watched = [m for m in range(model.nj) if module.JUMP_SOURCE[m] == flow]
             g0 = {m: module.guard(m, t, x, inputs(t, x), p, d) for m in watched}
+            open_side(model, t, x[:nx], inputs(t, x), p, d, g0)     # a gap leaving an impact: on its open side
             while solver.status == "running":
                 message = interrupts.reason()
                 if message is not None:
@@ -110,6 +113,9 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
                 bar(t_stop)
                 if hit is None:
                     t, x = solver.t, solver.y.copy()
+                    if slip_direction(model.ref, w.ref, t, x, inputs(t, x), p, d, flow, 0.0, IDEAL):    # a spatial slip
+                        g0.update({m: module.guard(m, t, x, inputs(t, x), p, d) for m in watched
+                                   if module.JUMP_CONTACT[m] == SLIP_STOP})
                     continue
                 k, t, x_before = hit
                 x = x_before.copy()

@@ -51,6 +51,8 @@ class CompiledModel:
     conserves_energy: bool = False
     work_names: tuple = ()      # the work slots carried after the state (andyc.runtime.work): elements, then 'jumps'
     untracked_work: tuple = ()  # frames moved by a link that depends on t (their driving work is not in the work)
+    energy_laws: tuple = ()     # per flow: its declared energy law as written (andyc.spec.energy_law), or None
+    energy_law_where: tuple = ()  # per flow: (line, document path) of that law, or None
     source: str = ""            # the model file's name
     constraint_where: tuple = ()  # (line, document path) of each row in the model file
     discrete_names: tuple = ()
@@ -67,17 +69,25 @@ class CompiledModel:
     contact_rows: tuple = ()    # the constraint row of each contact's gap
     jump_contact: tuple = ()    # per jump: the contact whose impact it is (andyc.runtime.contacts resolves it), or
     #                             SLIP_STOP (a slip's end, andyc.numerics.status), or -1
-    contact_stick_rows: tuple = ()  # the stick row of each contact with friction, or -1
+    contact_stick_rows: tuple = ()  # the stick row of each contact with friction (spatial: the first of two), or -1
+    contact_tangents: tuple = ()  # per contact: 0 frictionless, 1 planar, 2 spatial friction (stick rows t, t + 1)
     jump_kinds: tuple = ()      # per jump: (kind, contact) of a contact's jump (andyc.spec.contacts), ("", -1) else
 
     @property
     def contact_radix(self) -> list:
-        """The number of states of each contact: 2 (open, closed), 4 with friction (open, stick, slip +, slip -)."""
-        return radices([r >= 0 for r in self.contact_stick_rows] if self.contact_stick_rows
-                       else [False] * len(self.contact_names))
+        """The number of states of each contact: 2 (open, closed), 4 with planar friction (open, stick, slip +,
+        slip -), 3 with spatial friction (open, stick, slip)."""
+        return radices(self.tangents)
+
+    @property
+    def tangents(self) -> list:
+        """Per contact: 0 frictionless, 1 planar, 2 spatial friction."""
+        return (list(self.contact_tangents) or [int(r >= 0) for r in self.contact_stick_rows]
+                or [0] * len(self.contact_names))
 
     def contact_states(self, flow: int) -> list:
-        """Each contact's state in `flow` (andyc.spec.contacts: 0 open, 1 closed or sticking, 2 / 3 slipping)."""
+        """Each contact's state in `flow` (andyc.spec.contacts: 0 open, 1 closed or sticking, 2 / 3 slipping; spatial
+        friction: 2 slipping)."""
         return states_of(int(flow), self.contact_radix)
 
     def contact_flow(self, states: list) -> int:
@@ -241,7 +251,7 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
     if frames:
         integrator.evaluate_frames(m, log, p, np.zeros((1, len(model.frame_names), 12)))
     if model.nw or every:
-        integrator.evaluate_powers(m, w.ref, log, p, np.zeros((1, model.nw)))
+        integrator.evaluate_powers(m, w.ref, log, p, np.zeros((1, model.nw)), IDEAL)
     if model.nc or every:
         integrator.evaluate_constraints(m, w.ref, log, p, np.zeros((1, model.nh)), np.zeros((1, model.nc)),
                                         np.zeros((1, model.nc)))
@@ -258,7 +268,7 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
         if model.nw:
             xdot = np.zeros(model.nx + model.nw)
             numerics.dynamics.rhs_mode_into(m, w.ref, 0.0, x, u, p, d, flow, xdot, IDEAL)
-            integrator.stage_powers(m, w.ref, 0.0, x, u, p, d, flow, xdot)
+            integrator.stage_powers(m, w.ref, 0.0, x, u, p, d, flow, xdot, IDEAL)
     if adaptive and (model.nj or every):
         integrator.crosses(0, 1.0, -1.0)
         integrator.illinois_trial(0.0, 1.0, 1.0, -1.0, 1.0)

@@ -15,7 +15,7 @@ import numpy as np
 
 from andyc.errors import SimulationError
 from andyc.numerics.status import OK
-from andyc.runtime.contacts import resolve_impact, resolve_stop
+from andyc.runtime.contacts import resolve_impact, resolve_stop, start_slip
 from andyc.runtime.inputs import USER_ERRORS, InputSource, raised
 from andyc.runtime.options import Events
 from andyc.runtime.status import ZENO, at, in_jump
@@ -132,6 +132,8 @@ def finish_jump(model, k, t, x_before, x, u, p, d, flow: int, jumps: EventLog) -
             flow = resolve_stop(model, t, x, u, p, d, k, flow)
         except (FloatingPointError, np.linalg.LinAlgError) as exc:
             return flow, f"stopped: contact stick in jump '{model.jump_names[k]}': {exc}" + at(t)
+    elif model.jump_kinds and model.jump_kinds[k][0] == "slip" and model.tangents[model.jump_kinds[k][1]] == 2:
+        start_slip(model, t, x, u, p, d, k)     # spatial friction: the slip starts against the sticking force
     message = user_jump(model, k, t, x, u, p, d) or jumps.record(t, k, x_before, x, d, flow)
     return flow, message
 

@@ -20,7 +20,7 @@ from andyc.runtime.events import finish_jump, follow_instant_jumps
 from andyc.runtime.inputs import inputs_at
 from andyc.runtime.options import Projection
 from andyc.runtime.status import INTERRUPTED, at, diverging_constraints, ending, failure, in_jump
-from andyc.runtime.work import JumpWork, with_work
+from andyc.runtime.work import JumpWork, law_offset, with_work
 
 MODE = {"rk4": IDEAL, "projection": IDEAL, "lagrange": LAGRANGE, "baumgarte": BAUMGARTE}
 
@@ -29,8 +29,8 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
                    interrupts, run_of, tangent=None):
     """Integrate from (0, x) to t_end in steps dt, logging every `every`-th; x and d change in place.
     projection.energy_correction is resolved (a bool). Returns (log, status, stats).
-    tangent: an andyc.runtime.sensitivities.Tangent, carried through every step (the loop then takes one grid
-    step per call) and every jump."""
+    tangent: an andyc.runtime.sensitivities.Tangent, carried through every step (after each call of the loop, over
+    the steps that call took, in one compiled call) and every jump."""
     n_steps = int(round(t_end / dt))
     if abs(n_steps * dt - t_end) > 1e-9 * max(1.0, t_end):
         raise SimulationError(f"t_end = {t_end} is not a whole number of steps dt = {dt}; "
@@ -64,9 +64,7 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
     balance = JumpWork(model, x, out_u[0], p, d, t)
     flow, message = follow_instant_jumps(model, t, state, source, p, d, flow, jumps, w, mode)
     _no_instant_jump(tangent, jumps, 0)
-    e0 = balance.add(x, inputs_at(model, source, t, state, p, d, flow), d)
-    if tangent is not None:
-        chunk = 1
+    e0 = law_offset(model, flow, balance.add(x, inputs_at(model, source, t, state, p, d, flow), d))
     while i < n_steps and status == OK and message is None:
         message = interrupts.reason()
         if message is not None:
@@ -81,7 +79,7 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
         i, row, status, t, flow, k = integrator.advance(model.ref, w.ref, opts, fn, data, p, d, x, t, flow, i, i_end,
                                                         0.0, dt, every, log, row)
         if tangent is not None and status == OK:
-            tangent.advance(t0, x0, d0, flow0, t, 0.0 + i * dt, k, w.x_event[:nx], d)
+            tangent.advance(t0, x0, d0, flow0, i0, t, i, dt, k, w.x_event[:nx])
         if k >= 0:
             if status != OK:
                 message = in_jump(model, status, k, t)
@@ -94,8 +92,8 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
             _no_instant_jump(tangent, jumps, n_jumps + 1)
             if message is None and source.into(model, t, state, p, d, flow, w.u) != OK:
                 status = INPUT_FAILED
-            e0 = balance.add(x, w.u, d)
-        elif i > i0 and tangent is None:
+            e0 = law_offset(model, flow, balance.add(x, w.u, d))
+        elif i > i0:
             elapsed = time.perf_counter() - tic
             chunk = int(min(max(chunk * 0.25 / max(elapsed, 1e-6) * (i_end - i0) / (i - i0), 1000), 10_000_000))
         bar(t)

@@ -65,8 +65,9 @@ class Projection:
     normalize          renormalize the quaternion signals (every fixed-step method; the adaptive methods'
                        norm drift stays within their tolerances and never reaches the dynamics, whose
                        rotation matrices are exact for any norm)
-    energy_correction  the projection method's energy correction (Braun & Goldfarb eq. 5-6); None: on when
-                       the method is projection and the model declares conserves_energy; True needs both
+    energy_correction  the projection method's energy correction (Braun & Goldfarb eq. 5-6) to each flow's law
+                       (its energy_law, else E - E0 - W); None: on when the method is projection and the model
+                       declares conserves_energy or an energy_law; True needs the projection method
     energy_tol         the energy correction applies only where 2T exceeds this (Braun & Goldfarb eq. 6)
     """
     normalize: bool = True

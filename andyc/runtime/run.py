@@ -56,6 +56,8 @@ class Run:
     contact_stick_rows: list = field(default_factory=list)  # the multiplier (row) of its friction force, or -1
     contact_mu: list = field(default_factory=list)     # its friction coefficient (NaN without friction)
     slip_speeds: np.ndarray | None = None              # (N, contacts) each contact's slip speed (NaN without friction)
+    contact_tangents: list = field(default_factory=list)  # per contact: 0 frictionless, 1 planar, 2 spatial friction
+    slip_speeds_2: np.ndarray | None = None            # (N, contacts) the slip along a spatial contact's second tangent
     andyc_version: str = andyc.__version__
     display: dict = field(default_factory=dict)      # state units, the ground, shapes: for pictures (andyc.spec.display)
     work_names: list = field(default_factory=list)   # the elements that do work, then 'jumps' (andyc.runtime.work)
@@ -105,6 +107,9 @@ class Run:
         self.contact_mu = list(self.contact_mu) or [math.nan] * k
         if self.slip_speeds is None:
             self.slip_speeds = np.full((n, k), np.nan)
+        self.contact_tangents = list(self.contact_tangents) or [int(r >= 0) for r in self.contact_stick_rows]
+        if self.slip_speeds_2 is None:
+            self.slip_speeds_2 = np.full((n, k), np.nan)
 
     @property
     def energy_balance(self) -> np.ndarray:
@@ -129,8 +134,9 @@ class Run:
     @property
     def contact_modes(self) -> np.ndarray:
         """(N, contacts) each contact's state: 0 open, 1 closed (sticking, with friction), 2 slipping forwards
-        (slip speed > 0), 3 backwards; the flow index is these in mixed radix (andyc.spec.contacts)."""
-        radix = radices([r >= 0 for r in self.contact_stick_rows])
+        (slip speed > 0), 3 backwards (spatial friction: 2 slipping); the flow index is these in mixed radix
+        (andyc.spec.contacts)."""
+        radix = radices(self.contact_tangents)
         place = np.cumprod([1] + radix[:-1]).astype(np.int64)
         return ((self.flow[:, None] // place[None, :]) % np.array(radix, dtype=np.int64)).astype(np.int8).reshape(
             len(self.time), len(self.contact_names))
@@ -150,10 +156,35 @@ class Run:
     def friction_forces(self) -> np.ndarray:
         """(N, contacts) each contact's friction force along +tangent (the direction of positive slip): its stick
         row's multiplier while it sticks, -mu lam_n slipping forwards, +mu lam_n backwards; 0 open or frictionless."""
+        return self._friction(0)
+
+    @property
+    def friction_forces_2(self) -> np.ndarray:
+        """(N, contacts) the friction force of a contact with spatial friction along its second tangent (0 for the
+        others): its second stick row's multiplier while it sticks, -mu lam_n u_2 slipping (friction_forces: the
+        first tangent, -mu lam_n u_1), u the slip's unit direction."""
+        return self._friction(1)
+
+    def _friction(self, j: int) -> np.ndarray:
+        """Each contact's friction force along its tangent j (0, or 1 for the second of spatial friction)."""
         modes, normal = self.contact_modes, self.normal_forces
         out = np.zeros(modes.shape)
         for i, row in enumerate(self.contact_stick_rows):
-            if row < 0:
+            if self.contact_tangents[i] == 2:
+                slip = np.stack([self.slip_speeds[:, i], self.slip_speeds_2[:, i]], axis=1)
+                size = np.hypot(slip[:, 0], slip[:, 1])
+                known = f"{self.contact_names[i]}_slip_dir_1"
+                if known in self.discrete_names:        # a slip from rest, or a step that held it: the run's
+                    k = self.discrete_names.index(known)
+                    own = (size > 0) & (self.discrete[:, k + 2] == 0)
+                    direction = np.where(own[:, None], slip / np.where(size > 0, size, 1.0)[:, None],
+                                         self.discrete[:, k:k + 2])
+                else:
+                    direction = slip / np.where(size > 0, size, 1.0)[:, None]
+                out[:, i] = np.where(modes[:, i] == 1, self.multipliers[:, row + j], 0.0)
+                out[:, i] += np.where(modes[:, i] == 2, -self.contact_mu[i] * normal[:, i] * direction[:, j], 0.0)
+                continue
+            if row < 0 or j:
                 continue
             mu = self.contact_mu[i]
             out[:, i] = np.where(modes[:, i] == 1, self.multipliers[:, row], 0.0)
@@ -220,6 +251,7 @@ class Run:
                 "display": json.dumps(self.display),
                 **({"contacts": json.dumps({"names": self.contact_names, "rows": self.contact_rows,
                                             "stick_rows": self.contact_stick_rows,
+                                            "tangents": self.contact_tangents,
                                             "mu": [None if math.isnan(m) else m for m in self.contact_mu]})}
                    if self.contact_names else {})}
 
@@ -312,6 +344,9 @@ def write_h5(run: Run, path: Path) -> None:
                 f["contacts/mode"] = run.contact_modes
                 f["contacts/friction_force"] = run.friction_forces
                 f["contacts/slip_speed"] = run.slip_speeds
+                if 2 in run.contact_tangents:       # spatial friction: the second tangent's
+                    f["contacts/friction_force_2"] = run.friction_forces_2
+                    f["contacts/slip_speed_2"] = run.slip_speeds_2
         ev = run.events
         table = np.zeros(len(ev["time"]), dtype=[("time", "f8"), ("jump", h5py.string_dtype()),
                                                  ("from_flow", "i4"), ("to_flow", "i4")])
@@ -367,6 +402,8 @@ def read_h5(path) -> Run:
                    contact_stick_rows=contacts.get("stick_rows", []),
                    contact_mu=[math.nan if m is None else m for m in contacts.get("mu", [])],
                    slip_speeds=f["contacts/slip_speed"][()] if "contacts/slip_speed" in f else None,
+                   contact_tangents=contacts.get("tangents", []),
+                   slip_speeds_2=f["contacts/slip_speed_2"][()] if "contacts/slip_speed_2" in f else None,
                    sensitivities={k: f["sensitivities"][k][()] for k in f["sensitivities"]}
                    if "sensitivities" in f else None)
 
@@ -394,6 +431,11 @@ def write_csv(run: Run, path: Path) -> None:
             columns += ([f"mode_{c}" for c in names] + [f"friction_force_{c}" for c in names]
                         + [f"slip_speed_{c}" for c in names])
             data += [run.contact_modes[:, friction], run.friction_forces[:, friction], run.slip_speeds[:, friction]]
+            spatial = [i for i in friction if run.contact_tangents[i] == 2]
+            if spatial:
+                columns += ([f"friction_force_2_{run.contact_names[i]}" for i in spatial]
+                            + [f"slip_speed_2_{run.contact_names[i]}" for i in spatial])
+                data += [run.friction_forces_2[:, spatial], run.slip_speeds_2[:, spatial]]
     for name, xyz in run.frames.items():
         columns += [f"{name}.x", f"{name}.y", f"{name}.z"]
         data.append(xyz)

@@ -40,11 +40,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from andyc.errors import SimulationError
+from andyc.numerics.status import IDEAL
 from andyc.runtime.adaptive import run_adaptive
 from andyc.runtime.compiled import CompiledModel, compile_integrator, work
 from andyc.runtime.contacts import friction_coefficients, initial_mode, slip_speeds
 from andyc.runtime.events import EventLog
-from andyc.runtime.fixed_step import run_fixed_step
+from andyc.runtime.fixed_step import MODE, run_fixed_step
 from andyc.runtime.initial import consistent_initial_state, initial_state, require_independent_rows
 from andyc.runtime.inputs import InputSource, input_source, inputs_at
 from andyc.runtime.interrupts import Interrupts
@@ -60,7 +61,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
              flow0: str | int | None = None, every: int = 1, frames=None, rtol: float = 1e-8, atol: float = 1e-10,
              controller=None, progress: bool | None = None, interrupts: Interrupts | None = None,
              events: Events = Events(), init: Init = Init(), projection: Projection = Projection(),
-             sensitivities: bool = False) -> Run:
+             sensitivities=False) -> Run:
     """Integrate `model` from t = 0 to t_end and return the logged Run.
 
     dt is the step of the fixed-step methods and the output spacing of the adaptive ones; every N logs one
@@ -82,7 +83,10 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     sensitivities: also compute the exact derivatives of the run's end state, Run.sensitivities: "x0" dx(T)/dx0,
     "d0" dx(T)/dd0, "p" dx(T)/dp (x0 and d0 held), "time" dT/d(x0, d0, p) (nonzero when the run ends
     at a jump, stop_after) and "discrete" dd(T)/d(x0, d0, p), through the same RK4 steps and the saltation matrix of each jump
-    (andyc.runtime.sensitivities: the rk4 method; needs the build's derivatives, andyc.build_derivatives).
+    (andyc.runtime.sensitivities: the rk4, lagrange and projection methods; needs the build's derivatives,
+    andyc.build_derivatives). sensitivities may instead be an array Z (nx + nd + np, k) of directions in
+    z = (x0, d0, p): then only the derivatives along them are carried (cheaper when k is small), in
+    Run.sensitivities["directions"] = dx(T)/dz Z, and "time", "discrete" and "before_jump" with k columns.
     """
     _check_option("events", events, Events)
     _check_option("init", init, Init)
@@ -108,11 +112,13 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
         require_independent_rows(model, method, x, u, p, d, flow)
     if projection.energy_correction:
         _require_free_speed(model, x, u, p, d, flow)
+        _check_declared_law(model, x, u, p, d, flow, init)
     tangent = None
-    if sensitivities:
+    directions = None if isinstance(sensitivities, bool) else np.asarray(sensitivities, float)
+    if directions is not None or sensitivities:
         from andyc.runtime.sensitivities import Tangent, check, load_derivatives
-        check(model, method, source, controller)
-        tangent = Tangent(model, load_derivatives(model), p, source.held(flow))
+        check(model, method, source, controller, projection)
+        tangent = Tangent(model, load_derivatives(model), p, source.held(flow), method, projection, directions)
     bar = Progress(f"{model.name} {method}", t_end, enabled=progress)
     interrupts = interrupts or Interrupts()
     start = time.perf_counter()
@@ -146,11 +152,14 @@ def _energy_correction(model: CompiledModel, method: str, projection: Projection
     declares energy conserved. Asked for, it corrects to the energy balance E - E0 - W = 0 (W the work of every
     element, andyc.runtime.work; 0 on a conservative model): refused for another method, and for a model whose
     balance is not known (a frame moved by a link that depends on t)."""
+    declared = any(law is not None for law in model.energy_laws)
     if projection.energy_correction is None:
-        return dataclasses.replace(projection, energy_correction=model.conserves_energy and method == "projection")
+        return dataclasses.replace(projection, energy_correction=(model.conserves_energy or declared)
+                                   and method == "projection")
     if projection.energy_correction and method != "projection":
         raise SimulationError(f"energy correction needs the projection method, not {method}; use --method projection")
-    if projection.energy_correction and model.untracked_work:
+    builtin = not model.energy_laws or None in model.energy_laws       # a flow keeps the built-in law
+    if projection.energy_correction and model.untracked_work and builtin:
         raise SimulationError(f"{model.source}: energy correction: the energy law E - E0 - W = 0 is not known: frame "
                               f"'{model.untracked_work[0]}' moves by a link that depends on t, whose driving work "
                               "andyc does not derive; run without --energy-correction")
@@ -171,6 +180,33 @@ def _require_free_speed(model: CompiledModel, x, u, p, d, flow) -> None:
         raise SimulationError(f"{model.source}:{line}: {path}: the energy law has no speed to correct: the "
                               f"{len(rows)} constraint rows active at the start fix all {model.nv} speeds (rank "
                               f"{rank}); run without energy correction")
+
+
+def _check_declared_law(model: CompiledModel, x, u, p, d, flow, init: Init) -> None:
+    """The initial flow's declared energy law (andyc.spec.energy_law) at the start: it must hold to init.tol (unless
+    init is "as-is": the first step's correction then moves the speeds onto it), and the constraints must leave
+    its gradient a direction to correct along (N L^-1 dPhi_e/dv^T != 0, eq. 6); FILE:LINE of the law if not."""
+    if flow >= len(model.energy_laws) or model.energy_laws[flow] is None:
+        return
+    line, path = model.energy_law_where[flow]
+    where = f"{model.source}:{line}: {path}"
+    value, grad = model.module.energy_law(0.0, x, u, p, d, flow)
+    if init.mode != "as-is" and not abs(value) <= init.tol:
+        raise SimulationError(f"{where}: the energy law {model.energy_laws[flow]!r} is {value:.6g} at the initial "
+                              f"state, not 0 (within {init.tol:g}); correct its constants to the initial state, or "
+                              "start with --init as-is to let the first step move the speeds onto it")
+    L = np.linalg.cholesky(model.module.mass_matrix(0.0, x, u, p, d))
+    r = np.linalg.solve(L, grad)
+    rows = model.active_rows(flow)
+    if rows:
+        A = np.zeros((model.nc, model.nv))
+        model.module.constraints(0.0, x, u, p, d, np.empty(model.nh), np.empty(model.nc), A, np.empty(model.nc))
+        C = np.linalg.solve(L, A[rows].T).T         # A L^-T
+        r = r - np.linalg.pinv(C) @ (C @ r)
+    if not np.dot(r, r) > 1e-300:
+        raise SimulationError(f"{where}: the energy law has no speed to correct at the start: its gradient dPhi_e/dv "
+                              "lies in the span of the active constraint rows; declare a law the constraints leave "
+                              "free, or run without energy correction")
 
 
 @dataclass
@@ -204,7 +240,7 @@ class _Assembly:
         phi, c, lam = np.empty((n, model.nh)), np.empty((n, model.nc)), np.empty((n, model.nc))
         if model.nc:
             integrator.evaluate_constraints(model.ref, work(model).ref, log, p, phi, c, lam)
-        slip = slip_speeds(model, t_log, x_log, u_log, p, d_log) if model.contact_names else None
+        slip, slip_2 = slip_speeds(model, t_log, x_log, u_log, p, d_log) if model.contact_names else (None, None)
         frames_out, rotations = {}, {}
         if frame_names:
             poses = np.empty((n, len(model.frame_names), 12))
@@ -214,7 +250,7 @@ class _Assembly:
             rotations = {name: unit_quaternions(poses[:, k, 3:].reshape(n, 3, 3)) for name, k in at.items()}
         power = np.empty((n, model.nw))
         if model.nw:
-            integrator.evaluate_powers(model.ref, work(model).ref, log, p, power)
+            integrator.evaluate_powers(model.ref, work(model).ref, log, p, power, MODE.get(self.method, IDEAL))
         status = lost_constraints(self.method, status, phi, c, t_log)
         held = u_log[0] if n else self.source.held(model.initial_flow)
         return Run(model=model.name, spec_sha256=model.spec_sha256, method=self.method, dt=self.dt, nq=model.nq,
@@ -234,7 +270,7 @@ class _Assembly:
                    display=model.display, contact_names=list(model.contact_names),
                    contact_rows=list(model.contact_rows), contact_stick_rows=list(model.contact_stick_rows),
                    contact_mu=list(friction_coefficients(model, p)) if model.contact_names else [],
-                   slip_speeds=slip)
+                   slip_speeds=slip, slip_speeds_2=slip_2, contact_tangents=model.tangents)
 
 
 def _check_size(model: CompiledModel, t_end: float, dt: float, every: int) -> None:

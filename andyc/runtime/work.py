@@ -37,3 +37,11 @@ class JumpWork:
         if model.nj:                   # (a model with jumps has the slot `jumps`, last)
             x[model.nx + model.nw - 1] += after - self.before
         return after - float(np.sum(x[model.nx:]))
+
+
+def law_offset(model, flow: int, e0: float) -> float:
+    """The constant the projection's energy correction subtracts in `flow` (andyc_numerics/dynamics.project): the
+    built-in law's e0 (E0, then E+ - W after each jump), or 0 where the flow declares its own law Phi_e = 0
+    (andyc.spec.energy_law: taken as written)."""
+    laws = model.energy_laws
+    return 0.0 if flow < len(laws) and laws[flow] is not None else e0

@@ -91,13 +91,21 @@ def build_constraints(written: list, scope: Scope, quantities: FrameQuantities,
     ones first (DESIGN.md run layout; a contact's row is holonomic); multiplier names checked."""
     constraints = [_constraint(("constraints", i), c, scope, quantities) for i, c in enumerate(written)]
     constraints += [_constraint(("contacts", i), c, scope, quantities) for i, c in enumerate(contacts)]
-    # A contact with friction: its stick row, the slip speed = 0 (nonholonomic), active while it sticks.
+    # A contact with friction: its stick row, the slip speed = 0 (nonholonomic), active while it sticks; spatial
+    # friction (slip: a list of two tangential speeds): one constraint of two rows.
     constraints += [_constraint(("contacts", i), {"name": f"{c['name']}_stick", "slip": c["slip"],
-                                                  "multiplier": c.get("friction_multiplier", f"friction_{c['name']}")},
+                                                  "multiplier": c.get("friction_multiplier", _friction_names(c))},
                                 scope, quantities) for i, c in enumerate(contacts) if "slip" in c]
     constraints.sort(key=lambda c: not c.holonomic)
     _check_multipliers(constraints, {"constraints": written, "contacts": contacts}, scope)
     return constraints
+
+
+def _friction_names(contact: dict):
+    """The default names of a contact's friction forces: friction_<contact>, or friction_<contact>_1 and _2 (two
+    tangents)."""
+    base = f"friction_{contact['name']}"
+    return [f"{base}_1", f"{base}_2"] if isinstance(contact["slip"], list) else base
 
 
 def _constraint(where: tuple, c: dict, scope: Scope, quantities: FrameQuantities) -> Constraint:
@@ -185,8 +193,9 @@ def _constraint(where: tuple, c: dict, scope: Scope, quantities: FrameQuantities
     elif isinstance(multipliers, str):
         multipliers = [multipliers]
     if len(multipliers) != len(rows):
-        scope.report.error(where + ("multiplier",), f"{len(multipliers)} multiplier name(s) for {len(rows)} "
-                           f"constraint row(s)", f"give one name per row ({len(rows)})")
+        scope.report.error(where + ("friction_multiplier" if key == "slip" else "multiplier",),
+                           f"{len(multipliers)} multiplier name(s) for {len(rows)} constraint row(s)",
+                           f"give one name per row ({len(rows)})")
     gains = c.get("gains") or {}
     if "stiffness" in gains and not holonomic:
         scope.report.error(where + ("gains", "stiffness"), "a nonholonomic constraint has no stiffness (ANDY eq. "
@@ -348,38 +357,38 @@ def _works(row: sp.Expr, speeds: set) -> bool:
 def check_energy_law(data: dict, frames: list, constraints: list, flows: list, initial_flow: int, scope: Scope):
     """Where the model asks for the energy correction (`energy_correction: true` in its simulate: section or an
     expectation), its law E(t) - E(0) - W(t) = 0 (Braun & Goldfarb eq. 5-6, W the work of every element,
-    andyc/symbolic/work.py) must make sense: every element's work known (no frame whose link depends on t),
-    and a speed left for the correction to move (fewer constraint rows than speeds in the initial flow)."""
+    andyc/symbolic/work.py) must make sense: a speed left for the correction to move (fewer constraint rows
+    than speeds in the initial flow)."""
     places = [("simulate", "energy_correction")] if (data.get("simulate") or {}).get("energy_correction") else []
     places += [("expect", i, "energy_correction") for i, e in enumerate(data.get("expect") or [])
                if isinstance(e, dict) and e.get("energy_correction")]
     if not places:
         return
-    driven = rheonomic_frames(frames)
     speeds = len(scope.coordinates) + len(scope.speeds)
     active = set(flows[initial_flow].constraints) if flows else {c.name for c in constraints}
     rows = sum(len(c.rows) for c in constraints if c.name in active)
     for path in places:
-        if driven:
-            scope.report.error(path, f"the energy law E - E0 - W = 0 is not known: frame '{driven[0]}' moves by a link "
-                               "that depends on t, whose driving work andyc does not derive",
-                               "remove energy_correction, or prescribe that motion by a constraint that depends on t "
-                               "(its work is part of W)")
-        elif rows >= speeds:
+        if rows >= speeds:
             scope.report.error(path, f"the energy law has no speed to correct: the {rows} constraint rows of the "
                                f"initial flow fix all {speeds} speeds", "remove energy_correction")
 
 
 def check_work_names(data: dict, jumps: list, scope: Scope):
     """A model with jumps carries the energy they change as the work slot 'jumps' (andyc/symbolic/work.py, the
-    run files' work_jumps and power_jumps): no element that does work may take that name."""
-    if not jumps:
-        return
+    run files' work_jumps and power_jumps); any model may carry the slots 'baumgarte' and 'prescribed_motion'
+    (the baumgarte method's forces off the manifold, the links that depend on t): no element that does work may
+    take those names."""
+    reserved = {"baumgarte": "the baumgarte method's constraint forces off the manifold",
+                "prescribed_motion": "what drives the links that depend on t"}
+    if jumps:
+        reserved["jumps"] = "the model's jumps"
     for section in ("forces", "torques", "dampers", "springs", "potentials", "constraints"):
         for i, entry in enumerate(data.get(section) or []):
-            if isinstance(entry, dict) and entry.get("name") == "jumps":
-                scope.report.error((section, i, "name"), "the name 'jumps' is taken by the work of the model's "
-                                   "jumps (the run files' work_jumps, power_jumps)", "choose another name")
+            name = entry.get("name") if isinstance(entry, dict) else None
+            if name in reserved:
+                scope.report.error((section, i, "name"), f"the name '{name}' is taken by the work of "
+                                   f"{reserved[name]} (the run files' work_{name}, power_{name})",
+                                   "choose another name")
 
 
 def working_rows(c: Constraint, positions: set, speeds: set) -> list[int]:
@@ -401,6 +410,15 @@ def rheonomic_frames(frames: list) -> list[str]:
     """The frames whose link depends on t: their motion is prescribed, and the power that drives it is not
     derived (andyc/symbolic/work.py), so the energy balance of a model with one is not complete."""
     return [f.name for f in frames if any(TIME in _free(step) for step in f.transforms)]
+
+
+def driven_frames(frames: list) -> list[str]:
+    """The frames moved along t: those whose link depends on t and every frame below them (parents come first)."""
+    driven = set(rheonomic_frames(frames))
+    for f in frames:
+        if f.parent in driven:
+            driven.add(f.name)
+    return [f.name for f in frames if f.name in driven]
 
 
 def _free(step) -> set:

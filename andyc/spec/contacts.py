@@ -47,13 +47,15 @@ import sympy as sp
 
 from andyc.spec.expressions import TIME
 from andyc.spec.hybrid import multiplier_symbols, restitution
-from andyc.spec.model import FALLING, RISING, Flow, Jump
+from andyc.spec.model import FALLING, RISING, DiscreteState, Flow, Jump
 from andyc.spec.modes import flow_of, radices, states_of  # noqa: F401 (part of this module's API)
 from andyc.spec.scope import Scope
 
 IMPACT, LIFTOFF, SLIP, STOP = "impact", "liftoff", "slip", "stop"
 OPEN, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3      # a contact's state (without friction: 0 open, 1 closed)
+SLIDE = 2                                          # spatial friction: 0 open, 1 stick, 2 slip (one state)
 STATE_SUFFIX = {STICK: "_stick", SLIP_POS: "_slip_pos", SLIP_NEG: "_slip_neg"}
+SPATIAL_SUFFIX = {STICK: "_stick", SLIDE: "_slip"}
 MAX_MODES = 16                                     # flows: 4 contacts without friction, 2 with
 
 
@@ -66,13 +68,16 @@ class Contact:
     where: tuple
     friction: sp.Expr | None = None     # mu, an expression of parameters; None: frictionless
     stick: str | None = None    # the name of its stick row (slip speed = 0), with friction
-    friction_multiplier: str | None = None  # the friction force's name (the stick row's multiplier)
+    friction_multiplier: str | None = None  # the friction force's name (the stick row's multiplier; spatial: the first)
+    tangents: int = 0           # 0 frictionless, 1 planar, 2 spatial friction (slip: two tangential speeds)
+    direction: tuple = ()       # spatial: the names of its two discrete states holding the slip's direction
 
 
 def mode_name(states: list, contacts: list) -> str:
     """The flow of the contacts' states: `open` (none closed) or the closed contacts (`left+right`), with their
     friction state (`block_stick`, `block_slip_pos`, `block_slip_neg`)."""
-    closed = [c.name + (STATE_SUFFIX[s] if c.friction is not None else "") for c, s in zip(contacts, states) if s]
+    closed = [c.name + ((SPATIAL_SUFFIX if c.tangents == 2 else STATE_SUFFIX)[s] if c.friction is not None else "")
+              for c, s in zip(contacts, states) if s]
     return "+".join(closed) if closed else "open"
 
 
@@ -103,12 +108,21 @@ def build_contacts(written: list, constraints: list, has_hybrid: bool, scope: Sc
                                "add 'friction: mu' (Coulomb's coefficient), or remove 'slip'")
         elif "friction" in c:
             mu, stick = _friction(c["friction"], where + ("friction",), scope), f"{c['name']}_stick"
+        tangents = 0 if mu is None else 2 if isinstance(c["slip"], list) else 1
+        direction = _slip_direction(c["name"], where, scope) if tangents == 2 else ()
         contacts.append(Contact(c["name"], c["name"], row.multipliers[0], e, where, mu, stick,
-                                by_name[stick].multipliers[0] if stick in by_name else None))
-    radix = radices([c.friction is not None for c in contacts])
+                                by_name[stick].multipliers[0] if stick in by_name else None, tangents, direction))
+    spatial = [c for c in contacts if c.tangents == 2]
+    if spatial and len(contacts) > 1:
+        scope.report.error(spatial[0].where + ("slip",), f"contact '{spatial[0].name}' has spatial friction (two "
+                           f"tangents) beside {len(contacts) - 1} other contact(s): not supported yet",
+                           "give a contact with spatial friction alone, or make its friction planar (slip: one "
+                           "speed)")
+        return contacts, [], []
+    radix = radices([c.tangents for c in contacts])
     n_flows = flow_of([r - 1 for r in radix], radix) + 1
     if n_flows > MAX_MODES:
-        scope.report.error(("contacts",), f"{len(contacts)} contacts, {sum(r == 4 for r in radix)} with friction, "
+        scope.report.error(("contacts",), f"{len(contacts)} contacts, {sum(r != 2 for r in radix)} with friction, "
                            f"make {n_flows} modes, more than {MAX_MODES}", "with friction, give at most 2 contacts "
                            "(each has 4 modes: open, stick, slip forwards, slip backwards); without, at most 4")
         return contacts, [], []
@@ -141,6 +155,9 @@ def build_contacts(written: list, constraints: list, has_hybrid: bool, scope: Sc
                 text=_text(c.multiplier, "none"))
             if c.friction is None:
                 continue
+            if c.tangents == 2:
+                _spatial_jumps(add, c, w, s, k, i, other, by_name[c.stick], lams, n_sym, slips, scope)
+                continue
             t_sym = lams[c.friction_multiplier][0]
             used = {n_sym: c.multiplier, t_sym: c.friction_multiplier}
             if s == STICK:
@@ -153,7 +170,7 @@ def build_contacts(written: list, constraints: list, has_hybrid: bool, scope: Sc
                 stop = add(f"{c.name}_stop", STOP, k, other(STICK), stick.rows[0],
                            FALLING if s == SLIP_POS else RISING, i, c.friction, stick.quantities,
                            text=_text(w["slip"], "none"))
-                slips[k].append((c.constraint, c.stick, 1 if s == SLIP_POS else -1, stop))
+                slips[k].append((c.constraint, c.stick, 1 if s == SLIP_POS else -1, stop, None))
     flows = []
     for k, states in enumerate(all_states):
         closed = {c.name for c, s in zip(contacts, states) if s} | {c.stick for c, s in zip(contacts, states)
@@ -161,6 +178,44 @@ def build_contacts(written: list, constraints: list, has_hybrid: bool, scope: Sc
         active = tuple(c.name for c in constraints if c.name in closed or c.name in bilateral)
         flows.append(Flow(names[k], active, {}, ("contacts",), tuple(slips[k])))
     return contacts, flows, jumps
+
+
+def _spatial_jumps(add, c: Contact, w: dict, s: int, k: int, i: int, other, stick, lams: dict, n_sym, slips: dict,
+                   scope: Scope) -> None:
+    """The friction jumps of a contact with spatial friction (two tangents t1, t2; friction forces lam_1, lam_2
+    along them) in state s of flow k: sticking, it slips where |lam_t| reaches mu lam_n (`<c>_slip`, guard
+    mu^2 lam_n^2 - lam_1^2 - lam_2^2, falling; the runtime starts the slip against the sticking force,
+    andyc.runtime.contacts); slipping, it stops where the slip s = (s1, s2) reaches zero (`<c>_stop`, guard
+    s . d, d the slip's direction at the start of the integration step, kept in the discrete states `direction`
+    by the integrator: numerics.dynamics.slip_direction; a linear crossing at the stop, where |s|^2 only touches
+    zero), its target decided by the runtime (stick inside the cone, else slip on)."""
+    if len(stick.multipliers) != 2:         # one friction name for two tangents: reported (andyc.spec.constraints)
+        return
+    t1, t2 = (lams[name][0] for name in stick.multipliers)
+    used = {n_sym: c.multiplier, t1: stick.multipliers[0], t2: stick.multipliers[1]}
+    if s == STICK:
+        add(f"{c.name}_slip", SLIP, k, other(SLIDE), c.friction ** 2 * n_sym ** 2 - t1 ** 2 - t2 ** 2, FALLING, i,
+            used=used, text=_text(f"({w['friction']})**2*{c.multiplier}**2 - {stick.multipliers[0]}**2 - "
+                                  f"{stick.multipliers[1]}**2", "none"))
+        return
+    d1, d2 = (next(x.symbol for x in scope.discrete if x.name == name) for name in c.direction[:2])
+    stop = add(f"{c.name}_stop", STOP, k, other(STICK), stick.rows[0] * d1 + stick.rows[1] * d2, FALLING, i,
+               c.friction, stick.quantities,
+               text=_text(f"({w['slip'][0]})*{c.direction[0]} + ({w['slip'][1]})*{c.direction[1]}", "none"))
+    slips[k].append((c.constraint, c.stick, 0, stop, c.direction[0]))
+
+
+def _slip_direction(name: str, where: tuple, scope: Scope) -> tuple:
+    """The discrete states of a contact with spatial friction that keep its slip's direction (unit, in its
+    tangents' coordinates; 0 until it slips): `<contact>_slip_dir_1`, `_2`, and `<contact>_slip_held`, 1 while a
+    fixed step holds that direction (andyc.numerics.dynamics.slip_direction)."""
+    names = (f"{name}_slip_dir_1", f"{name}_slip_dir_2", f"{name}_slip_held")
+    for n in names:
+        if n in scope.declared:
+            scope.report.error(where + ("name",), f"contact '{name}' with spatial friction needs the name '{n}' "
+                               f"(its slip's direction), which is taken", f"rename the {scope.declared[n]} '{n}'")
+        scope.discrete.append(DiscreteState(n, sp.Symbol(f"d_{n}", real=True), sp.Integer(0), where + ("slip",)))
+    return names
 
 
 def _friction(value, path, scope: Scope) -> sp.Expr:

@@ -24,6 +24,7 @@ from andyc.spec.constraints import (FrameQuantities, build_constraints, check_co
                                     check_work_names)
 from andyc.spec.contacts import build_contacts
 from andyc.spec.elements import build_elements
+from andyc.spec.energy_law import build_energy_laws
 from andyc.spec.expect import build_expect
 from andyc.spec.frames import build_frames
 from andyc.spec.hybrid import build_hybrid, check_nonlinear_impacts
@@ -117,6 +118,7 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
     if conserves:
         check_conservative(elements, constraints, frames, data.get("constraints") or [], scope)
     check_energy_law(data, frames, constraints, flows, initial_flow, scope)
+    energy_laws = build_energy_laws(data, flows, constraints, scope, quantities)
     check_work_names(data, jumps, scope)
     shapes = build_shapes(data, scope, smap.file)
     gravity = (scope.vector(data["gravity"], ("gravity",), scope.parameter_names, "only parameters are allowed here")
@@ -140,4 +142,5 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
                 dampers=elements.dampers, springs=elements.springs, potentials=elements.potentials,
                 constraints=constraints, conserves_energy=conserves, discrete=scope.discrete, flows=flows,
                 jumps=jumps, initial_flow=initial_flow, contacts=contacts, input_expressions=input_expressions, shapes=shapes,
-                driven_inputs=driven, closed_form=closed_form, simulate=simulate, expect=expect, **origin)
+                driven_inputs=driven, closed_form=closed_form, simulate=simulate, expect=expect,
+                energy_laws=energy_laws, **origin)

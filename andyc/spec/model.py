@@ -261,6 +261,7 @@ class Spec:
     closed_form: dict = field(default_factory=dict)  # state name -> x_i(t) of t, parameters and held inputs
     simulate: dict = field(default_factory=dict)     # andyc sim's options the model gives (andyc.spec.simulate)
     expect: list = field(default_factory=list)       # of Expectation (andyc.spec.expect), for andyc test
+    energy_laws: tuple = ()     # per flow: its energy law (andyc.spec.energy_law.EnergyLaw), or None: the built-in
 
     @property
     def speed_symbols(self) -> list:

@@ -1,13 +1,15 @@
-"""Contact modes as flow numbers: each contact's state (open, closed or stick, slip either way) is a digit,
+"""Contact modes as flow numbers: each contact's state (open, closed or stick, slip either way; spatial friction: slip) is a digit,
 the flow is their number in mixed radix (contact 0 the lowest digit). Plain Python, no SymPy: the runtime and
 the run files read it on every run (andyc.spec.contacts builds the modes)."""
 
 from __future__ import annotations
 
 
-def radices(frictional: list) -> list:
-    """The number of states of each contact (4 with friction, 2 without), from a flag per contact."""
-    return [4 if f else 2 for f in frictional]
+def radices(tangents: list) -> list:
+    """The number of states of each contact, from its number of friction tangents (or a flag, True for planar
+    friction): 2 without friction (open, closed), 4 planar (open, stick, slip forwards, backwards), 3 spatial
+    (open, stick, slip)."""
+    return [(2, 4, 3)[int(n)] for n in tangents]
 
 
 def states_of(flow: int, radix: list) -> list:

@@ -25,7 +25,7 @@ from andyc.symbolic.hybrid import hybrid_terms
 from andyc.symbolic.kinematics import frame_kinematics
 from andyc.symbolic.model import SymbolicModel
 from andyc.symbolic.reduce import merge_rigid_bodies
-from andyc.symbolic.work import work_slots
+from andyc.symbolic.work import energy_law_terms, work_slots
 
 
 def derive(spec: Spec) -> SymbolicModel:
@@ -46,7 +46,8 @@ def derive(spec: Spec) -> SymbolicModel:
     quantities = FrameQuantities(spec, kin, emit)
     constraints = constraint_terms(spec, quantities)
     hybrid = hybrid_terms(spec, quantities, constraints)
-    work_names, powers, row_work = work_slots(spec, terms, constraints)
+    laws = energy_law_terms(spec, quantities)
+    work_names, powers, row_work, prescribed = work_slots(spec, terms, constraints)
     rates = {sym: rate for K in kin.values() for sym, rate in K.signal_rates.items()}
     return SymbolicModel(
         spec=spec, t=TIME,
@@ -58,7 +59,7 @@ def derive(spec: Spec) -> SymbolicModel:
         frame_positions={f.name: kin[f.name].r for f in spec.frames if not f.internal},
         frame_rotations={f.name: kin[f.name].R for f in spec.frames if not f.internal},
         elements=terms, powers=powers, work_names=work_names, row_work=row_work,
-        constraints=constraints, hybrid=hybrid, forward=choose(M), derive_seconds=time.perf_counter() - start)
+        constraints=constraints, hybrid=hybrid, energy_laws=laws, prescribed=prescribed, forward=choose(M), derive_seconds=time.perf_counter() - start)
 
 
 __all__ = ["derive", "SymbolicModel"]

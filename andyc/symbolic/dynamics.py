@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from andyc.errors import SpecError
+from andyc.spec.constraints import driven_frames
 from andyc.spec.model import Spec
 from andyc.symbolic.emitter import Emitter
 from andyc.symbolic.kinematics import FrameKinematics, cross
@@ -47,6 +48,7 @@ class ElementTerms:
     G_direct: sp.Matrix | None = None               # n x 1, for elements on speeds or coordinates
     energy: sp.Expr = sp.Integer(0)
     power: sp.Expr = sp.Integer(0)
+    drive: tuple = ()       # (a, b): its share a . dv/dt + b of the power that drives the links depending on t (work.py)
 
     @property
     def M(self) -> sp.Matrix | None:
@@ -76,6 +78,12 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
         return sp.Matrix([sp.diff(expr, qi) for qi in q] + [0] * (n - len(q)))
 
     out = []
+    driven = set(driven_frames(spec.frames))
+
+    def moved(K) -> tuple:
+        """The velocity and own-axes angular velocity a frame has at zero speeds: its motion along t."""
+        return K.v - K.Jv * v, K.wb - K.Jwb * v
+
     for b in spec.bodies:
         K = kin[b.frame]
         terms = ElementTerms(b.name, inertia=[(K.Jv, b.mass * sp.eye(3))], loads=[(K.Jv, b.mass * (spec.gravity - K.ac))],
@@ -85,6 +93,11 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
             Iw = b.inertia * K.wb
             terms.inertia.append((K.Jwb, b.inertia))
             terms.loads.append((K.Jwb, -(b.inertia * K.alb + cross(K.wb, Iw))))
+        if b.frame in driven:       # m (a - g) . V_t + (I alb + wb x I wb) . W_t, a = Jv dv/dt + ac
+            Vt, Wt = moved(K)
+            terms.drive = (b.mass * K.Jv.T * Vt + K.Jwb.T * b.inertia * Wt,
+                           b.mass * (K.ac - spec.gravity).dot(Vt)
+                           + (b.inertia * K.alb + cross(K.wb, b.inertia * K.wb)).dot(Wt))
         out.append(terms)
     for f in spec.loads:
         K = kin[f.frame]
@@ -93,7 +106,7 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
         else:
             vec = kin[f.in_frame].R * f.vector
             J, rate = (K.Jv, K.v) if f.kind == "force" else (K.Jw, K.w)
-        out.append(ElementTerms(f.name, loads=[(J, vec)], power=rate.dot(vec)))
+        out.append(_driven(ElementTerms(f.name, loads=[(J, vec)], power=rate.dot(vec)), f.frame in driven, v))
     for d in spec.dampers:
         if d.speed is not None:
             j = damped.index(d.speed)
@@ -104,7 +117,8 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
             K = kin[d.frame]
             J, chi = (K.Jwb, K.wb) if d.angular else (K.Jv, K.v)
         gain = d.coefficient * (_norm(chi) if d.law == "quadratic" else 1)
-        out.append(ElementTerms(d.name, loads=[(J, -gain * chi)], power=-gain * chi.dot(chi)))
+        out.append(_driven(ElementTerms(d.name, loads=[(J, -gain * chi)], power=-gain * chi.dot(chi)),
+                           d.frame in driven, v))
     for s in spec.springs:
         if s.length is not None:
             x = s.length
@@ -116,10 +130,24 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
             dx = (a.Jv - b.Jv).T * delta / x
         stretch = x - s.rest_length
         energy = s.stiffness * stretch ** 2 / 2
-        out.append(ElementTerms(s.name, G_direct=-s.stiffness * stretch * dx, energy=energy, power=time_power(energy)))
+        terms = ElementTerms(s.name, G_direct=-s.stiffness * stretch * dx, energy=energy, power=time_power(energy))
+        if s.between is not None and set(s.between) & driven:   # k (x - x0) dx/dt at zero speeds
+            (Va, _), (Vb, _) = moved(kin[s.between[0]]), moved(kin[s.between[1]])
+            terms.drive = (sp.zeros(n, 1), s.stiffness * stretch * delta.dot(Va - Vb) / x)
+        out.append(terms)
     for p in spec.potentials:
         out.append(ElementTerms(p.name, G_direct=-gradient(p.energy), energy=p.energy, power=time_power(p.energy)))
     return out
+
+
+def _driven(terms: ElementTerms, driven: bool, v: sp.Matrix) -> ElementTerms:
+    """A force, torque or damper on a frame moved along t: the power its force f has along that motion, counted in
+    its own power P = f . (J v + V_t) and not in the equations' f . J v, goes to the drive with the sign that
+    balances the energy: f . J v - P (= -f . V_t)."""
+    if driven:
+        (J, f), = terms.loads
+        terms.drive = (sp.zeros(len(v), 1), f.dot(J * v) - terms.power)
+    return terms
 
 
 def assemble(spec: Spec, terms: list[ElementTerms]):

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import sympy as sp
 
@@ -42,6 +42,8 @@ class SymbolicModel:
     row_work: list            # per velocity-level row: the slot of its constraint's power, or -1
     constraints: ConstraintTerms  # phi, c = A v + b, kappa (eq. 10-12); empty without constraints
     hybrid: HybridTerms       # flows, jumps (one flow, no jumps without a hybrid section)
+    prescribed: tuple = ()    # (slot, a, b): the power a . dv/dt + b driving the links that depend on t (work.py)
+    energy_laws: list = field(default_factory=list)  # per flow: (Phi_e, dPhi_e/dv) of its declared law, or None
     forward: ForwardDynamics | None = None  # how dv/dt = M^-1 G is solved (formulation.py); None: dense
     derive_seconds: float = 0.0
 

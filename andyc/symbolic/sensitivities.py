@@ -1,7 +1,7 @@
 """Exact first derivatives of a model's expressions, as more assignments (symbolic forward mode).
 
 The SymbolicModel is a chain of assignments s = f(earlier symbols). For variables w (here the state
-x = (q, v), the discrete states d, the parameters p and the time t: W = (x, d, p, t)), each intermediate
+x = (q, v, sigma), the discrete states d, the parameters p and the time t: W = (x, d, p, t)), each intermediate
 symbol's gradient is carried forward in order, entry by entry:
 
     ds/dw_j = sum_a (df/da) da/dw_j        over the symbols a that f reads,
@@ -62,6 +62,6 @@ class ForwardGradients:
 
 
 def variables(model: SymbolicModel) -> list:
-    """W = (q, v, d, p, t): the symbols the derivatives are taken with respect to, in the order of the generated
-    module's STATES, DISCRETE_STATES, PARAMETERS, then t."""
-    return [*model.q, *model.v, *model.discrete, *model.parameters, model.t]
+    """W = (q, v, sigma, d, p, t): the symbols the derivatives are taken with respect to, in the order of the
+    generated module's STATES (coordinates, speeds, signals), DISCRETE_STATES, PARAMETERS, then t."""
+    return [*model.q, *model.v, *model.signals, *model.discrete, *model.parameters, model.t]
