@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from andyc.codegen.buildfiles import (BuildResult, build_key, equations_path, jumps_path, module_name, module_path,
-                                     numerics_package, numerics_path, written_constant)
+from andyc.codegen.buildfiles import (BuildResult, build_key, equations_path, jumps_path, library_present, module_name,
+                                     module_path, numerics_package, numerics_path, written_constant)
 from andyc.errors import plural
 from andyc.outputs import OutputError
 from andyc.spec.yamlpos import MAX_YAML_BYTES
@@ -53,7 +53,7 @@ def unchanged(path, out_dir="build") -> BuildResult | None:
     jumps = jumps_path(out_dir, name) if written_constant(front, "JUMPS_FILE") else None
     if digest != written_constant(front, "SPEC_SHA256") or (jumps is not None and not jumps.exists()):
         return None
-    if not (numerics_path(out_dir, name) / "__init__.py").exists():
+    if not (numerics_path(out_dir, name) / "__init__.py").exists() or not library_present(out_dir, name):
         return None
     return BuildResult(name, front, True, key, jumps_path=jumps, jumps_kept=jumps is not None)
 
@@ -116,7 +116,7 @@ def build(path, out_dir="build", force: bool = False) -> BuildResult:
                           f"(--build-dir DIR), or pass --force to replace that build")
     jumps = jumps_path(out_dir, spec.name) if spec.jumps else None
     if not force and written_constant(equations_path(out_dir, spec.name), "BUILD_KEY") == key and (
-            jumps is None or jumps.exists()):
+            jumps is None or jumps.exists()) and library_present(out_dir, spec.name):
         from andyc.codegen.generate import write_front
 
         write_front(spec, out_dir, key)

@@ -50,7 +50,16 @@ parameters: {L: 1.5, m: 2.0, g: 9.81}
 
 def _stamps(folder):
     return {p.name: p.stat().st_mtime_ns for p in folder.rglob("*") if p.is_file() and p.name.endswith(
-        ("_equations.py", ".nbi", ".nbc"))}
+        ("_equations.py", ".nbi", ".nbc", "_leaves.c", ".so"))}
+
+
+def _leaves_compiled(model, result) -> bool:
+    """Whether this build compiled the model's leaves: by the C compiler (its library, andyc.codegen.c_leaves),
+    or by Numba."""
+    library = model.module.EQUATIONS.C_LIBRARY
+    if library is not None:
+        return (model.path.parent / library).is_file() and result.timings.get("cc", 0.0) > 0
+    return result.compiled > 0
 
 
 def test_runtime_data_edits_reuse_the_build_and_an_equation_edit_rebuilds(tmp_path):
@@ -59,10 +68,10 @@ def test_runtime_data_edits_reuse_the_build_and_an_equation_edit_rebuilds(tmp_pa
     path.parent.mkdir()
     path.write_text(PENDULUM)
     first, result = andyc.compile_model(path, build)
-    assert not result.skipped and result.compiled > 0
+    assert not result.skipped and _leaves_compiled(first, result)
     folder = result.module_path.parent
     stamps = _stamps(folder)
-    assert any(name.endswith(".nbc") for name in stamps)
+    assert any(name.endswith((".nbc", ".so")) for name in stamps)
 
     path.write_text(EDITED)
     edited, again = andyc.compile_model(path, build)
@@ -81,8 +90,8 @@ def test_runtime_data_edits_reuse_the_build_and_an_equation_edit_rebuilds(tmp_pa
     assert abs(energy - 2.0 * 9.81 * 1.5 * np.sin(0.75)) < 1e-6
 
     path.write_text(EDITED.replace("gravity: [0, -g, 0]", "gravity: [0, -2*g, 0]"))
-    _, rebuilt = andyc.compile_model(path, build)
-    assert not rebuilt.skipped and rebuilt.build_key != result.build_key and rebuilt.compiled > 0
+    remade, rebuilt = andyc.compile_model(path, build)
+    assert not rebuilt.skipped and rebuilt.build_key != result.build_key and _leaves_compiled(remade, rebuilt)
 
     # The same bytes again: the build is found without reading the model, and a warm `andyc sim`
     # imports neither SymPy nor SciPy (nor the schema's and templates' libraries).
@@ -129,9 +138,12 @@ def test_two_models_of_one_name_never_share_a_build_folder(tmp_path):
     assert written_constant(result.module_path, "SOURCE_PATH") == str(second.resolve())
 
 
-def test_a_new_model_compiles_only_its_own_functions(tmp_path):
+@pytest.mark.parametrize("backend", ["c", "numba"])
+def test_a_new_model_compiles_only_its_own_functions(tmp_path, monkeypatch, backend):
     """The algorithms are compiled once for every model (andyc/numerics, cached by content): a model never
-    built before compiles its leaves, and nothing of the integrator, projection or solves."""
+    built before compiles its leaves (by the C compiler, or by Numba), and nothing of the integrator,
+    projection or solves."""
+    monkeypatch.setenv("ANDYC_BACKEND", backend)
     first, second = tmp_path / "a.yaml", tmp_path / "b.yaml"
     first.write_text(PENDULUM)
     second.write_text(PENDULUM.replace("cached_pendulum", "other_pendulum").replace("mass: m", "mass: 3*m"))
@@ -139,7 +151,9 @@ def test_a_new_model_compiles_only_its_own_functions(tmp_path):
     model, result = andyc.compile_model(second, tmp_path / "build")
     leaves = [name for name, value in vars(model.module.EQUATIONS).items() if hasattr(value, "address")]
     assert sorted(leaves) == ["dynamics", "energy", "frame_poses", "power"]      # what a pendulum needs
-    assert result.compiled == len(leaves)
+    assert (model.module.EQUATIONS.C_LIBRARY is not None) == (backend == "c")
+    assert _leaves_compiled(model, result)
+    assert result.compiled == (0 if backend == "c" else len(leaves))     # Numba: the leaves, and nothing else
     run = andyc.simulate(model, 0.5, dt=1e-3)
     theta, omega = run.state[-1]        # m g L sin(theta) + m (L theta')^2 / 2 at m = 3, the changed equation
     assert abs(3 * 9.81 * np.sin(theta) + 3 * omega ** 2 / 2 - 3 * 9.81 * np.sin(0.5)) < 1e-6

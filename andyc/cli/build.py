@@ -68,8 +68,9 @@ def build(file, build_dir, force, fmt):
         summary = f"{result.module_path}: up to date (equations and andyc unchanged); {compile}"
     else:
         ops = sum(result.operations.values())
+        cc = f"C compiler {t['cc']:.2f} s, " if "cc" in t else ""
         summary = (f"{result.module_path}: built; derive {t['derive']:.2f} s, generate {t['generate']:.2f} s, "
-                   f"{compile}; {ops} operations ({', '.join(f'{k} {v}' for k, v in result.operations.items())})")
+                   f"{cc}{compile}; {ops} operations ({', '.join(f'{k} {v}' for k, v in result.operations.items())})")
     report.say(summary)
     if report.text:
         report_jumps_file(result)

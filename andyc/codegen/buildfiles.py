@@ -103,5 +103,13 @@ def written_constant(path: Path, constant: str):
     return None
 
 
+def library_present(out_dir, name: str) -> bool:
+    """Whether the build's leaves are all there: the shared library its equations load (andyc.codegen.c_leaves),
+    when they load one."""
+    equations = equations_path(out_dir, name)
+    library = written_constant(equations, "C_LIBRARY")
+    return library is None or equations.with_name(str(library)).is_file()
+
+
 def jumps_path(out_dir, name: str) -> Path:
     return Path(out_dir) / name / f"{name}_jumps.py"

@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import pprint
 import time
+import warnings
 from pathlib import Path
 
 import jinja2
@@ -26,6 +27,7 @@ from andyc.errors import format_path
 from andyc.outputs import check_output, create_once, update_text, write_text
 from andyc.codegen.buildfiles import (PACKAGE, BuildResult, build_key, equations_path, jumps_path, module_name,
                                      module_path, numerics_package, write_numerics)
+from andyc.codegen import c_leaves
 from andyc.codegen.leaves import leaves, state_names
 from andyc.codegen.printer import to_code
 from andyc.spec.display import display
@@ -97,12 +99,15 @@ def _forward_context(model: SymbolicModel) -> dict:
             "mass_order": order, "nt": len(order) if fwd.chosen == LTDL else 0}
 
 
-def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
+def render(model: SymbolicModel, key: str, c: bool = False) -> tuple[str, dict, str | None]:
     """The text of <name>_equations.py (the model's leaves, everything of it that Numba compiles: it depends
-    only on what the equations depend on) and the operation count of each leaf."""
+    only on what the equations depend on), the operation count of each leaf, and with `c` (a C compiler
+    at hand) the text of <name>_leaves.c, when every leaf has C (andyc.codegen.c_leaves), else None; then
+    <name>_equations.py loads the leaves from the library of it."""
     spec = model.spec
     cons = model.constraints
     found = leaves(model)
+    c_source = c_leaves.render(spec.name, found.functions) if c and found.in_c else None
     nx_before = len(model.q) + model.dof
     context = {
         "version": andyc.__version__, "build_key": key, "name": spec.name, "module_name": module_name(spec.name, key),
@@ -128,8 +133,10 @@ def render(model: SymbolicModel, key: str) -> tuple[str, dict]:
         **_hybrid_context(model),
         **_forward_context(model),
         "leaves": found.functions,
+        "c_library": c_leaves.library_name(spec.name, key) if c_source else None,
+        "c_names": [f["name"] for f in found.functions if f["c"] is not None] if c_source else [],
     }
-    return _environment().get_template("equations.py.j2").render(**context), found.operations
+    return _environment().get_template("equations.py.j2").render(**context), found.operations, c_source
 
 
 def render_front(spec, key: str) -> str:
@@ -247,10 +254,24 @@ def generate(model: SymbolicModel, out_dir="build", force: bool = False) -> Buil
         if target is not None:
             check_output(target, spec.files, what)
     key = build_key(spec.meaning_sha256)
-    source, operations = render(model, key)
+    cc = c_leaves.compiler()
+    source, operations, c_source = render(model, key, c=cc is not None)
+    timings = {"generate": time.perf_counter() - start}
+    if c_source is not None:
+        start = time.perf_counter()
+        c_path = equations.with_name(f"{spec.name}_leaves.c")
+        library = equations.with_name(c_leaves.library_name(spec.name, key))
+        if (write_text if force else update_text)(c_path, c_source) or force or not library.exists():
+            try:
+                c_leaves.compile_library(c_path, library, cc)
+            except c_leaves.NoC as exc:     # the compiler refused it: the Numba leaves, and say why
+                warnings.warn(f"{spec.name}: the C leaves did not compile, Numba compiles them instead ({exc})",
+                              stacklevel=2)
+                source, operations, _ = render(model, key, c=False)
+        timings["cc"] = time.perf_counter() - start
     (write_text if force else update_text)(equations, source)
     write_front(spec, out_dir, key)
-    result = BuildResult(spec.name, path, False, key, {"generate": time.perf_counter() - start}, operations)
+    result = BuildResult(spec.name, path, False, key, timings, operations)
     if jumps is not None:
         result.jumps_path = jumps
         result.jumps_kept = not create_once(jumps, render_jumps(model))

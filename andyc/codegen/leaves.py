@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from andyc.codegen.c_leaves import NoC, c_lines
 from andyc.codegen.printer import function_body
 from andyc.numerics.layout import scratch_layout
 from andyc.symbolic.model import SymbolicModel
@@ -73,6 +74,14 @@ def _code(model, body, returns: str | None, indent: int) -> list[str]:
     return lines or [f"{pad}return None"]
 
 
+def _c(model, body, returns: str | None, indent: int) -> list[str] | None:
+    """The body in C (andyc.codegen.c_leaves), or None where it has none."""
+    try:
+        return c_lines(_unpack(model, body.inputs), body, returns, indent)
+    except NoC:
+        return None
+
+
 class Leaves:
     """The leaves of one model: `functions` ({decorator, name, args, doc, code} each, for the template) and the
     operation count of each (`operations`)."""
@@ -83,42 +92,59 @@ class Leaves:
 
     def add(self, name, args, outputs, returns=None):
         body = function_body(outputs, self.pool)
-        self._append(name, args, _code(self.model, body, returns, 4), body.operations)
+        self._append(name, args, _code(self.model, body, returns, 4), body.operations,
+                     c=_c(self.model, body, returns, 4))
 
     def add_per_jump(self, name, args, bodies, fallback):
         """A leaf over the jumps: `bodies` holds (outputs, returns) of each jump, in order."""
-        code, operations = [], 0
+        code, c, operations = [], [], 0
         for k, (outputs, returns) in enumerate(bodies):
             body = function_body(outputs, self.pool)
             code += [f"    if k == {k}:", *_code(self.model, body, returns or "None", 8)]
+            branch = _c(self.model, body, returns or ("" if fallback == "None" else None), 8)
+            c = None if c is None or branch is None else c + [f"    if (k == {k}) {{", *branch, "    }"]
             operations += body.operations
-        self._append(name, f"k, {args}", code + [f"    return {fallback}"], operations)
+        end = "    return;" if fallback == "None" else f"    return {fallback};"
+        self._append(name, f"k, {args}", code + [f"    return {fallback}"], operations,
+                     c=None if c is None else c + [end])
 
-    def _append(self, name, args, code, operations, decorator=None):
+    def _append(self, name, args, code, operations, decorator=None, c=None):
+        """c: the body in C, or None where it has none (then the model's leaves are all Numba's)."""
         self.functions.append({"decorator": decorator or f"leaf({name!r})", "name": name, "args": args,
-                               "doc": DOCS[name], "code": code})
+                               "doc": DOCS[name], "code": code, "c": c})
         self.operations[name] = operations
+
+    @property
+    def in_c(self) -> bool:
+        """Whether every leaf has C (the input callback model_inputs stays Numba's in either backend)."""
+        return all(f["c"] is not None for f in self.functions if f["name"] != "model_inputs")
+
+
+def _flat(array: str, width: int):
+    """The target `array[row, column]` of a leaf, which indexes its arrays flat, row-major (as C pointers)."""
+    return lambda row, column: f"{array}[{row * width + column}]"
 
 
 def leaves(model: SymbolicModel) -> Leaves:
     """Every leaf `model` has, with the input callback of the inputs it drives by an expression."""
     out = Leaves(model)
     n, cons, spec = model.dof, model.constraints, model.spec
-    mass = [(f"M[{i}, {j}]", model.M[i, j]) for i in range(n) for j in range(i, n)]
-    mirror = [(f"M[{j}, {i}]", sp.Symbol(f"M[{i}, {j}]")) for i in range(n) for j in range(i + 1, n)]
+    mass = [(f"M[{i * n + j}]", model.M[i, j]) for i in range(n) for j in range(i, n)]
+    mirror = [(f"M[{j * n + i}]", sp.Symbol(f"M[{i * n + j}]")) for i in range(n) for j in range(i + 1, n)]
     force = [(f"G[{i}]", model.G[i]) for i in range(n)] + [(f"G[{n + i}]", e) for i, e in enumerate(model.powers)]
     at = scratch_layout(n, cons.nc, len(model.hybrid.jumps))      # the rows of S
-    rows = ([(f"S[{at['phi']}, {i}]", e) for i, e in enumerate(cons.phi)]
-            + [(f"S[{at['cv']}, {i}]", e) for i, e in enumerate(cons.c)]
-            + [(f"S[{at['A'] + i}, {j}]", cons.A[i, j]) for i in range(cons.nc) for j in range(n)]
-            + [(f"S[{at['kappa']}, {i}]", e) for i, e in enumerate(cons.kappa)])
+    S = _flat("S", at["width"])
+    rows = ([(S(at['phi'], i), e) for i, e in enumerate(cons.phi)]
+            + [(S(at['cv'], i), e) for i, e in enumerate(cons.c)]
+            + [(S(at['A'] + i, j), cons.A[i, j]) for i in range(cons.nc) for j in range(n)]
+            + [(S(at['kappa'], i), e) for i, e in enumerate(cons.kappa)])
     out.add("dynamics", f"{STATE}, M, G", mass + force + mirror)
     out.add("energy", STATE, [("e", model.energy)], returns="e")
     out.add("power", STATE, [("w", model.power)], returns="w")
     frames = list(model.frame_positions)
     out.add("frame_poses", f"{STATE}, out",
-            [(f"out[{k}, {i}]", model.frame_positions[f][i]) for k, f in enumerate(frames) for i in range(3)]
-            + [(f"out[{k}, {3 + 3 * i + j}]", model.frame_rotations[f][i, j])
+            [(f"out[{12 * k + i}]", model.frame_positions[f][i]) for k, f in enumerate(frames) for i in range(3)]
+            + [(f"out[{12 * k + 3 + 3 * i + j}]", model.frame_rotations[f][i, j])
                for k, f in enumerate(frames) for i in range(3) for j in range(3)])
     if model.signals:
         nq = len(model.q)
@@ -126,8 +152,8 @@ def leaves(model: SymbolicModel) -> Leaves:
     if cons.nc:
         out.add("dynamics_constraints", f"{STATE}, M, G, S", mass + force + rows + mirror)
         out.add("constraints_into", f"{STATE}, S", rows)
-        out.add("constraint_gains", "p, S", [(f"S[{at['ks']}, {i}]", e) for i, e in enumerate(cons.stiffness)]
-                + [(f"S[{at['kd']}, {i}]", e) for i, e in enumerate(cons.damping)])
+        out.add("constraint_gains", "p, S", [(S(at['ks'], i), e) for i, e in enumerate(cons.stiffness)]
+                + [(S(at['kd'], i), e) for i, e in enumerate(cons.damping)])
     _hybrid(out, model, at)
     _energy_law(out, model)
     if model.prescribed:
@@ -144,7 +170,8 @@ def leaves(model: SymbolicModel) -> Leaves:
 def _hybrid(out: Leaves, model: SymbolicModel, at: dict) -> None:
     h = model.hybrid
     if any(h.flow_inputs):
-        out.add("flow_inputs", "p, U", [(f"U[{f}, {i}]", e) for f, inputs in enumerate(h.flow_inputs)
+        nu = len(model.inputs)
+        out.add("flow_inputs", "p, U", [(f"U[{f * nu + i}]", e) for f, inputs in enumerate(h.flow_inputs)
                                          for i, e in inputs.items()])
     if not h.jumps:
         return
@@ -156,7 +183,8 @@ def _hybrid(out: Leaves, model: SymbolicModel, at: dict) -> None:
     out.add_per_jump("guard_rate", f"{STATE}, xdot", [([("g", j.guard_rate)], "g") for j in h.jumps], "0.0")
     out.add_per_jump("enabled", f"{STATE}, lam", [([("e", j.enabled)], "e") for j in h.jumps], "1.0")
     out.add_per_jump("reset", STATE, [([(index[s], e) for s, e in j.resets], None) for j in h.jumps], "None")
-    out.add("restitution", "p, S", [(f"S[{at['e']}, {k}]", j.restitution) for k, j in enumerate(h.jumps)])
+    S = _flat("S", at["width"])
+    out.add("restitution", "p, S", [(S(at['e'], k), j.restitution) for k, j in enumerate(h.jumps)])
 
 
 def _energy_law(out: Leaves, model: SymbolicModel) -> None:
@@ -166,8 +194,9 @@ def _energy_law(out: Leaves, model: SymbolicModel) -> None:
     its flows with the built-in law return E - W (W the work slots after x) and that gradient."""
     if not any(model.energy_laws) and not model.prescribed:
         return
-    code, operations = [], 0
+    code, c, operations = [], [], 0
     n = model.dof
+    nx, nw = len(model.q) + n + len(model.signals), len(model.work_names)
     for k, law in enumerate(model.energy_laws or [None] * len(model.hybrid.flows)):
         if law is None and not model.prescribed:
             continue
@@ -181,8 +210,16 @@ def _energy_law(out: Leaves, model: SymbolicModel) -> None:
         if law is None:
             code += ["        for i in range(NW):", "            g -= x[NX + i]"]
         code += ["        return g"]
+        branch = _c(model, body, None, 8)
+        if c is not None and branch is not None:
+            less = ["        double e = g;", f"        for (int i = 0; i < {nw}; i++) e -= x[{nx} + i];"] if law is None else \
+                ["        double e = g;"]
+            c += [f"    if (k == {k}) {{", *branch, *less, "        return e;", "    }"]
+        else:
+            c = None
         operations += body.operations
-    out._append("energy_law", f"k, {STATE}, grad", code + ["    return math.nan"], operations)
+    out._append("energy_law", f"k, {STATE}, grad", code + ["    return math.nan"], operations,
+                c=None if c is None else c + ["    return NAN;"])
 
 
 def _inputs(out: Leaves, model: SymbolicModel) -> None:

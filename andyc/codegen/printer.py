@@ -38,6 +38,7 @@ class FunctionBody:
     lines: list           # [(name, code)] local assignments, in order
     outputs: list         # [(target, code)]
     operations: int       # sympy count_ops of every line
+    exprs: list           # [(name or target, expression)]: the lines, then the outputs, for another printer
 
 
 def function_body(outputs: list[tuple[str, sp.Expr]], pool: dict[sp.Symbol, sp.Expr]) -> FunctionBody:
@@ -79,7 +80,8 @@ def function_body(outputs: list[tuple[str, sp.Expr]], pool: dict[sp.Symbol, sp.E
         inputs |= {s for s in e.free_symbols if s not in defs}
     lines = [(str(s), to_code(defs[s])) for s in order]
     ops = sum(sp.count_ops(defs[s]) for s in order) + sum(sp.count_ops(e) for e in out_exprs)
-    return FunctionBody(inputs, lines, [(t, to_code(e)) for (t, _), e in zip(outputs, out_exprs)], int(ops))
+    exprs = [(str(s), defs[s]) for s in order] + [(t, e) for (t, _), e in zip(outputs, out_exprs)]
+    return FunctionBody(inputs, lines, [(t, to_code(e)) for (t, _), e in zip(outputs, out_exprs)], int(ops), exprs)
 
 
 def _ordered_symbols(expr) -> list:

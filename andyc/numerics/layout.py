@@ -34,3 +34,8 @@ def scratch_layout(nv: int, nc: int, nj: int) -> dict:
     rows.update({name: first + i for i, name in enumerate(VECTORS)})
     rows.update(rows=first + len(VECTORS), width=width)
     return rows
+
+
+# The leaves that return a number (the others write into their arrays): their C return type, for the
+# leaves of either backend (model.py's LEAVES; andyc/codegen/c_leaves.py).
+RETURNS = ("energy", "power", "guard", "guard_rate", "enabled", "energy_law")

@@ -48,10 +48,12 @@ and what a run drives beyond them):
     status = inputs(t, x, d, p, flow, u, data)    INPUTS_SIGNATURE
 """
 
+import ctypes
+
 import numpy as np
 
 from .compiler import NUMBA, cfunc, jit
-from .layout import VECTORS, scratch_layout
+from .layout import RETURNS, VECTORS, scratch_layout
 
 SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj", "nw", "nt")   # nt: speeds under LTDL (or 0)
 ROWS = ("s_a", "s_c", "s_w") + tuple(f"s_{name}" for name in VECTORS)  # the first row of each part of S
@@ -78,28 +80,31 @@ if NUMBA:
     from numba.core.extending import intrinsic
     from numba.experimental import structref
 
-    _f8, _i8, _V, _MAT = types.float64, types.int64, types.float64[::1], types.float64[:, ::1]
-    _STATE = (_f8, _V, _V, _V, _V)
+    # A leaf takes its arrays as plain C pointers (row-major, of the sizes in the module's constants): so its
+    # signature is C's, and a leaf compiled by a C compiler (andyc.codegen.c_leaves) is one too.
+    _f8, _i8, _P = types.float64, types.int64, types.CPointer(types.float64)
+    _STATE = (_f8, _P, _P, _P, _P)
+    _ARRAYS = types.float64[::1]
     LEAVES = {
-        "dynamics": types.void(*_STATE, _MAT, _V),
-        "dynamics_constraints": types.void(*_STATE, _MAT, _V, _MAT),
-        "constraints_into": types.void(*_STATE, _MAT),
-        "signal_rates": types.void(*_STATE, _V),
+        "dynamics": types.void(*_STATE, _P, _P),
+        "dynamics_constraints": types.void(*_STATE, _P, _P, _P),
+        "constraints_into": types.void(*_STATE, _P),
+        "signal_rates": types.void(*_STATE, _P),
         "energy": _f8(*_STATE),
         "power": _f8(*_STATE),
-        "frame_poses": types.void(*_STATE, _MAT),
-        "constraint_gains": types.void(_V, _MAT),
-        "restitution": types.void(_V, _MAT),
-        "guard": _f8(_i8, *_STATE, _V),
-        "guard_rate": _f8(_i8, *_STATE, _V),
-        "enabled": _f8(_i8, *_STATE, _V),
+        "frame_poses": types.void(*_STATE, _P),
+        "constraint_gains": types.void(_P, _P),
+        "restitution": types.void(_P, _P),
+        "guard": _f8(_i8, *_STATE, _P),
+        "guard_rate": _f8(_i8, *_STATE, _P),
+        "enabled": _f8(_i8, *_STATE, _P),
         "reset": types.void(_i8, *_STATE),
-        "flow_inputs": types.void(_V, _MAT),
-        "closed_form": types.void(_f8, _V, _V, _V),
-        "energy_law": _f8(_i8, *_STATE, _V),
-        "drive_power": types.void(*_STATE, _V),
+        "flow_inputs": types.void(_P, _P),
+        "closed_form": types.void(_f8, _P, _P, _P),
+        "energy_law": _f8(_i8, *_STATE, _P),
+        "drive_power": types.void(*_STATE, _P),
     }
-    INPUTS_SIGNATURE = _i8(_f8, _V, _V, _V, _i8, _V, _V)
+    INPUTS_SIGNATURE = _i8(_f8, _ARRAYS, _ARRAYS, _ARRAYS, _i8, _ARRAYS, _ARRAYS)
 
     def leaf(name):
         """Compile a model function as the leaf `name` (a C callback of its signature in LEAVES, cached
@@ -109,6 +114,20 @@ if NUMBA:
     def input_callback(function):
         """Compile an input function `status = inputs(t, x, d, p, flow, u, data)` (INPUTS_SIGNATURE)."""
         return cfunc(INPUTS_SIGNATURE)(function)
+
+    class CLeaf(types.WrapperAddressProtocol):
+        """A leaf a C compiler made (the build's <name>_leaves_<key>.so): Numba types it by its signature in
+        LEAVES, as a Numba leaf of that name, so the algorithms take either."""
+
+        def __init__(self, library, name):
+            self.library, self.name = library, name       # the library stays loaded while a leaf of it lives
+            self.address = ctypes.cast(getattr(library, name), ctypes.c_void_p).value
+
+        def __wrapper_address__(self):
+            return self.address
+
+        def signature(self):
+            return LEAVES[self.name]
 
     @structref.register
     class ModelType(types.StructRef):
@@ -127,12 +146,22 @@ if NUMBA:
         """The scratch of one model, for the algorithms. Build it with Work."""
 
     def _passes_as(given, wanted) -> bool:
-        """Whether a value of type `given` can be passed where the leaf takes `wanted`: an array of the very
-        type (dtype, dimensions, C layout: the leaf indexes it as contiguous), or a number (cast)."""
+        """Whether a value of type `given` can be passed where the leaf takes `wanted`: a C-contiguous array of its
+        dtype where it takes a pointer (the leaf indexes it row-major), an array of the very type where it takes
+        an array, or a number (cast)."""
+        if isinstance(wanted, types.CPointer):
+            return isinstance(given, types.Array) and given.dtype == wanted.dtype and given.layout == "C"
         if isinstance(wanted, types.Array):
             return (isinstance(given, types.Array) and given.dtype == wanted.dtype and given.ndim == wanted.ndim
                     and given.layout == "C")
         return isinstance(given, (types.Number, types.Boolean))
+
+    def _argument(context, builder, value, given, wanted):
+        if isinstance(wanted, types.CPointer):
+            return context.make_array(given)(context, builder, value=value).data
+        if isinstance(wanted, types.Array):
+            return value
+        return context.cast(builder, value, given, wanted)
 
     @intrinsic
     def call(typingctx, leaf, args):
@@ -149,7 +178,7 @@ if NUMBA:
             address = cgutils.create_struct_proxy(leaf)(context, builder, value=function).c_addr
             pointer = builder.bitcast(address, context.get_value_type(prototype))
             passed = [builder.extract_value(arguments, i) for i in range(len(args))]
-            passed = [value if isinstance(wanted, types.Array) else context.cast(builder, value, given, wanted)
+            passed = [_argument(context, builder, value, given, wanted)
                       for value, given, wanted in zip(passed, args.types, prototype.atypes)]
             return builder.call(pointer, passed)
 
@@ -184,8 +213,21 @@ else:
     def input_callback(function):
         return function
 
+    class CLeaf:
+        """A leaf a C compiler made, called through ctypes (numbers as C's, arrays as row-major pointers)."""
+
+        def __init__(self, library, name):
+            self.function = getattr(library, name)
+            self.function.restype = ctypes.c_double if name in RETURNS else None
+
+        def __call__(self, *args):
+            return self.function(*(a.ctypes.data_as(ctypes.POINTER(ctypes.c_double)) if isinstance(a, np.ndarray)
+                                   else ctypes.c_int64(a) if isinstance(a, (int, np.integer)) else ctypes.c_double(a)
+                                   for a in args))
+
     def call(leaf, args):
-        return leaf(*args)
+        """As compiled: a leaf indexes its arrays flat (row-major), as through C pointers."""
+        return leaf(*(a.reshape(-1) if isinstance(a, np.ndarray) else a for a in args))
 
     def borrowed(array):
         return array
@@ -225,6 +267,13 @@ def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_sl
                   impact_nrows,
                   jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact,
                   row_work, mass_parent, mass_order))
+
+
+def c_leaves(path: str, names) -> dict:
+    """The leaves `names` of the shared library at path (a build's <name>_leaves_<key>.so, which
+    andyc/codegen/c_leaves.py writes), by name, as the algorithms take them."""
+    library = ctypes.CDLL(path)
+    return {name: CLeaf(library, name) for name in names}
 
 
 def sizes_of(equations) -> dict:
