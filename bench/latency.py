@@ -80,7 +80,9 @@ def measure(root: Path, model: str, work: Path, shared: Path) -> dict:
         else:
             wall, text = _andyc(root, ["build", path], folder, env)
             row["build"], row["derive"], row["generate"] = wall, _stage(text, "derive"), _stage(text, "generate")
-            row["numba_build"] = _stage(text, "compile") if "compile" in text else _stage(text, "cache in")
+            row["cc"] = _stage(text, "C compiler") if "C compiler" in text else 0.0     # the leaves in C
+            row["numba_build"] = (_stage(text, "compile") if re.search(r"compile [0-9]", text)
+                                  else _stage(text, "cache in"))
             row["sim_after_build"], _ = _andyc(root, ["sim", path, *SIM], folder, env)
     return row
 
@@ -209,20 +211,21 @@ def main(argv=None) -> int:
               f"pendulum): {first:.1f} s")
         print()
         print(f"{'model':16s} {'cold sim':>9s} {'target':>6s} | {'build':>6s} {'derive':>6s} {'gen':>5s} "
-              f"{'numba':>6s} {'then sim':>8s} | {'warm sim':>8s}")
+              f"{'cc':>5s} {'numba':>6s} {'then sim':>8s} | {'warm sim':>8s}")
         for model in args.models.split(","):
             for k in range(args.repeats):
                 work = tmp / f"{model}-{k}"
                 work.mkdir()
                 r = measure(root, model, work, shared)
                 print(f"{model:16s} {r['cold']:8.1f}s {TARGETS.get(model, 0):5d}s | {r['build']:5.1f}s "
-                      f"{r['derive']:5.1f}s {r['generate']:4.1f}s {r['numba_build']:5.1f}s "
+                      f"{r['derive']:5.1f}s {r['generate']:4.1f}s {r['cc']:4.1f}s {r['numba_build']:5.1f}s "
                       f"{r['sim_after_build']:7.1f}s | {r['warm']:7.2f}s", flush=True)
     print()
     print("cold sim: `andyc sim` in a fresh build folder with a fresh NUMBA_CACHE_DIR (build, compile, a 1 s run),")
     print("andyc's shared numerics compiled (the first line above);")
-    print("build: `andyc build` in another fresh folder, of which derive, generate (andyc's figures) and numba")
-    print("(compile or cache load); then sim: `andyc sim` after it; warm sim: the cold command again.")
+    print("build: `andyc build` in another fresh folder, of which derive, generate, cc (the C compiler on the leaves)")
+    print("and numba (compile or cache load; andyc's figures); then sim: `andyc sim` after it; warm sim: the cold")
+    print("command again.")
     return 0
 
 
