@@ -212,9 +212,8 @@ def _energy_law(out: Leaves, model: SymbolicModel) -> None:
         code += ["        return g"]
         branch = _c(model, body, None, 8)
         if c is not None and branch is not None:
-            less = ["        double e = g;", f"        for (int i = 0; i < {nw}; i++) e -= x[{nx} + i];"] if law is None else \
-                ["        double e = g;"]
-            c += [f"    if (k == {k}) {{", *branch, *less, "        return e;", "    }"]
+            work = [f"        for (int i = 0; i < {nw}; i++) e -= x[{nx} + i];"] if law is None else []
+            c += [f"    if (k == {k}) {{", *branch, "        double e = g;", *work, "        return e;", "    }"]
         else:
             c = None
         operations += body.operations
