@@ -42,10 +42,8 @@ def test_bouncing_ball_impacts_and_zeno(compiled, method):
     stated = float(run.status.split("accumulate at t = ")[1].split(" s")[0])
     assert abs(stated - T_INF) < 1e-6                      # the accumulation point the message names
     assert 0 < T_INF - run.time[-1] < 1e-6                 # where the run stopped
-    # It stops instead of grinding towards t_inf: few steps, and (compiled rk4) a small fraction of a second.
+    # It stops instead of grinding towards t_inf: few steps (counted, not timed: the machine may be loaded).
     assert run.stats["steps"] < 5000
-    if method == "rk4":
-        assert run.stats["wall_seconds"] < 0.25
     assert np.all(run.column("y") > -1e-12)                # never through the ground
     # each impact keeps e of the speed
     before, after = run.events["state_before"][:, 1], run.events["state_after"][:, 1]
