@@ -14,6 +14,7 @@ then Numba); `andyc sim` then runs in that folder.
     python bench/latency.py --models double_pendulum --repeats 3
     python bench/latency.py --functions passive_walker      where Numba's seconds go, leaf by leaf
     python bench/latency.py --speed-ab OTHER_TREE           same-run A/B of RK4 steps/s against another checkout
+    python bench/latency.py --backend-ab                    same-process A/B of RK4 steps/s, C against Numba leaves
 
 Targets on the idle 2-core machine: cold first result <= 10 s (double_pendulum, swing_bar,
 ball_in_bowl, passive_walker), <= 30 s (panda); warm sim <= 1 s; --version <= 0.3 s; check <= 1.5 s.
@@ -181,6 +182,39 @@ def speed_ab(root: Path, other: Path, rounds: int = 5) -> None:
                   f"{statistics.median(ratio):.2f} ({min(ratio):.2f} .. {max(ratio):.2f})", flush=True)
 
 
+BACKEND_MODELS = ("swing_bar", "double_pendulum", "passive_walker")
+
+
+def backend_ab(root: Path, rounds: int = 9, seconds: float = 20.0) -> None:
+    """RK4 steps per CPU second of each model of BACKEND_MODELS with the C leaves (andyc/codegen/c_leaves.py)
+    against the Numba leaves (ANDYC_BACKEND=numba), both built and run in one process, alternated C/N, N/C over
+    `rounds`: the ratio C/N of each round, median, min and max. The thread's CPU time, not the wall's, so that
+    other work on the machine counts less (issue 27: the C leaves run no slower, ratio >= 0.99)."""
+    import statistics
+
+    sys.path.insert(0, str(root))
+    import andyc
+
+    with tempfile.TemporaryDirectory(prefix="andyc-backends-") as tmp:
+        for model in BACKEND_MODELS:
+            built = {}
+            for backend in ("c", "numba"):
+                os.environ["ANDYC_BACKEND"] = backend
+                built[backend] = andyc.compile_model(root / "models" / f"{model}.yaml", Path(tmp) / backend)[0]
+                andyc.simulate(built[backend], 0.01, dt=1e-3, progress=False)
+            os.environ.pop("ANDYC_BACKEND")
+            rates = {"c": [], "numba": []}
+            for k in range(rounds):
+                for backend in (("c", "numba") if k % 2 == 0 else ("numba", "c")):
+                    start = time.thread_time()
+                    andyc.simulate(built[backend], seconds, dt=1e-3, every=1000, progress=False)
+                    rates[backend].append(seconds / 1e-3 / (time.thread_time() - start))
+            ratio = [c / n for c, n in zip(rates["c"], rates["numba"])]
+            print(f"{model}: C {statistics.median(rates['c']):.3g} RK4 steps per CPU s, Numba "
+                  f"{statistics.median(rates['numba']):.3g}; C/Numba median {statistics.median(ratio):.3f} "
+                  f"({min(ratio):.3f} .. {max(ratio):.3f}), {rounds} rounds", flush=True)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--root", type=Path, default=ROOT, help="the andyc checkout to measure (default: this one)")
@@ -189,8 +223,13 @@ def main(argv=None) -> int:
     parser.add_argument("--functions", metavar="MODEL", help="only the per-function compile profile of MODEL")
     parser.add_argument("--speed-ab", metavar="OTHER_TREE", type=Path,
                         help="only the A/B of simulation speed: OTHER_TREE (A) against --root (B)")
+    parser.add_argument("--backend-ab", action="store_true",
+                        help="only the same-process A/B of RK4 steps/s, the C leaves against the Numba leaves")
     args = parser.parse_args(argv)
     root = args.root.resolve()
+    if args.backend_ab:
+        backend_ab(root)
+        return 0
     if args.speed_ab:
         speed_ab(root, args.speed_ab.resolve())
         return 0

@@ -172,3 +172,32 @@ def test_a_leaf_refuses_an_array_it_would_read_wrongly(compiled):
         model.numerics.dynamics.rhs_mode_into(model.ref, w.ref, 0.0, x[:, 0], model.input_defaults,
                                               model.parameter_defaults, model.module.DISCRETE_DEFAULTS, 0,
                                               w.xdot, 0)
+
+
+def test_the_c_leaves_are_compiled_for_this_processor(tmp_path, monkeypatch):
+    """The C leaves are compiled for the host's processor (-march=native, andyc/codegen/c_leaves.py), so their
+    library is named for it: the build folder on a machine of another processor is not up to date, and its
+    build (of the same key) compiles that machine's library beside the first, which stays."""
+    from andyc.codegen import c_leaves
+    from andyc.numerics import compiler
+    from andyc.pipeline import build
+
+    if c_leaves.compiler() is None:
+        pytest.skip("no C compiler: the Numba leaves")
+    path = tmp_path / "pendulum.yaml"
+    path.write_text(PENDULUM)
+    result = build(path, tmp_path / "build")
+    folder = result.module_path.parent
+    here = sorted(p.name for p in folder.glob("*.so"))
+    assert here == [compiler.library_file(written_constant(equations_path(tmp_path / "build", "cached_pendulum"),
+                                                           "C_LEAVES"))]
+    assert compiler.host_cpu() in here[0]
+    assert unchanged(path, tmp_path / "build") is not None
+
+    monkeypatch.setattr(compiler, "host_cpu", lambda: "othercpu-00000000")
+    assert unchanged(path, tmp_path / "build") is None          # not this processor's library
+    again = build(path, tmp_path / "build")
+    assert not again.skipped and again.build_key == result.build_key and again.timings["cc"] > 0
+    there = sorted(p.name for p in folder.glob("*.so"))
+    assert len(there) == 2 and here[0] in there and any("othercpu-00000000" in name for name in there)
+    assert build(path, tmp_path / "build").skipped

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import andyc
-from andyc.numerics.compiler import cache_folder
+from andyc.numerics.compiler import cache_folder, library_file
 from andyc.outputs import check_folder, update_text
 
 PACKAGE = Path(__file__).resolve().parents[1]
@@ -107,8 +107,8 @@ def library_present(out_dir, name: str) -> bool:
     """Whether the build's leaves are all there: the shared library its equations load (andyc.codegen.c_leaves),
     when they load one."""
     equations = equations_path(out_dir, name)
-    library = written_constant(equations, "C_LIBRARY")
-    return library is None or equations.with_name(str(library)).is_file()
+    stem = written_constant(equations, "C_LEAVES")
+    return stem is None or equations.with_name(library_file(str(stem))).is_file()
 
 
 def jumps_path(out_dir, name: str) -> Path:

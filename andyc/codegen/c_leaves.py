@@ -2,7 +2,7 @@
 
 The same cse'd bodies as the Numba leaves of <name>_equations.py (andyc.codegen.leaves), printed as C99
 functions with the C signatures of andyc_numerics/model.py's LEAVES (t a double, k an int64_t, every array a
-row-major `double *`), into <name>_leaves.c; the system's C compiler makes <name>_leaves_<key>.so of it,
+row-major `double *`), into <name>_leaves.c; the system's C compiler makes <name>_leaves_<key>_<cpu>.so of it,
 which <name>_equations.py loads (andyc_numerics/model.py: c_leaves). The algorithms take a leaf by its C
 address either way, so they compile once for both backends.
 
@@ -29,6 +29,13 @@ from andyc.numerics.layout import RETURNS
 # What the compiler is asked for: position-independent code for a shared library; no contraction of a*b + c
 # into a fused multiply-add, so that the C leaves round as the Numba ones do (results equal to ~1e-15).
 FLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-math-errno")
+# ... and for this machine's processor, as Numba compiles its leaves (for the host CPU). On x86-64 this is what
+# made the C leaves slower than Numba's: the baseline's SSE2 has two-operand arithmetic only, so a leaf's long
+# straight line of products needs a register copy for every third instruction (the swing bar's dynamics: 1113
+# instructions, 174 of them movapd) where AVX's three-operand form needs none (873): 9 % of the swing bar's RK4
+# step. The library is then keyed by the processor (andyc.numerics.compiler.library_file). A compiler that
+# does not know the flag compiles without it.
+NATIVE = ("-march=native",)
 
 
 class NoC(Exception):
@@ -115,21 +122,29 @@ def render(name: str, functions: list[dict]) -> str:
     return "\n".join(out)
 
 
-def library_name(name: str, key: str) -> str:
-    """The shared library's file name: one per build key, since a process that loaded one keeps it (dlopen
-    caches by path) and a rebuild must not look like the library it replaced."""
-    return f"{name}_leaves_{key[:16]}.so"
+def library_stem(name: str, key: str) -> str:
+    """The shared library's name but for the processor (andyc.numerics.compiler.library_file adds it): one per
+    build key, since a process that loaded one keeps it (dlopen caches by path) and a rebuild must not look like
+    the library it replaced."""
+    return f"{name}_leaves_{key[:16]}"
 
 
-def compile_library(source: Path, target: Path, cc: str) -> None:
-    """Compile the C file `source` into the shared library `target`, written whole (andyc.outputs); NoC with
-    the compiler's message when it fails."""
+def compile_library(source: Path, folder: Path, stem: str, cc: str) -> Path:
+    """Compile the C file `source` into the shared library of `stem` for this machine (library_file), in
+    `folder`, written whole (andyc.outputs), and remove the libraries of other builds of the model (those of
+    this build for other processors stay); the library's path. NoC with the compiler's message when it fails."""
+    from andyc.numerics.compiler import library_file
     from andyc.outputs import write_atomic
 
+    target = folder / library_file(stem)
     with write_atomic(target) as tmp:
-        proc = subprocess.run([cc, *FLAGS, "-o", str(tmp), str(source), "-lm"], capture_output=True, text=True)
+        for flags in ((*FLAGS, *NATIVE), FLAGS):
+            proc = subprocess.run([cc, *flags, "-o", str(tmp), str(source), "-lm"], capture_output=True, text=True)
+            if proc.returncode == 0 or "march" not in proc.stderr:
+                break
         if proc.returncode != 0:
             raise NoC(f"{cc} failed on {source}: {proc.stderr.strip()[:2000]}")
-    for old in target.parent.glob(f"{target.name.rsplit('_', 1)[0]}_*.so"):
-        if old != target:
+    for old in folder.glob(f"{stem.rsplit('_', 1)[0]}_*.so"):
+        if not old.name.startswith(f"{stem}_"):
             old.unlink(missing_ok=True)
+    return target

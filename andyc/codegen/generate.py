@@ -30,6 +30,7 @@ from andyc.codegen.buildfiles import (PACKAGE, BuildResult, build_key, equations
 from andyc.codegen import c_leaves
 from andyc.codegen.leaves import leaves, state_names
 from andyc.codegen.printer import to_code
+from andyc.numerics.compiler import library_file
 from andyc.spec.display import display
 from andyc.symbolic.formulation import DENSE, LTDL, choose, pattern_of, tree_of
 from andyc.symbolic.model import SymbolicModel
@@ -133,7 +134,7 @@ def render(model: SymbolicModel, key: str, c: bool = False) -> tuple[str, dict, 
         **_hybrid_context(model),
         **_forward_context(model),
         "leaves": found.functions,
-        "c_library": c_leaves.library_name(spec.name, key) if c_source else None,
+        "c_leaves": c_leaves.library_stem(spec.name, key) if c_source else None,
         "c_names": [f["name"] for f in found.functions if f["c"] is not None] if c_source else [],
     }
     return _environment().get_template("equations.py.j2").render(**context), found.operations, c_source
@@ -260,10 +261,10 @@ def generate(model: SymbolicModel, out_dir="build", force: bool = False) -> Buil
     if c_source is not None:
         start = time.perf_counter()
         c_path = equations.with_name(f"{spec.name}_leaves.c")
-        library = equations.with_name(c_leaves.library_name(spec.name, key))
+        library = equations.with_name(library_file(c_leaves.library_stem(spec.name, key)))
         if (write_text if force else update_text)(c_path, c_source) or force or not library.exists():
             try:
-                c_leaves.compile_library(c_path, library, cc)
+                c_leaves.compile_library(c_path, equations.parent, c_leaves.library_stem(spec.name, key), cc)
             except c_leaves.NoC as exc:     # the compiler refused it: the Numba leaves, and say why
                 warnings.warn(f"{spec.name}: the C leaves did not compile, Numba compiles them instead ({exc})",
                               stacklevel=2)

@@ -13,8 +13,11 @@ Where that folder cannot be written, or Numba's cache API has changed, Numba's o
 Importing this module does not import Numba (andyc reads cache_folder() without it).
 """
 
+import functools
+import hashlib
 import importlib.util
 import os
+import re
 import warnings
 
 NUMBA = importlib.util.find_spec("numba") is not None     # (imported on the first `jit`; none: plain Python)
@@ -84,3 +87,31 @@ def _register_locator() -> None:
         classes.insert(0, ContentLocator)
     except (ImportError, AttributeError, TypeError):
         pass
+
+
+@functools.lru_cache(maxsize=None)
+def host_cpu() -> str:
+    """The processor this machine's C leaves are compiled for (andyc/codegen/c_leaves.py compiles them with
+    -march=native, as Numba compiles for the host): LLVM's name of it and a digest of its features, as
+    Numba keys its own cache. A build's library carries it in its name (library_file), so that a build
+    folder moved to, or shared with, another machine never loads instructions its processor may lack."""
+    try:
+        from llvmlite import binding
+
+        name, features = binding.get_host_cpu_name(), binding.get_host_cpu_features().flatten()
+    except Exception:       # no llvmlite (hence no Numba), or its API changed: the platform's and the kernel's words
+        import platform
+
+        name, features = platform.machine() or "cpu", platform.processor()
+        try:
+            with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as fh:
+                features += next((line for line in fh if line.startswith("flags")), "")
+        except OSError:
+            pass
+    digest = hashlib.sha256(features.encode()).hexdigest()[:8]
+    return f"{re.sub(r'[^A-Za-z0-9]', '', name)[:24] or 'cpu'}-{digest}"
+
+
+def library_file(stem: str) -> str:
+    """The file name of a build's C leaves (<name>_leaves_<key16>, andyc/codegen/c_leaves.py) on this machine."""
+    return f"{stem}_{host_cpu()}.so"

@@ -116,7 +116,7 @@ if NUMBA:
         return cfunc(INPUTS_SIGNATURE)(function)
 
     class CLeaf(types.WrapperAddressProtocol):
-        """A leaf a C compiler made (the build's <name>_leaves_<key>.so): Numba types it by its signature in
+        """A leaf a C compiler made (the build's <name>_leaves_<key>_<cpu>.so): Numba types it by its signature in
         LEAVES, as a Numba leaf of that name, so the algorithms take either."""
 
         def __init__(self, library, name):
@@ -270,7 +270,7 @@ def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_sl
 
 
 def c_leaves(path: str, names) -> dict:
-    """The leaves `names` of the shared library at path (a build's <name>_leaves_<key>.so, which
+    """The leaves `names` of the shared library at path (a build's <name>_leaves_<key>_<cpu>.so, which
     andyc/codegen/c_leaves.py writes), by name, as the algorithms take them."""
     library = ctypes.CDLL(path)
     return {name: CLeaf(library, name) for name in names}
