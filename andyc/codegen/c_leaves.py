@@ -24,6 +24,7 @@ from pathlib import Path
 
 from sympy.printing.c import C99CodePrinter
 
+from andyc.codegen.printer import Unwrapped
 from andyc.numerics.layout import RETURNS
 
 # What the compiler is asked for: position-independent code for a shared library; no contraction of a*b + c
@@ -42,7 +43,7 @@ class NoC(Exception):
     """The model's leaves cannot be written in C (the reason); the build uses the Numba leaves."""
 
 
-class _Printer(C99CodePrinter):
+class _Printer(Unwrapped, C99CodePrinter):
     """C99 printer: every number a double literal (no integer division), unknown functions refused."""
 
     def _print_Rational(self, expr):
@@ -71,10 +72,12 @@ class _Printer(C99CodePrinter):
         return super()._print_Pow(expr)
 
 
+_PRINTER = _Printer({"strict": True})     # one for every expression: making one costs more than most prints
+
+
 def to_c(expr) -> str:
-    printer = _Printer({"strict": True})
     try:
-        return printer.doprint(expr)
+        return _PRINTER.doprint(expr)
     except Exception as exc:        # SymPy raises PrintMethodNotImplementedError (or others) for what has no C
         raise NoC(f"no C for {type(expr).__name__}: {exc}") from None
 
@@ -92,14 +95,66 @@ def compiler() -> str | None:
 
 
 def c_lines(unpack: list[str], body, returns: str | None, indent: int) -> list[str]:
-    """A body in C: the inputs it reads, its cse'd locals, its outputs (an array element or a returned local)."""
+    """A body in C: the inputs it reads, its cse'd locals, then its outputs (array elements) and what it returns.
+
+    Every output is a store of a local or a number, after every local (so no store comes before a read of
+    the inputs). Two kinds of output are written otherwise than as they come, to the same numbers: the zeros
+    first, a run of consecutive elements of one array as a loop (which the compiler makes a memset); and an
+    output that copies another (the mass matrix's lower triangle, `M[j n + i] = M[i n + j]`) from its value,
+    held in a local (_out<k>) where it is not a number or a local already, rather than read back from the
+    array. Thousands of single stores of zero (the N-four-bar's M and constraint Jacobian at N = 20: 5153), and
+    reads of an array after them, made the C compiler's dead-store and alias analysis quadratic in the size of
+    a leaf: three quarters of its time at N = 20."""
     pad = " " * indent
     lines = [f"{pad}const double {line};" for line in unpack]
+    outputs = [(target, expr) for target, expr in body.exprs if "[" in target]
+    given = dict(outputs)
+    copied = {str(e) for _, e in outputs if e.is_Symbol and str(e) in given}
+    resolved = {t: given[str(e)] if e.is_Symbol and str(e) in given else e for t, e in outputs}
+    zeros = [t for t, e in resolved.items() if e == 0]
+    value = {}                      # output -> the code of its value, for the outputs another copies
+    stores = []
     for target, expr in body.exprs:
-        code = to_c(expr)
-        lines.append(f"{pad}{target} = {code};" if "[" in target else f"{pad}const double {target} = {code};")
+        if "[" not in target:
+            lines.append(f"{pad}const double {target} = {to_c(expr)};")
+        elif resolved[target] == 0:
+            continue
+        elif expr.is_Symbol and str(expr) in given:
+            stores.append(f"{pad}{target} = {value[str(expr)]};")
+        else:
+            code = to_c(expr)
+            if target in copied and not expr.is_Atom:
+                local = f"_out{len(value)}"
+                lines.append(f"{pad}const double {local} = {code};")
+                code = local
+            value[target] = code
+            stores.append(f"{pad}{target} = {code};")
+    lines += _zero_stores(zeros, pad) + stores
     if returns is not None:
         lines.append(f"{pad}return {returns};")
+    return lines
+
+
+def _zero_stores(targets: list[str], pad: str, run: int = 4) -> list[str]:
+    """Stores of 0.0 into `targets` (array elements `A[i]`): a loop over each run of at least `run` consecutive
+    elements of one array, single stores for the rest."""
+    by_array: dict[str, list[int]] = {}
+    for target in targets:
+        array, index = target[:-1].split("[")
+        by_array.setdefault(array, []).append(int(index))
+    lines = []
+    for array, indices in by_array.items():
+        indices.sort()
+        k = 0
+        while k < len(indices):
+            end = k
+            while end + 1 < len(indices) and indices[end + 1] == indices[end] + 1:
+                end += 1
+            if end - k + 1 >= run:
+                lines.append(f"{pad}for (int64_t _z = {indices[k]}; _z <= {indices[end]}; _z++) {array}[_z] = 0.0;")
+            else:
+                lines += [f"{pad}{array}[{i}] = 0.0;" for i in indices[k:end + 1]]
+            k = end + 1
     return lines
 
 

@@ -14,7 +14,16 @@ import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 
-class _Printer(PythonCodePrinter):
+class Unwrapped:
+    """A SymPy code printer that rewrites re(...) (SymPy's _handle_UnevaluatedExpr) only in an expression that
+    has one: SymPy rebuilds every expression it prints for it, a third of the printing time of a large model,
+    and a generated body has none (its symbols are real)."""
+
+    def _handle_UnevaluatedExpr(self, expr):
+        return super()._handle_UnevaluatedExpr(expr) if expr.has(sp.re) else expr
+
+
+class _Printer(Unwrapped, PythonCodePrinter):
     """Python printer for Numba: math.* calls, floats for rationals."""
 
     def _print_Rational(self, expr):

@@ -96,7 +96,10 @@ class FrameQuantities:
 
     def rate(self, f) -> sp.Expr:
         """df/dt at dv/dt = 0."""
-        out = sp.diff(f, TIME) + sum((sp.diff(f, qi) * vi for qi, vi in zip(self.q, self.v)), sp.Integer(0))
+        # Only by the coordinates f holds (the others give zero terms): a row's few, not the model's.
+        held = f.free_symbols
+        out = sp.diff(f, TIME) + sum((sp.diff(f, qi) * vi for qi, vi in zip(self.q, self.v) if qi in held),
+                                     sp.Integer(0))
         for sym in f.free_symbols:
             if sym in self.position_rate:
                 out += sp.diff(f, sym) * self.position_rate[sym]
@@ -106,10 +109,11 @@ class FrameQuantities:
 
     def jac(self, f) -> list:
         """df/dv: with rate(f), df/dt = rate(f) + jac(f) dv/dt."""
-        row = [sp.diff(f, vi) for vi in self.v]
-        for sym in f.free_symbols & set(self.rates):
+        held = f.free_symbols
+        row = [sp.diff(f, vi) if vi in held else sp.S.Zero for vi in self.v]
+        for sym in held & set(self.rates):
             df = sp.diff(f, sym)
-            row = [r + df * J for r, J in zip(row, self.rates[sym].J)]
+            row = [r + df * J if J != 0 else r for r, J in zip(row, self.rates[sym].J)]
         return row
 
     def define(self, sym: sp.Symbol, fq) -> None:

@@ -31,8 +31,13 @@ class Emitter:
         return sym
 
     def matrix(self, label: str, mat: sp.Matrix) -> sp.Matrix:
+        """Name each entry of `mat` (scalar), row by row: <label><i> of a column, <label><i><j> of a matrix of
+        at most 3 x 3, else <label><i>_<j>. Only the nonzero entries are visited (a Jacobian's columns are
+        mostly zero, and a model's frames times its speeds would make the derivation quadratic)."""
         rows, cols = mat.shape
         if cols == 1:
             return sp.Matrix([self.scalar(f"{label}{i}", mat[i]) for i in range(rows)])
-        return sp.Matrix(rows, cols, lambda i, j: self.scalar(f"{label}{i}{j}" if cols <= 3 and rows <= 3
-                                                              else f"{label}{i}_{j}", mat[i, j]))
+        short = cols <= 3 and rows <= 3
+        named = {(i, j): self.scalar(f"{label}{i}{j}" if short else f"{label}{i}_{j}", e)
+                 for (i, j), e in sorted(mat.todok().items())}
+        return sp.Matrix.from_dok(rows, cols, named)

@@ -99,8 +99,16 @@ def quaternion_matrix(w, x, y, z, two_over_norm2) -> sp.Matrix:
 
 
 def _rate(expr, q, v):
-    """Total time derivative of expr(q, v, t) with dv/dt = 0 (dq/dt is the first len(q) speeds)."""
-    return sum((sp.diff(expr, qi) * vi for qi, vi in zip(q, v)), sp.diff(expr, TIME))
+    """Total time derivative of expr(q, v, t) with dv/dt = 0 (dq/dt is the first len(q) speeds). Only the
+    coordinates expr holds are differentiated by (the others give zero terms): a frame's few, not the model's."""
+    held = expr.free_symbols
+    return sum((sp.diff(expr, qi) * vi for qi, vi in zip(q, v) if qi in held), sp.diff(expr, TIME))
+
+
+def _by_coordinates(expr, q) -> list:
+    """d expr / dq_j for each coordinate, zero (without differentiating) for those expr does not hold."""
+    held = expr.free_symbols
+    return [sp.diff(expr, qj) if qj in held else sp.S.Zero for qj in q]
 
 
 @dataclass
@@ -119,6 +127,18 @@ class LinkMotion:
     al_own: sp.Matrix   # R^T al = d/dt (R^T w)
 
 
+def link_pose(transforms) -> tuple[sp.Matrix, sp.Matrix]:
+    """R and p of a link of Translate and Rotate steps, as link_motion finds them, without its motion (a fixed
+    link's: its Jacobians would be 3 x n zeros, work per speed of the model for each fixed frame)."""
+    R, p = sp.eye(3), sp.zeros(3, 1)
+    for step in transforms:
+        if isinstance(step, Translate):
+            p = p + R * step.vector
+        else:
+            R = R * rotation_matrix(step.axis, step.angle)
+    return R, p
+
+
 def link_motion(transforms, q, v) -> LinkMotion:
     """Relative motion of a holonomic link (its Translate and Rotate steps)."""
     n = len(v)
@@ -132,7 +152,7 @@ def link_motion(transforms, q, v) -> LinkMotion:
         if isinstance(step, Translate):
             p = p + R * step.vector
             continue
-        rate = sp.Matrix([sp.diff(step.angle, qj) for qj in q] + [0] * (n - len(q))).T
+        rate = sp.Matrix([_by_coordinates(step.angle, q) + [0] * (n - len(q))])
         axis = R * step.axis
         Jw += axis * rate
         w_t += axis * sp.diff(step.angle, TIME)
@@ -141,9 +161,8 @@ def link_motion(transforms, q, v) -> LinkMotion:
         Jw_own = turn.T * Jw_own + step.axis * rate
         w_t_own = turn.T * w_t_own + step.axis * sp.diff(step.angle, TIME)
         R = R * turn
-    Jv = sp.zeros(3, n)
-    for j, qj in enumerate(q):
-        Jv[:, j] = sp.diff(p, qj)
+    columns = [_by_coordinates(e, q) for e in p]
+    Jv = sp.Matrix.from_dok(3, n, {(i, j): e for i, row in enumerate(columns) for j, e in enumerate(row) if e != 0})
     vvec = sp.Matrix(v)
     w_rel = Jw * vvec + w_t
     v_rel = Jv * vvec + sp.diff(p, TIME)
@@ -198,16 +217,14 @@ def rigid_groups(spec: Spec) -> dict[str, tuple[str, sp.Matrix, sp.Matrix]]:
     A frame is fixed to its parent when its link is only constant translations and
     rotations (parameters allowed; no coordinate, no time); a moving frame is its own root.
     """
-    q = [c.q for c in spec.coordinates]
-    v = spec.speed_symbols
-    moving = set(q) | {TIME}
+    moving = {c.q for c in spec.coordinates} | {TIME}
     out = {"world": ("world", sp.eye(3), sp.zeros(3, 1))}
     for frame in spec.frames:
         steps = list(frame.transforms)
         if _is_fixed(steps, moving):
-            link = link_motion(steps, q, v)
+            R, p = link_pose(steps)
             root, R0, p0 = out[frame.parent]
-            out[frame.name] = (root, R0 * link.R, p0 + R0 * link.p)
+            out[frame.name] = (root, R0 * R, p0 + R0 * p)
         else:
             out[frame.name] = (frame.name, sp.eye(3), sp.zeros(3, 1))
     return out
@@ -231,8 +248,13 @@ def _attach(P: FrameKinematics, motion: LinkMotion, emit: Emitter, label: str, i
     w = emit.matrix(f"{label}w", P.w + Rw_rel)
     vel = emit.matrix(f"{label}v", P.v + cross(P.w, d) + Rv_rel)
     Jw = emit.matrix(f"{label}Jw", P.Jw + P.R * Jw_rel)
-    Jv_cols = [P.Jv[:, j] + cross(P.Jw[:, j], d) + P.R * Jv_rel[:, j] for j in range(n)]
-    Jv = emit.matrix(f"{label}Jv", sp.Matrix.hstack(*Jv_cols) if n else sp.zeros(3, 0))
+    # Column by column, of the columns where Jw_P or Jv_rel has an entry (the others are Jv_P's: no work per
+    # speed of the model, which would make the derivation quadratic in its size).
+    Jv_sum = P.Jv.todok()
+    for j in sorted({j for _, j in P.Jw.todok()} | {j for _, j in Jv_rel.todok()}):
+        column = P.Jv[:, j] + cross(P.Jw[:, j], d) + P.R * Jv_rel[:, j]
+        Jv_sum.update({(i, j): column[i] for i in range(3)})
+    Jv = emit.matrix(f"{label}Jv", sp.Matrix.from_dok(3, n, Jv_sum))
     al = emit.matrix(f"{label}al", P.al + P.R * al_rel + cross(P.w, Rw_rel))
     ac = emit.matrix(f"{label}ac", P.ac + cross(P.al, d) + cross(P.w, cross(P.w, d))
                      + 2 * cross(P.w, Rv_rel) + P.R * ac_rel)

@@ -1,0 +1,99 @@
+"""Build time of the IFToMM A02 N-four-bar by stage, in CPU seconds, against the size of the generated code
+(issue 27: the build grows no faster than the generated code; N = 40 under 2 min on the 2-core machine).
+
+Each N builds in a fresh process and a fresh folder (bench/large_models.py's nfourbar_yaml): load, derive
+(andyc/symbolic), generate (andyc/codegen: cse and printing) in this process's CPU time, then the C compiler
+on the leaves in its processes' CPU time (resource's RUSAGE_CHILDREN; compiled in parallel where the leaves
+are split, so its wall time can be less). CPU seconds, not wall, since the machine is shared. Then the growth
+exponent of each stage against the operation count of the leaves (a least-squares slope of log time on log
+operations): 1 is linear in the generated code.
+
+    python bench/build_time.py                 N = 10, 20, 40
+    python bench/build_time.py --sizes 10,20   (N = 40 takes a few minutes of CPU)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+STAGES = ("load", "derive", "generate", "cc")
+
+ONE = """
+import json, resource, sys, time
+from pathlib import Path
+sys.path.insert(0, sys.argv[3])
+from large_models import nfourbar_yaml
+from andyc import pipeline
+
+n, folder = int(sys.argv[1]), Path(sys.argv[2])
+path = folder / f"nfourbar{n}.yaml"
+path.write_text(nfourbar_yaml(n))
+
+def children():
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+out = {}
+t = time.process_time()
+spec = pipeline.load(path)
+out["load"] = time.process_time() - t
+t = time.process_time()
+model = pipeline.derive(spec)
+out["derive"] = time.process_time() - t
+t, c, wall = time.process_time(), children(), time.perf_counter()
+result = pipeline.generate(model, folder / "build", force=True)
+out["generate"] = time.process_time() - t
+out["cc"] = children() - c
+out["cc_wall"] = result.timings.get("cc", 0.0)
+out["operations"] = sum(result.operations.values())
+print(json.dumps(out))
+"""
+
+
+def measure(n: int, root: Path) -> dict:
+    with tempfile.TemporaryDirectory(prefix="andyc-build-time-") as tmp:
+        proc = subprocess.run([sys.executable, "-c", ONE, str(n), tmp, str(root / "bench")], capture_output=True,
+                              text=True, env={**os.environ, "PYTHONPATH": str(root)})
+    if proc.returncode != 0:
+        raise SystemExit(proc.stderr)
+    return json.loads(proc.stdout.splitlines()[-1])
+
+
+def slope(xs, ys) -> float:
+    """The least-squares slope of log y on log x."""
+    lx, ly = [math.log(x) for x in xs], [math.log(max(y, 1e-9)) for y in ys]
+    mx, my = sum(lx) / len(lx), sum(ly) / len(ly)
+    return sum((a - mx) * (b - my) for a, b in zip(lx, ly)) / sum((a - mx) ** 2 for a in lx)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", default="10,20,40")
+    parser.add_argument("--root", type=Path, default=ROOT, help="the andyc checkout to measure (default: this one)")
+    args = parser.parse_args(argv)
+    rows = {}
+    print(f"andyc at {args.root.resolve()}; CPU seconds")
+    print(f"{'N':>3} {'operations':>10} {'load':>6} {'derive':>7} {'generate':>8} {'cc':>6} {'cc wall':>7} {'total':>7}")
+    for n in map(int, args.sizes.split(",")):
+        r = rows[n] = measure(n, args.root.resolve())
+        total = sum(r[s] for s in STAGES)
+        print(f"{n:>3} {r['operations']:>10} {r['load']:6.1f} {r['derive']:7.1f} {r['generate']:8.1f} {r['cc']:6.1f} "
+              f"{r['cc_wall']:7.1f} {total:7.1f}", flush=True)
+    if len(rows) > 1:
+        ops = [r["operations"] for r in rows.values()]
+        print("growth exponent against the operations (1: as the generated code): " + ", ".join(
+            f"{s} {slope(ops, [r[s] for r in rows.values()]):.2f}" for s in ("derive", "generate", "cc"))
+            + f", total {slope(ops, [sum(r[s] for s in STAGES) for r in rows.values()]):.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
