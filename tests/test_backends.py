@@ -10,8 +10,9 @@ import andyc
 from tests.support import MODELS
 
 # a chain, a closed loop with rows in a moving frame, a hybrid model with jumps and multipliers in guards,
-# and a model whose inputs are expressions (its input callback stays Numba's in either backend)
-CASES = ["double_pendulum", "swing_bar", "bouncing_ball_contact", "cart_pole"]
+# a model whose inputs are expressions (its input callback stays Numba's in either backend), and a free body
+# (its M has runs of zeros, which the C leaves store by loops, and a lower triangle they copy from locals)
+CASES = ["double_pendulum", "swing_bar", "bouncing_ball_contact", "cart_pole", "free_body"]
 
 
 @pytest.fixture(scope="module")
@@ -84,3 +85,38 @@ def test_runs_agree(both, name):
     for column, values in run_n.events.items():
         if np.asarray(values).dtype.kind == "f":
             np.testing.assert_allclose(run_c.events[column], values, rtol=0, atol=1e-10 * scale)
+
+
+def test_c_outputs_zero_runs_and_copies(tmp_path):
+    """andyc.codegen.c_leaves.c_lines writes the zeros of a body first (a run of at least 4 consecutive
+    elements as a loop) and an output that copies another from its value: compiled, the function stores what
+    SymPy evaluates each output to, in every element, whatever the array held."""
+    import ctypes
+    from types import SimpleNamespace
+
+    import sympy as sp
+
+    from andyc.codegen import c_leaves
+
+    cc = c_leaves.compiler()
+    if cc is None:
+        pytest.skip("no C compiler")
+    x0, x1, c0 = sp.symbols("x0 x1 c0", real=True)
+    values = {x0: 0.7, x1: -1.3}
+    outputs = {0: c0 + 1, 1: sp.Integer(0), 8: sp.sin(x0) * x1, 13: x1}
+    outputs.update({i: sp.Integer(0) for i in (2, 3, 4, 5, 6, 7, 11, 12)})  # with M[1], M[10]: 1..7, 10..12
+    copies = {9: 0, 10: 1, 14: 8, 15: 13}           # M[9] = M[0] (an expression), M[10] = M[1] (zero), ...
+    body = SimpleNamespace(exprs=[("c0", x0 * x1)] + [(f"M[{i}]", e) for i, e in outputs.items()]
+                           + [(f"M[{i}]", sp.Symbol(f"M[{j}]")) for i, j in copies.items()])
+    lines = c_leaves.c_lines(["x0 = x[0]", "x1 = x[1]"], body, None, 4)
+    text = "\n".join(["#include <math.h>", "#include <stdint.h>", "void f(double *x, double *M) {", *lines, "}"])
+    assert "for (int64_t _z = 1; _z <= 7; _z++) M[_z] = 0.0;" in text and "M[10] = 0.0;" in text and "= M[" not in text
+    source = tmp_path / "f.c"
+    source.write_text(text)
+    library = ctypes.CDLL(str(c_leaves.compile_library(source, tmp_path, "f_leaves_0", cc)))
+    x, M = np.array([0.7, -1.3]), np.full(16, np.nan)
+    pointer = ctypes.POINTER(ctypes.c_double)
+    library.f(x.ctypes.data_as(pointer), M.ctypes.data_as(pointer))
+    expected = {i: float(e.subs(c0, x0 * x1).subs(values)) for i, e in outputs.items()}
+    expected.update({i: expected[j] for i, j in copies.items()})
+    np.testing.assert_allclose(M, [expected[i] for i in range(16)], rtol=1e-15, atol=0)

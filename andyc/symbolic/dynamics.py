@@ -150,6 +150,12 @@ def _driven(terms: ElementTerms, driven: bool, v: sp.Matrix) -> ElementTerms:
     return terms
 
 
+def _entries(J: sp.Matrix) -> tuple:
+    """J's shape and nonzero entries, a key equal for equal matrices: a Jacobian's few nonzero columns, not its
+    3 x n entries (a model's bodies times its speeds would make the assembly quadratic in its size)."""
+    return J.shape, tuple(sorted(J.todok().items()))
+
+
 def assemble(spec: Spec, terms: list[ElementTerms]):
     """Sum the element terms (eq. 8); check that every speed moves mass."""
     n = len(spec.speed_symbols)
@@ -161,10 +167,10 @@ def assemble(spec: Spec, terms: list[ElementTerms]):
     loads: dict = {}        # Jacobian entries -> (J, summed f)
     for e in terms:
         for J, W in e.inertia:
-            key = tuple(J)
+            key = _entries(J)
             inertia[key] = (J, inertia[key][1] + W if key in inertia else W)
         for J, f in e.loads:
-            key = tuple(J)
+            key = _entries(J)
             loads[key] = (J, loads[key][1] + f if key in loads else f)
         if e.G_direct is not None:
             G += e.G_direct
