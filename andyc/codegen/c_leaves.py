@@ -22,6 +22,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
+from sympy import S
 from sympy.printing.c import C99CodePrinter
 
 from andyc.codegen.printer import Unwrapped
@@ -76,6 +77,8 @@ _PRINTER = _Printer({"strict": True})     # one for every expression: making one
 
 
 def to_c(expr) -> str:
+    if expr is S.Zero:          # what the printer gives (see printer.to_code)
+        return "0.0"
     try:
         return _PRINTER.doprint(expr)
     except Exception as exc:        # SymPy raises PrintMethodNotImplementedError (or others) for what has no C

@@ -38,6 +38,8 @@ _PRINTER = _Printer({"fully_qualified_modules": True, "standard": "python3"})
 
 
 def to_code(expr) -> str:
+    if expr is sp.S.Zero:       # what the printer gives, without its ~20 us: most of a large M's entries
+        return "0"
     return _PRINTER.doprint(expr)
 
 
@@ -88,7 +90,7 @@ def function_body(outputs: list[tuple[str, sp.Expr]], pool: dict[sp.Symbol, sp.E
     for e in [defs[s] for s in order] + out_exprs:
         inputs |= {s for s in e.free_symbols if s not in defs}
     lines = [(str(s), to_code(defs[s])) for s in order]
-    ops = sum(sp.count_ops(defs[s]) for s in order) + sum(sp.count_ops(e) for e in out_exprs)
+    ops = sum(sp.count_ops(defs[s]) for s in order) + sum(sp.count_ops(e) for e in out_exprs if e is not sp.S.Zero)
     exprs = [(str(s), defs[s]) for s in order] + [(t, e) for (t, _), e in zip(outputs, out_exprs)]
     return FunctionBody(inputs, lines, [(t, to_code(e)) for (t, _), e in zip(outputs, out_exprs)], int(ops), exprs)
 
