@@ -120,3 +120,30 @@ def test_c_outputs_zero_runs_and_copies(tmp_path):
     expected = {i: float(e.subs(c0, x0 * x1).subs(values)) for i, e in outputs.items()}
     expected.update({i: expected[j] for i, j in copies.items()})
     np.testing.assert_allclose(M, [expected[i] for i in range(16)], rtol=1e-15, atol=0)
+
+
+def test_a_compiler_without_march_native_compiles_without_it(tmp_path):
+    """The C leaves ask for this processor (-march=native, as Numba compiles for the host); a compiler that
+    refuses the flag (some clang builds) compiles them without it, rather than the build falling back to Numba."""
+    import ctypes
+    import os
+    import stat
+
+    from andyc.codegen import c_leaves
+
+    cc = c_leaves.compiler()
+    if cc is None or os.name != "posix":
+        pytest.skip("no C compiler, or no shell to wrap it in")
+    wrapper = tmp_path / "cc-without-march"
+    wrapper.write_text('#!/bin/sh\nfor a in "$@"; do case "$a" in -march=*) echo "error: unknown argument: $a" >&2; '
+                       f'exit 1;; esac; done\nexec {cc} "$@"\n')
+    wrapper.chmod(wrapper.stat().st_mode | stat.S_IEXEC)
+    source = tmp_path / "f.c"
+    source.write_text("double energy(double t) { return 2.0 * t; }\n")
+    library = c_leaves.compile_library(source, tmp_path, "f_leaves_0", str(wrapper))
+    function = ctypes.CDLL(str(library)).energy
+    function.restype, function.argtypes = ctypes.c_double, [ctypes.c_double]
+    assert function(1.25) == 2.5
+    source.write_text("double energy(double t) { return 2.0 * ; }\n")     # any other error is the compiler's
+    with pytest.raises(c_leaves.NoC, match="failed"):
+        c_leaves.compile_library(source, tmp_path, "f_leaves_1", str(wrapper))
