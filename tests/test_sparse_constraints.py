@@ -1,0 +1,138 @@
+"""The sparse constrained solve (andyc/numerics/sparse_rows.py, chosen by andyc/symbolic/sparse_rows.py) against the
+dense one (andyc/numerics/linalg.py), both from one build (andyc_numerics/model.new_model's `constrained`): the
+accelerations, the multipliers and the projected states agree to rounding at random states and at singular poses
+(where the dense path takes its SVD); and the IFToMM A02 N-four-bar follows its reduced exact motion."""
+
+import dataclasses
+import sys
+
+import numpy as np
+import pytest
+
+import andyc
+from andyc.runtime.compiled import work
+from andyc.symbolic.sparse_rows import DENSE, SPARSE, choose, dense_operations, envelope, supports
+from tests.support import ROOT
+
+sys.path.insert(0, str(ROOT / "bench"))
+from large_models import nfourbar_yaml, reduced_b0  # noqa: E402
+
+TOL = 1e-12
+
+
+def variants(model) -> dict:
+    """"dense" and "sparse": the model's compiled Model with each constrained solve."""
+    E, numerics = model.module.EQUATIONS, model.numerics
+    return {k: numerics.model.new_model(E, numerics.stubs, k) for k in (DENSE, SPARSE)}
+
+
+def evaluate(model, ref, x, e0):
+    """(dx/dt, multipliers, the state projected (position, velocity, energy e0)) of flow 0 at x, and the statuses."""
+    dyn = model.numerics.dynamics
+    p, u = model.parameter_defaults, model.input_defaults
+    d = model.initial_discrete(p)
+    w = work(model)
+    xdot, lam, projected = np.zeros(model.nx), np.zeros(model.nc), x.copy()
+    status = (dyn.rhs_mode_into(ref, w.ref, 0.0, x, u, p, d, 0, xdot, 0),
+              dyn.multipliers(ref, w.ref, 0.0, x, u, p, d, 0, lam),
+              dyn.project(ref, w.ref, 0.0, projected, u, p, d, 0, True, e0, 0.0))
+    return xdot, lam, projected, status
+
+
+def assert_same(model, x, e0=0.0):
+    (a, la, xa, sa), (b, lb, xb, sb) = (evaluate(model, ref, x, e0) for ref in variants(model).values())
+    assert sa == sb == (0, 0, 0)
+    for dense, sparse in ((a, b), (la, lb), (xa, xb)):
+        assert np.abs(dense - sparse).max() <= TOL * max(1.0, np.abs(dense).max())
+
+
+@pytest.fixture(scope="module")
+def nfourbar(compiled, build_dir):
+    path = build_dir / "nfourbar3.yaml"
+    path.write_text(nfourbar_yaml(3))
+    return compiled(path)
+
+
+def test_supports_and_envelope_follow_the_tree_and_the_loops():
+    # a chain 0 <- 1 <- 2 and a root 3: row 0 on speed 2 reaches its ancestors; row 1 on 3 alone
+    parent, order = [-1, 0, 1, -1], [2, 3, 1, 0]
+    support = supports([{2}, {3}, {1, 3}], parent, order)
+    assert support == [[2, 1, 0], [3], [3, 1, 0]]
+    first, block = envelope([0, 1, 2], support)
+    assert first == [0, 1, 0] and block == [0, 0, 0]            # row 2 meets both: one block
+    first, block = envelope([0, 1], support)
+    assert first == [0, 1] and block == [0, 1]                  # disjoint supports: two blocks
+
+
+def test_the_choice_follows_the_operation_counts():
+    # the N-four-bar's patterns (speeds c0, b1, c1, ..., b_N, c_N; loop k on c_{k-1}, b_k, c_k)
+    for n, expected in ((1, DENSE), (20, SPARSE)):
+        nv = 2 * n + 1
+        parent = [-1 if i % 2 == 0 else i - 1 for i in range(nv)]
+        M = [({i + 1} if i % 2 == 0 and i + 1 < nv else {i - 1} if i % 2 else set()) for i in range(nv)]
+        A = [s for k in range(1, n + 1) for s in ({2 * k - 2, 2 * k - 1, 2 * k},) * 2]
+        order = [i for i in range(nv) if i % 2] + [i for i in range(nv) if i % 2 == 0]
+        solve = choose(M, A, (parent, order), [list(range(2 * n))], False)
+        assert solve.chosen == expected
+        assert solve.operations[DENSE] == dense_operations(nv, 2 * n)
+    with pytest.raises(ValueError):
+        choose(M, A, None, [list(range(2 * n))], False, force=SPARSE)
+
+
+def test_nfourbar_sparse_equals_dense_at_random_states(nfourbar):
+    assert nfourbar.module.EQUATIONS.CONSTRAINED_SOLVE == SPARSE
+    rng = np.random.default_rng(27)
+    x0 = nfourbar.initial_state(nfourbar.parameter_defaults)
+    for _ in range(5):
+        assert_same(nfourbar, x0 + rng.normal(scale=0.5, size=x0.size), e0=rng.normal())
+
+
+def test_nfourbar_singular_pose_takes_the_least_norm_solve(nfourbar):
+    """All bars horizontal: every loop's x row vanishes (the rows are redundant), the dense path takes its SVD; the
+    sparse one its block's, with the same least-norm multipliers (zero on the vanished rows)."""
+    nq = nfourbar.nq
+    x = np.zeros(nfourbar.nx)
+    x[nq:nq + nq] = [0.7 if i % 2 == 0 else -0.7 for i in range(nq)]
+    x[nq + 1] += 0.01                                   # off the velocity constraint: the projection corrects it
+    lam = evaluate(nfourbar, variants(nfourbar)[DENSE], x, 0.0)[1]
+    phi, c, A, kappa = (np.zeros(nfourbar.nh), np.zeros(nfourbar.nc), np.zeros((nfourbar.nc, nq)),
+                        np.zeros(nfourbar.nc))
+    p = nfourbar.parameter_defaults
+    nfourbar.module.constraints(0.0, x, nfourbar.input_defaults, p, nfourbar.initial_discrete(p), phi, c, A, kappa)
+    assert np.linalg.matrix_rank(A) < nfourbar.nc
+    assert np.abs(lam[0::2]).max() < 1e-12 < np.abs(lam[1::2]).min()
+    assert_same(nfourbar, x, e0=1.0)
+    x[:nq] = 1e-9                                       # near it: below the rank tolerance still
+    assert_same(nfourbar, x, e0=1.0)
+
+
+def test_nfourbar_follows_the_reduced_motion(nfourbar):
+    times = (0.5, 1.0, 12.5, 20.0)
+    run = andyc.simulate(nfourbar, 20.0, dt=1e-3, method="projection", every=500, frames=["tip0"], progress=False)
+    exact = reduced_b0(3, times)
+    for k, t in enumerate(times):
+        i = int(np.argmin(abs(run.time - t)))
+        assert abs(run.time[i] - t) < 1e-9
+        assert np.abs(run.frames["tip0"][i, :2] - exact[k]).max() < 1e-6
+
+
+@pytest.mark.parametrize("name, singular", [("fourbar", [0.0, 0.0, 0.0]), ("slider_crank", None)])
+def test_shipped_models_sparse_equals_dense(compiled, name, singular):
+    model = compiled(name)
+    assert len(model.module.EQUATIONS.ROW_PTR)                  # the sparse solve applies (chosen or not)
+    rng = np.random.default_rng(3)
+    x0 = model.initial_state(model.parameter_defaults)
+    for _ in range(5):
+        assert_same(model, x0 + rng.normal(scale=0.5, size=x0.size), e0=rng.normal())
+    if singular is not None:                                    # the flat four-bar: its loop loses a rank
+        x = x0.copy()
+        x[:model.nq] = singular
+        assert_same(model, x, e0=1.0)
+
+
+def test_fourbar_trajectory_sparse_equals_dense(compiled):
+    """Through the flat (singular) configuration, the whole run: each solve's trajectory within 1e-12."""
+    model = compiled("fourbar")
+    runs = [andyc.simulate(dataclasses.replace(model, ref=ref), 2.0, dt=1e-3, method="projection", every=100,
+                           progress=False) for ref in variants(model).values()]
+    assert np.abs(runs[0].state - runs[1].state).max() <= TOL * np.abs(runs[0].state).max()
