@@ -26,8 +26,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 DENSE, SPARSE = "dense", "sparse"
-SPARSE_GAIN = 0.5   # the dense kernels run with sizes as constants up to n = 8 (unrolled), the sparse ones read
-                    # index tables: the sparse solve is chosen at half the operations or fewer.
+SPARSE_GAIN = 0.3   # the dense kernels run with sizes as constants up to n = 8 (unrolled), the sparse ones read
+                    # index tables. Measured on the N-four-bar (bench/large.py, projection steps, alternated):
+                    # N = 3 (0.35 of the operations) 0.98 .. 1.29 the dense step's time, N = 5 (0.18) 0.64 .. 0.70,
+                    # N = 10 (0.057) 0.30, N = 20 (0.016) 0.06 .. 0.16; the shipped models (0.7 .. 1) stay dense.
 
 
 @dataclass
