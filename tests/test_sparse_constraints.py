@@ -56,6 +56,41 @@ def nfourbar(compiled, build_dir):
     return compiled(path)
 
 
+TWIN = """name: twin_fourbars
+description: two separate parallelogram four-bars (their loops' rows form two blocks of the Gram matrix)
+parameters: {L: 1, m: 1, g: 9.81}
+gravity: [0, -g, 0]
+coordinates:
+  a0: {initial: pi/2, velocity: -1}
+  a1: {initial: -pi/2, velocity: 1}
+  a2: {initial: pi/2, velocity: -1}
+  b0: {initial: pi/2, velocity: -1}
+  b1: {initial: -pi/2, velocity: 1}
+  b2: {initial: pi/2, velocity: -1}
+frames:
+  - {name: ca, parent: world, revolute: a0}
+  - {name: ca_tip, parent: ca, translation: [L, 0, 0]}
+  - {name: ka, parent: ca_tip, revolute: a1}
+  - {name: ka_end, parent: ka, translation: [L, 0, 0]}
+  - {name: ra, parent: world, translation: [L, 0, 0], revolute: a2}
+  - {name: ra_tip, parent: ra, translation: [L, 0, 0]}
+  - {name: cb, parent: world, translation: [3*L, 0, 0], revolute: b0}
+  - {name: cb_tip, parent: cb, translation: [L, 0, 0]}
+  - {name: kb, parent: cb_tip, revolute: b1}
+  - {name: kb_end, parent: kb, translation: [L, 0, 0]}
+  - {name: rb, parent: world, translation: [4*L, 0, 0], revolute: b2}
+  - {name: rb_tip, parent: rb, translation: [L, 0, 0]}
+bodies:
+"""
+TWIN += "".join(f"  - {{name: {f}_rod, frame: {f}, mass: m, com: [L/2, 0, 0], inertia: [0, m*L**2/12, m*L**2/12]}}\n"
+                for f in ("ca", "ka", "ra", "cb", "kb", "rb"))
+TWIN += """constraints:
+  - {name: loop_a, holonomic: [ka_end.x - ra_tip.x, ka_end.y - ra_tip.y]}
+  - {name: loop_b, holonomic: [kb_end.x - rb_tip.x, kb_end.y - rb_tip.y]}
+simulate: {method: projection}
+"""
+
+
 def test_supports_and_envelope_follow_the_tree_and_the_loops():
     # a chain 0 <- 1 <- 2 and a root 3: row 0 on speed 2 reaches its ancestors; row 1 on 3 alone
     parent, order = [-1, 0, 1, -1], [2, 3, 1, 0]
@@ -118,6 +153,24 @@ def test_nfourbar_follows_the_reduced_motion(nfourbar):
         i = int(np.argmin(abs(run.time - t)))
         assert abs(run.time[i] - t) < 1e-9
         assert np.abs(run.frames["tip0"][i, :2] - exact[k]).max() < 1e-6
+
+
+def test_a_singular_block_alone_takes_the_svd(compiled, build_dir):
+    """Two separate four-bars: their rows form two blocks; with one lying flat (its x row vanishes) only that block
+    takes the SVD, and the result is still the dense SVD path's."""
+    path = build_dir / "twin_fourbars.yaml"
+    path.write_text(TWIN)
+    model = compiled(path)
+    assert model.module.EQUATIONS.FLOW_ENVELOPE[0, 1].tolist() == [0, 0, 2, 2]     # two blocks: rows 0-1, 2-3
+    nq = model.nq
+    x = np.zeros(model.nx)
+    x[:nq] = [0.0, 0.0, 0.0, 1.2, -1.2, 1.2]             # a flat, b at a generic pose
+    x[nq:] = [0.7, -0.7, 0.7, -0.4, 0.4, -0.4]
+    lam = evaluate(model, variants(model)[DENSE], x, 0.0)[1]
+    assert abs(lam[0]) < 1e-12 < min(abs(lam[1]), abs(lam[2]), abs(lam[3]))
+    assert_same(model, x, e0=1e-3)
+    x[:3] = 1e-11                                        # near it: far below the rank tolerance
+    assert_same(model, x, e0=1e-3)
 
 
 @pytest.mark.parametrize("name, singular", [("fourbar", [0.0, 0.0, 0.0]), ("slider_crank", None)])

@@ -430,7 +430,7 @@ def move(model, t, x, u, p, d, dq):
 @jit(inline="always")
 def correct_rows(model, flow, nr, residual, L, S):
     """S's dv row <- the least M-norm change with A dv = -r over the first nr rows of `flow`, r the values of
-    S's `residual` row (phi or cv) at those rows; L from cholesky."""
+    S's `residual` row (phi or cv) at those rows; L from `factor`."""
     rows, y0 = model.flow_rows, model.s_y
     whiten_flow(model, L, S, flow, nr)
     for r in range(nr):
