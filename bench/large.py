@@ -16,6 +16,7 @@ each peer, then andyc again ...), printed as min .. max, and ratios are taken wi
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import tempfile
 import time
 from pathlib import Path
@@ -256,29 +257,49 @@ def robot_section(tmp: Path, names, rounds: int) -> None:
                  if "ltdl" in times else ""), flush=True)
 
 
+def _solves(model) -> dict:
+    """name -> the model with that constrained solve (andyc_numerics/model.new_model), the chosen one first: the
+    dense and the sparse solve A/B in one process, from one build."""
+    chosen = model.module.EQUATIONS.CONSTRAINED_SOLVE
+    names = [chosen] + [k for k in ("dense", "sparse") if k != chosen and (k == "dense" or len(model.module.EQUATIONS.ROW_PTR))]
+    return {k: dataclasses.replace(model, ref=model.numerics.model.new_model(model.module.EQUATIONS,
+                                                                              model.numerics.stubs, k))
+            for k in names}
+
+
 def fourbar_section(tmp: Path, sizes, rounds: int, t_end: float = 20.0, dt: float = 1e-3) -> None:
     section("IFToMM A02 N-four-bar: projection step, build by stage, B0 against the reduced motion (issue 27)")
     print(f"projection method (RK4 + Braun & Goldfarb projection, energy correction), dt = {dt:g} s, {t_end:g} s; "
-          f"us per step min .. max over {rounds} rounds; B0 error: max over t = {B0_TIMES} of |B0 - exact|")
+          f"us per step min .. max over {rounds} rounds, the constrained solves (andyc/symbolic/sparse_rows.py) "
+          f"alternated within each round; B0 error: max over t = {B0_TIMES} of |B0 - exact|")
     for n in sizes:
         path = tmp / f"nfourbar{n}.yaml"
         path.write_text(nfourbar_yaml(n))
-        tic = time.perf_counter()
+        tic, cpu = time.perf_counter(), time.process_time()
         model, result = andyc.compile_model(path, tmp / "build", force=True)
-        total = time.perf_counter() - tic
+        total, cpu = time.perf_counter() - tic, time.process_time() - cpu
         t = result.timings
-        walls, worst = [], 0.0
         exact = reduced_b0(n, B0_TIMES)
+        variants = _solves(model)
+        walls, worst = {k: [] for k in variants}, {k: 0.0 for k in variants}
+        for variant in variants.values():
+            andyc.simulate(variant, 10 * dt, dt=dt, method="projection", progress=False)
         for _ in range(rounds):
-            run = andyc.simulate(model, t_end, dt=dt, method="projection", every=500, frames=["tip0"],
-                                 progress=False)
-            walls.append(1e6 * run.stats["wall_seconds"] / (t_end / dt))
-            for k, tk in enumerate(B0_TIMES):
-                i = int(np.argmin(abs(run.time - tk)))
-                worst = max(worst, float(np.max(abs(run.frames["tip0"][i, :2] - exact[k]))))
+            for k, variant in variants.items():
+                run = andyc.simulate(variant, t_end, dt=dt, method="projection", every=500, frames=["tip0"],
+                                     progress=False)
+                walls[k].append(1e6 * run.stats["wall_seconds"] / (t_end / dt))
+                for j, tk in enumerate(B0_TIMES):
+                    i = int(np.argmin(abs(run.time - tk)))
+                    worst[k] = max(worst[k], float(np.max(abs(run.frames["tip0"][i, :2] - exact[j]))))
+        ops = model.module.EQUATIONS.CONSTRAINED_OPERATIONS
         print(f"N = {n:>2}: {2 * n + 1} speeds, {2 * n} rows, {result.operations['dynamics']} operations; build "
-              f"{total:.1f} s (derive {t.get('derive', 0):.1f}, generate {t.get('generate', 0):.1f}, compile "
-              f"{t.get('compile', 0):.1f}); {_spread(walls)} us per step; B0 error {worst:.1e} m", flush=True)
+              f"{total:.1f} s, CPU {cpu:.1f} s (derive {t.get('derive', 0):.1f}, generate {t.get('generate', 0):.1f}, "
+              f"cc {t.get('cc', 0):.1f}, compile {t.get('compile', 0):.1f}); solve operations {ops}", flush=True)
+        for k in variants:
+            ratio = f", {k}/dense {_spread(_ratios(walls, k, 'dense'))}" if k != "dense" else ""
+            print(f"    {k:>6}{' (chosen)' if k == next(iter(variants)) else '':9}: {_spread(walls[k])} us per step"
+                  f"{ratio}; B0 error {worst[k]:.1e} m", flush=True)
 
 
 @njit(cache=False)

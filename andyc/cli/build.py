@@ -43,6 +43,10 @@ def check(files, fmt):
 
             summary += "\n" + reduction_report(file, spec, model)
         summary += "\n  " + model.forward.describe(model.constraints.nc > 0)
+        if model.constraints.nc > 0:
+            from andyc.codegen.generate import constrained_solve
+
+            summary += "\n  " + constrained_solve(model).describe()
         report.say(summary)
         report.results.append({"file": file, "ok": True, "summary": summary})
     if problems:

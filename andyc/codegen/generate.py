@@ -34,6 +34,7 @@ from andyc.numerics.compiler import library_file
 from andyc.spec.display import display
 from andyc.symbolic.formulation import DENSE, LTDL, choose, pattern_of, tree_of
 from andyc.symbolic.model import SymbolicModel
+from andyc.symbolic import sparse_rows
 
 TEMPLATES = PACKAGE / "templates"
 
@@ -100,6 +101,26 @@ def _forward_context(model: SymbolicModel) -> dict:
             "mass_order": order, "nt": len(order) if fwd.chosen == LTDL else 0}
 
 
+def _constrained_context(model: SymbolicModel) -> dict:
+    """The constrained solve the runtime uses and, where the sparse one applies, its tables
+    (andyc.symbolic.sparse_rows; the runtime may still be asked for either, andyc_numerics/model.new_model)."""
+    solve = constrained_solve(model)
+    nf, nc = len(model.hybrid.flow_rows), model.constraints.nc
+    applies = solve.operations.get(sparse_rows.SPARSE) is not None
+    return {"constrained_solve": solve.chosen, "constrained_operations": solve.operations,
+            "row_ptr": solve.row_ptr if applies else [], "row_cols": solve.row_cols if applies else [[], []],
+            "flow_envelope": solve.envelopes if applies else [[[0] * nc, [0] * nc] for _ in range(nf)]}
+
+
+def constrained_solve(model: SymbolicModel, force: str | None = None) -> sparse_rows.ConstrainedSolve:
+    """andyc.symbolic.sparse_rows.choose for a derived model (M's and A's patterns, the tree of M, its flows)."""
+    A, n = model.constraints.A, model.M.rows
+    M_pattern = pattern_of(model.M)
+    A_pattern = [{j for j in range(n) if A[i, j] != 0} for i in range(model.constraints.nc)]
+    slips = any(flow.slip for flow in model.spec.flows)
+    return sparse_rows.choose(M_pattern, A_pattern, tree_of(M_pattern), model.hybrid.flow_rows, slips, force)
+
+
 def render(model: SymbolicModel, key: str, c: bool = False) -> tuple[str, dict, str | None]:
     """The text of <name>_equations.py (the model's leaves, everything of it that Numba compiles: it depends
     only on what the equations depend on), the operation count of each leaf, and with `c` (a C compiler
@@ -133,6 +154,7 @@ def render(model: SymbolicModel, key: str, c: bool = False) -> tuple[str, dict, 
         "has_closed_form": bool(spec.closed_form),
         **_hybrid_context(model),
         **_forward_context(model),
+        **_constrained_context(model),
         "leaves": found.functions,
         "c_leaves": c_leaves.library_stem(spec.name, key) if c_source else None,
         "c_names": [f["name"] for f in found.functions if f["c"] is not None] if c_source else [],

@@ -16,6 +16,7 @@ content (compiler.py), wherever the copy sits.
     model.py       Model (the compiled model: sizes, tables, the leaves' signatures) and Work (its arrays)
     stubs.py       leaves that do nothing, for the parts a model has none of
     linalg.py      Cholesky, triangular and Gram solves, unrolled for small sizes
+    sparse_rows.py the Gram solves along the tree of M and the rows' supports (banded factor, SVD per block)
     dynamics.py    the right-hand side of a flow, the multipliers, projection and the impact map
     integrator.py  RK4 with event location, the hybrid step, evaluations over a run's log
     inputs.py      input callbacks: the model's and the run's, held values, tables

@@ -14,6 +14,8 @@ from .compiler import jit
 from .linalg import (add_rows_transposed, cholesky, correction, ltdl, ltdl_solve, solve_gram, solve_lower, solve_upper,
                      whiten)
 from .model import call
+from .sparse_rows import (add_rows_transposed_sparse, rows_times, solve_gram_sparse, tree_factor, tree_lower,
+                          tree_times, tree_upper, whiten_rows)
 from .status import BAUMGARTE, DEPENDENT, HOLD, IDEAL, OK, PAINLEVE, RANK_TOL, SINGULAR_MASS, SLIP_TINY
 
 
@@ -30,7 +32,7 @@ def rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode):
         status = whitened_equations(model, t, x, u, p, d, M, G, S)
         if status == OK:
             status = constraint_force(model, p, d, flow, mode, M, G, S)
-            solve_upper(M, G, nv)
+            upper(model, M, G)
     elif model.nt > 0:                  # a = M^-1 G along the tree of M (LTDL, Featherstone 2005)
         call(model.dynamics, (t, x, u, p, d, M, G))
         status = OK if ltdl(M, model.mass_parent, model.mass_order, nv, 0.0) else SINGULAR_MASS
@@ -54,13 +56,73 @@ def rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode):
 
 
 @jit(inline="always")
+def sparse(model):
+    """Whether the model's constrained flows are solved along the tree of M and the rows' sparsity (sparse_rows.py,
+    chosen by andyc/symbolic/sparse_rows.py) rather than densely (linalg.py)."""
+    return model.row_ptr.shape[0] > 0
+
+
+@jit(inline="always")
+def factor(model, M):
+    """M <- a square root R of M = R^T R (the dense path's R = L^T of cholesky, or sparse_rows.tree_factor's);
+    False when M is not positive definite."""
+    if sparse(model):
+        return tree_factor(model, M)
+    return cholesky(M, model.nv, 0.0)
+
+
+@jit(inline="always")
+def lower(model, M, b):
+    """b <- R^-T b, M factored by `factor`."""
+    if sparse(model):
+        tree_lower(model, M, b)
+    else:
+        solve_lower(M, b, model.nv)
+
+
+@jit(inline="always")
+def upper(model, M, b):
+    """b <- R^-1 b, M factored by `factor`."""
+    if sparse(model):
+        tree_upper(model, M, b)
+    else:
+        solve_upper(M, b, model.nv)
+
+
+@jit(inline="always")
+def whiten_flow(model, M, S, flow, m):
+    """C = A R^-1 over the first m active rows of `flow`, into S's C block."""
+    if sparse(model):
+        whiten_rows(model, M, S, model.flow_rows, flow, m)
+    else:
+        whiten(model, M, S, model.flow_rows, flow, m)
+
+
+@jit(inline="always")
+def solve_flow_gram(model, S, flow, m, least_norm):
+    """y <- (C C^T)^+ y over the first m active rows of `flow` (linalg.solve_gram; sparse_rows.solve_gram_sparse)."""
+    if sparse(model):
+        return solve_gram_sparse(model, S, model.flow_rows, flow, m, least_norm, model.flow_envelope[flow])
+    return solve_gram(model, S, m, least_norm)
+
+
+@jit(inline="always")
+def add_flow_rows(model, S, flow, m, scale, out):
+    """out += scale C^T y over the first m active rows of `flow`."""
+    if sparse(model):
+        add_rows_transposed_sparse(model, S, model.flow_rows, flow, m, scale, out)
+    else:
+        add_rows_transposed(model, S, m, scale, out)
+
+
+@jit(inline="always")
 def whitened_equations(model, t, x, u, p, d, M, G, S):
-    """M <- L (M = L L^T, see cholesky), G <- g = L^-1 G and every row's terms into S, from one evaluation
+    """M <- R (M = R^T R, see factor), G <- g = R^-T G and every row's terms into S, from one evaluation
     that shares their subexpressions (dynamics_constraints); returns a status."""
     call(model.dynamics_constraints, (t, x, u, p, d, M, G, S))
-    if not cholesky(M, model.nv, 0.0):
+    if not factor(model, M):
         return SINGULAR_MASS
-    solve_lower(M, G, model.nv)
+    lower(model, M, G)
     return OK
 
 
@@ -70,7 +132,12 @@ def constraint_system(model, flow, L, g, S):
     returns their number."""
     nr, nv, rows = model.flow_nrows[flow], model.nv, model.flow_rows
     c0, y0, kappa = model.s_c, model.s_y, model.s_kappa
-    whiten(model, L, S, rows, flow, nr)
+    whiten_flow(model, L, S, flow, nr)
+    if sparse(model):
+        rows_times(model, S, rows, flow, nr, g, S[y0])
+        for r in range(nr):
+            S[y0, r] = -S[kappa, rows[flow, r]] - S[y0, r]
+        return nr
     for r in range(nr):
         s = -S[kappa, rows[flow, r]]
         for i in range(nv):
@@ -104,11 +171,11 @@ def constraint_force(model, p, d, flow, mode, L, g, S):
                 s += S[model.s_w + r, i] * S[model.s_y, r]
             g[i] += s
         return OK
-    if solve_gram(model, S, nr, mode == IDEAL) < 0:
+    if solve_flow_gram(model, S, flow, nr, mode == IDEAL) < 0:
         return DEPENDENT
     if mode == BAUMGARTE:
         baumgarte(model, p, flow, nr, S)
-    add_rows_transposed(model, S, nr, 1.0, g)
+    add_flow_rows(model, S, flow, nr, 1.0, g)
     return OK
 
 
@@ -299,7 +366,7 @@ def multipliers(model, w, t, x, u, p, d, flow, lam):
         slip_rows(model, p, d, flow, M, S, nr)
         solve_slipping(model, flow, S, nr)
     else:
-        solve_gram(model, S, nr, True)
+        solve_flow_gram(model, S, flow, nr, True)
     for r in range(model.nc):
         lam[r] = np.nan
     for r in range(nr):
@@ -363,12 +430,20 @@ def move(model, t, x, u, p, d, dq):
 @jit(inline="always")
 def correct_rows(model, flow, nr, residual, L, S):
     """S's dv row <- the least M-norm change with A dv = -r over the first nr rows of `flow`, r the values of
-    S's `residual` row (phi or cv) at those rows; L from cholesky."""
+    S's `residual` row (phi or cv) at those rows; L from `factor`."""
     rows, y0 = model.flow_rows, model.s_y
-    whiten(model, L, S, rows, flow, nr)
+    whiten_flow(model, L, S, flow, nr)
     for r in range(nr):
         S[y0, r] = -S[residual, rows[flow, r]]
-    correction(model, L, S, nr)
+    if not sparse(model):
+        correction(model, L, S, nr)
+        return
+    solve_flow_gram(model, S, flow, nr, True)
+    dv = S[model.s_dv, :model.nv]
+    for i in range(model.nv):
+        dv[i] = 0.0
+    add_flow_rows(model, S, flow, nr, 1.0, dv)
+    upper(model, L, dv)
 
 
 @jit
@@ -391,7 +466,7 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
     nq, nv = model.nq, model.nv
     M, G, S = w.M, w.G, w.S
     call(model.dynamics, (t, x, u, p, d, M, G))
-    if not cholesky(M, nv, 0.0):
+    if not factor(model, M):
         return SINGULAR_MASS
     nr = model.flow_nrows[flow]
     constrain = constrain and nr > 0
@@ -412,7 +487,9 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
         # (the run passes e0 = 0 there). Else the built-in E - e0 - W, whose gradient M v gives r = L^T v.
         law = call(model.energy_law, (flow, t, x, u, p, d, S[model.s_r]))
         if law == law:
-            solve_lower(M, r, nv)
+            lower(model, M, r)
+        elif sparse(model):
+            tree_times(model, M, x[nq:nq + nv], r)
         else:
             for i in range(nv):            # r = L^T v (the factor's diagonal holds 1 / L_ii)
                 s = x[nq + i] / M[i, i]
@@ -421,13 +498,16 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
                 r[i] = s
         if constrain:
             c0, y0 = model.s_c, model.s_y
-            for j in range(nr):        # y <- C r, for r <- r - C^+ C r
-                s = 0.0
-                for i in range(nv):
-                    s += S[c0 + j, i] * r[i]
-                S[y0, j] = s
-            solve_gram(model, S, nr, True)
-            add_rows_transposed(model, S, nr, -1.0, r)
+            if sparse(model):          # y <- C r, for r <- r - C^+ C r
+                rows_times(model, S, model.flow_rows, flow, nr, r, S[y0])
+            else:
+                for j in range(nr):
+                    s = 0.0
+                    for i in range(nv):
+                        s += S[c0 + j, i] * r[i]
+                    S[y0, j] = s
+            solve_flow_gram(model, S, flow, nr, True)
+            add_flow_rows(model, S, flow, nr, -1.0, r)
         rr = 0.0
         for i in range(nv):
             rr += r[i] * r[i]
@@ -441,7 +521,7 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
             scale = -residual / rr
             for i in range(nv):
                 r[i] *= scale
-            solve_upper(M, r, nv)
+            upper(model, M, r)
             for i in range(nv):
                 x[nq + i] += r[i]
     return OK

@@ -64,7 +64,8 @@ TABLES = ("quaternions",                            # index in x of each quatern
           "jump_source", "jump_target", "jump_direction", "jump_priority", "jump_order", "jump_multipliers",
           "jump_contact",                            # the contact whose impact jump k is, or -1
           "row_work",                                # the work slot of each row's constraint power, or -1
-          "mass_parent", "mass_order")               # the tree of M: parent of each speed; children first
+          "mass_parent", "mass_order",               # the tree of M: parent of each speed; children first
+          "row_ptr", "row_cols", "flow_envelope")    # the rows' sparsity (sparse_rows.py; row_ptr empty: dense)
 LEAF_NAMES = ("dynamics", "dynamics_constraints", "constraints_into", "signal_rates", "energy", "power",
               "frame_poses", "constraint_gains", "restitution", "guard", "guard_rate", "enabled", "reset",
               "flow_inputs", "closed_form", "energy_law", "drive_power")
@@ -247,7 +248,7 @@ else:
 def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, flow_slip_dir,
            impact_rows,
            impact_nrows, jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers,
-           jump_contact, row_work, mass_parent, mass_order, leaves):
+           jump_contact, row_work, mass_parent, mass_order, row_ptr, row_cols, flow_envelope, leaves):
     (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
      constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form, energy_law,
      drive_power) = leaves
@@ -260,13 +261,14 @@ def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_sl
                  borrowed(impact_rows), borrowed(impact_nrows), borrowed(jump_source), borrowed(jump_target),
                  borrowed(jump_direction), borrowed(jump_priority), borrowed(jump_order), borrowed(jump_multipliers),
                  borrowed(jump_contact), borrowed(row_work), borrowed(mass_parent), borrowed(mass_order),
+                 borrowed(row_ptr), borrowed(row_cols), borrowed(flow_envelope),
                  dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
                  constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form,
                  energy_law, drive_power,
                  (quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, flow_slip_dir, impact_rows,
                   impact_nrows,
                   jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact,
-                  row_work, mass_parent, mass_order))
+                  row_work, mass_parent, mass_order, row_ptr, row_cols, flow_envelope))
 
 
 def c_leaves(path: str, names) -> dict:
@@ -284,14 +286,20 @@ def sizes_of(equations) -> dict:
     return {**sizes, "na": sizes["nx"] + sizes["nw"], "ng": sizes["nv"] + sizes["nw"], "rows": layout["rows"], "width": layout["width"]}
 
 
-def new_model(equations, stubs) -> Model:
+def new_model(equations, stubs, constrained=None) -> Model:
     """The Model of a generated <name>_equations.py module: its sizes (NQ, NV, ...), tables (FLOW_ROWS, ...)
     and leaves; `stubs` (a module of leaves that do nothing) stands in for the leaves a model has none of
-    (no constraints, no jumps, ...)."""
+    (no constraints, no jumps, ...). `constrained`: "dense" or "sparse" overrides the module's CONSTRAINED_SOLVE
+    (sparse_rows.py; "sparse" needs its tables: ValueError without)."""
     sizes = sizes_of(equations)
     layout = scratch_layout(sizes["nv"], sizes["nc"], sizes["nj"])
     rows = np.array([layout[name] for name in ("A", "C", "W") + VECTORS], dtype=np.int64)
     tables = [np.ascontiguousarray(getattr(equations, name.upper()), dtype=np.int64) for name in TABLES]
+    chosen = constrained or getattr(equations, "CONSTRAINED_SOLVE", "dense")
+    if chosen == "sparse" and not len(tables[TABLES.index("row_ptr")]):
+        raise ValueError("the sparse constrained solve does not apply to this model (no ROW_PTR)")
+    if chosen != "sparse":
+        tables[TABLES.index("row_ptr")] = tables[TABLES.index("row_ptr")][:0]
     leaves = tuple(getattr(equations, name, None) or getattr(stubs, name) for name in LEAF_NAMES)
     return _model(np.array([sizes[name] for name in SIZES], dtype=np.int64), rows, *tables, leaves)
 

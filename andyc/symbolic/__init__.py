@@ -8,6 +8,7 @@
     work.py         the power of every element that does work (the energy balance E - E0 - W)
     emitter.py      the ordered intermediate assignments;  model.py: SymbolicModel and its summary
     formulation.py  the forward dynamics each model gets: dense Cholesky of M, or LTDL along its tree
+    sparse_rows.py  the constrained solve each model gets: dense, or along the tree and the rows' supports
     linearize.py    A, B by exact forward-mode derivatives;  eom.py: the equations written out for reading
 """
 

@@ -53,7 +53,7 @@ class ForwardDynamics:
         what = ("sparse LTDL along the tree of M (Featherstone 2005)" if self.chosen == LTDL
                 else "dense Cholesky of M")
         depth = f"; tree depth {max(_depths(self.parent)) + 1}" if self.parent else ""
-        note = "; flows with constraint rows: dense (the Gram solves and the projection use its factor)" if rows else ""
+        note = "; flows with constraint rows: see the constrained solve" if rows else ""
         return f"forward dynamics: {what}{depth}; factor + solve operations: {ops}{note}"
 
 
