@@ -31,7 +31,7 @@ from andyc.codegen import c_leaves
 from andyc.codegen.leaves import leaves, state_names
 from andyc.codegen.printer import to_code
 from andyc.spec.display import display
-from andyc.symbolic.formulation import DENSE, LTDL, choose, pattern_of, tree_of
+from andyc.symbolic.formulation import ABA, DENSE, LTDL, choose, pattern_of, tree_of
 from andyc.symbolic.model import SymbolicModel
 
 TEMPLATES = PACKAGE / "templates"
@@ -96,7 +96,8 @@ def _forward_context(model: SymbolicModel) -> dict:
     tree = tree_of(pattern_of(model.M)) if fwd.chosen == DENSE else (fwd.parent, fwd.order)
     parent, order = tree if tree is not None else ([], [])
     return {"formulation": fwd.chosen, "forward_operations": fwd.operations, "mass_parent": parent,
-            "mass_order": order, "nt": len(order) if fwd.chosen == LTDL else 0}
+            "mass_order": order, "nt": len(order) if fwd.chosen == LTDL else 0,
+            "nb": model.dof if fwd.chosen == ABA else 0}
 
 
 def render(model: SymbolicModel, key: str, c: bool = False) -> tuple[str, dict, str | None]:

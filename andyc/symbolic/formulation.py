@@ -16,10 +16,17 @@ is the latest of i's neighbours before it. The factorization is exact (no fill-i
 neighbour of i before it lies on i's chain i, lambda(i), lambda(lambda(i)), ... (then eliminating
 a speed only updates entries between its own ancestors); otherwise the dense path is used.
 
+The third, Featherstone's articulated-body algorithm (andyc/symbolic/aba.py), gives dv/dt without M: its
+cost grows like the number of links, M's symbolic assembly like n^2 .. n^3 on a chain. It applies to an
+unconstrained tree whose links each have their own speeds (aba.py); flows with constraint rows, and every
+other use of M (projection, impacts, energy, linearization), keep M.
+
 The operation counts are those of the numerical kernels (andyc/numerics/linalg.py: cholesky with
 solve_lower and solve_upper, ltdl with ltdl_solve), a multiplication, an addition, a division or a
-square root counting one: the same for every state, from M's pattern alone. Both run after the same
-generated M and G (the leaf `dynamics`), whose count is the model's OPERATIONS["dynamics"].
+square root counting one: the same for every state, from M's pattern alone; with the symbolic
+assembly of M and G added (count_ops of the intermediates they reach, before cse) when ABA is among the
+alternatives, whose own count is that of its intermediates the same way: all three then count the whole
+of dv/dt.
 """
 
 from __future__ import annotations
@@ -28,13 +35,14 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-DENSE, LTDL = "dense", "ltdl"
-FORMULATIONS = (DENSE, LTDL)
+DENSE, LTDL, ABA = "dense", "ltdl", "aba"
+FORMULATIONS = (DENSE, LTDL, ABA)
 LTDL_GAIN = 0.6     # the tree factorization is chosen when it needs at most this fraction of the dense
                     # operations: the dense kernels run with sizes as constants up to n = 8 (unrolled) and
                     # stream through rows, the tree's reads its parents from a table. Measured (bench/large.py,
                     # kernels): on chains (0.69 .. 0.96 of the operations) the tree's is 1.0 .. 2x slower,
                     # on a quadruped's tree (0.44) and a humanoid's (0.22) 0.3 .. 0.6x the time.
+ABA_GAIN = 1.0     # ABA is chosen when its count is at most this fraction of the chosen factorization's
 
 
 @dataclass
@@ -48,13 +56,15 @@ class ForwardDynamics:
 
     def describe(self, rows: bool = False) -> str:
         """One line for `andyc check`; `rows`: the model has constraint rows (their flows stay dense)."""
-        ops = ", ".join(f"{name} {'n/a (M has no tree pattern)' if n is None else n}"
-                        for name, n in self.operations.items())
-        what = ("sparse LTDL along the tree of M (Featherstone 2005)" if self.chosen == LTDL
-                else "dense Cholesky of M")
+        why = {LTDL: "n/a (M has no tree pattern)", ABA: "n/a (not a tree of links with their own speeds)"}
+        ops = ", ".join(f"{name} {why[name] if n is None else n}" for name, n in self.operations.items())
+        what = {LTDL: "sparse LTDL along the tree of M (Featherstone 2005)",
+                ABA: "articulated-body algorithm (Featherstone 2008, Table 7.1), no M",
+                DENSE: "dense Cholesky of M"}[self.chosen]
         depth = f"; tree depth {max(_depths(self.parent)) + 1}" if self.parent else ""
         note = "; flows with constraint rows: dense (the Gram solves and the projection use its factor)" if rows else ""
-        return f"forward dynamics: {what}{depth}; factor + solve operations: {ops}{note}"
+        kind = "operations of dv/dt" if ABA in self.operations else "factor + solve operations"
+        return f"forward dynamics: {what}{depth}; {kind}: {ops}{note}"
 
 
 def _depths(parent: list) -> list:
@@ -112,18 +122,48 @@ def pattern_of(M: sp.Matrix) -> list[set]:
     return [{j for j in range(n) if j != i and (M[i, j] != 0 or M[j, i] != 0)} for i in range(n)]
 
 
-def choose(M: sp.Matrix, force: str | None = None) -> ForwardDynamics:
+def reached_operations(exprs, pool: dict) -> int:
+    """count_ops of `exprs` and of the intermediates of `pool` they reach (before cse)."""
+    seen, stack, total = set(), [], 0
+    for e in exprs:
+        e = sp.sympify(e)
+        total += sp.count_ops(e)
+        stack.extend(e.free_symbols)
+    while stack:
+        s = stack.pop()
+        if s in seen or s not in pool:
+            continue
+        seen.add(s)
+        total += sp.count_ops(pool[s])
+        stack.extend(pool[s].free_symbols)
+    return int(total)
+
+
+def choose(M: sp.Matrix, force: str | None = None, aba=None, G: sp.Matrix | None = None,
+           pool: dict | None = None) -> ForwardDynamics:
     """The forward dynamics of M dv/dt = G: the tree's LTDL when M has a tree pattern and it needs at most
-    LTDL_GAIN of the dense operations, else dense; `force` (DENSE or LTDL) overrides the counts (LTDL still
-    needs the pattern: ValueError without)."""
+    LTDL_GAIN of the dense operations, else dense; `force` (DENSE, LTDL or ABA) overrides the counts (LTDL
+    still needs the pattern, ABA its derivation: ValueError without). `aba` (aba.ArticulatedBody or None),
+    G and `pool` (the model's intermediates) put ABA among the alternatives: then each count is that of
+    the whole dv/dt (module docstring) and ABA is chosen when it is the lowest by ABA_GAIN."""
     n = M.rows
     tree = tree_of(pattern_of(M))
     ops = {DENSE: dense_operations(n), LTDL: None if tree is None else ltdl_operations(tree[0])}
     if force == LTDL and tree is None:
         raise ValueError("M has no tree pattern: the LTDL factorization would fill in")
+    if force == ABA and aba is None:
+        raise ValueError("the articulated-body algorithm does not apply to this model")
     if force is not None:
         chosen = force
     else:
         chosen = LTDL if tree is not None and ops[LTDL] <= LTDL_GAIN * ops[DENSE] else DENSE
+    if pool is not None:
+        assembly = reached_operations(list(M.upper_triangular()) + list(G), pool)
+        ops = {k: None if x is None else x + assembly for k, x in ops.items()}
+        ops[ABA] = None
+        if aba is not None:
+            ops[ABA] = reached_operations(aba.vdot, {**pool, **dict(aba.assignments)})
+            if force is None and ops[ABA] <= ABA_GAIN * ops[chosen]:
+                chosen = ABA
     parent, order = tree if tree is not None and chosen == LTDL else ([], [])
     return ForwardDynamics(chosen, parent, order, ops)
