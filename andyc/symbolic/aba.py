@@ -25,7 +25,9 @@ generalized force of every element other than a body (forces, torques, dampers, 
 G of dynamics.py, the same terms the dense path adds), so dv/dt = M^-1 G exactly. X_i^T I^a X_i is formed
 in blocks (rotate by E, then shift by r: A + r~ B'^T - B' r~ - r~ C' r~, B' + r~ C', C'), every
 intermediate an emitted symbol (no expression grows along the tree), symmetric ones by their upper
-triangle; D_i^-1 by its LDL^T factors written out (n_i = 1: one division; a floating base: 6 x 6).
+triangle; D_i^-1 by its LDL^T factors written out (n_i = 1: one division; a floating base: 6 x 6). Where a
+column of S_i is a unit vector e_k (a joint about or along one of the link's own axes), I^a's row and column k
+are zero exactly (I^a S_i = U_i - U_i D_i^-1 D_i = 0), so they are written as zeros, not computed to rounding.
 
 Applies to an unconstrained tree of links whose relative motion has its own speeds only: each speed
 enters exactly one link's S_i (revolute, prismatic, any holonomic link of its own coordinates, a floating
@@ -166,6 +168,16 @@ class _Writer:
         return out
 
 
+def _unit_rows(S: sp.Matrix) -> list:
+    """The rows k where a column of S is the unit vector e_k (a joint about or along one of its own axes)."""
+    out = []
+    for j in range(S.cols):
+        nonzero = [k for k in range(S.rows) if S[k, j] != 0]
+        if len(nonzero) == 1 and S[nonzero[0], j] == 1:
+            out.append(nonzero[0])
+    return out
+
+
 def _cross_motion(a, b):
     w, v, w2, v2 = a[:3, 0], a[3:, 0], b[:3, 0], b[3:, 0]
     return _vec(cross(w, w2), cross(w, v2) + cross(v, w2))
@@ -225,27 +237,29 @@ def articulated_body(spec: Spec, terms) -> ArticulatedBody | None:
         bias[link.name] = out.vec(f"{label}c", _cross_motion(vi, link.vJ) + link.cJ)
         IA[link.name] = link.inertia
         pA[link.name] = _cross_force(vi, link.inertia * vi)
-    U, Dinv_u, Dinv_UT, acc, vdot = {}, {}, {}, {"world": _vec(sp.zeros(3, 1), -spec.gravity)}, [None] * n
+    U, D, u, acc, vdot = {}, {}, {}, {"world": _vec(sp.zeros(3, 1), -spec.gravity)}, [None] * n
     for i in reversed(range(len(links))):
         link, label = links[i], f"aba{i}_"
         Ik = out.sym(f"{label}IA", IA[link.name])
         pk = out.vec(f"{label}pA", pA[link.name])
         c = bias[link.name]
         if link.speeds:
-            Uk = out.mat(f"{label}U", Ik * link.S)
-            D = link.S.T * Uk
-            uk = out.vec(f"{label}u", sp.Matrix([tau[j] for j in link.speeds]) - link.S.T * pk)
-            U[i] = Uk
+            U[i] = out.mat(f"{label}U", Ik * link.S)
+            D[i] = link.S.T * U[i]
+            u[i] = out.vec(f"{label}u", sp.Matrix([tau[j] for j in link.speeds]) - link.S.T * pk)
             if len(link.speeds) == 1:
-                inv = out.emit.scalar(f"{label}Dinv", 1 / D[0, 0])
-                Dinv_UT[i], Dinv_u[i] = Uk.T * inv, uk * inv
-            else:
-                Dinv_UT[i], Dinv_u[i] = out.solve(f"{label}DU", D, Uk.T), out.solve(f"{label}Du", D, uk)
+                D[i] = out.emit.scalar(f"{label}Dinv", 1 / D[i][0, 0])     # (kept as D^-1)
         if link.parent == "world":
             continue
         if link.speeds:
-            Ia = out.sym(f"{label}Ia", Ik - U[i] * Dinv_UT[i])
-            pa = Ia * c + pk + U[i] * Dinv_u[i]
+            # W = U D^-1: I^a = I^A - W U^T, p^a = p^A + I^a c + W u
+            W = (U[i] * D[i] if len(link.speeds) == 1 else out.solve(f"{label}W", D[i], U[i].T).T)
+            W = out.mat(f"{label}W", W)
+            Ia = Ik - W * U[i].T
+            for k in _unit_rows(link.S):        # I^a S = U - U D^-1 D = 0: exactly, not by rounding
+                Ia[k, :], Ia[:, k] = sp.zeros(1, 6), sp.zeros(6, 1)
+            Ia = out.sym(f"{label}Ia", Ia)
+            pa = Ia * c + pk + W * u[i]
         else:
             Ia, pa = Ik, pk + Ik * c
         IA[link.parent] = IA[link.parent] + _inertia_to_parent(link, Ia, out, f"{label}X")
@@ -254,7 +268,9 @@ def articulated_body(spec: Spec, terms) -> ArticulatedBody | None:
         label = f"aba{i}_"
         a1 = out.vec(f"{label}a1", _motion(link, acc[link.parent]) + bias[link.name])
         if link.speeds:
-            dv = out.vec(f"{label}dv", Dinv_u[i] - Dinv_UT[i] * a1)
+            rhs = out.vec(f"{label}r", u[i] - U[i].T * a1)
+            dv = rhs * D[i] if len(link.speeds) == 1 else out.solve(f"{label}dv", D[i], rhs)
+            dv = out.vec(f"{label}dv", dv)
             for j, e in zip(link.speeds, dv):
                 vdot[j] = e
             acc[link.name] = out.vec(f"{label}a", a1 + link.S * dv)
