@@ -53,7 +53,7 @@ def derive(spec: Spec) -> SymbolicModel:
     rates = {sym: rate for K in kin.values() for sym, rate in K.signal_rates.items()}
     # ABA (aba.py) for the unconstrained rhs, chosen from the operation counts of the whole dv/dt.
     aba = articulated_body(spec, terms) if not spec.constraints else None
-    forward = choose(M, aba=aba, G=G, pool=dict(emit.assignments)) if aba is not None else choose(M)
+    forward = choose(M, aba=aba, G=G, pool=dict(emit.assignments)) if not spec.constraints else choose(M)
     return SymbolicModel(
         spec=spec, t=TIME,
         q=[c.q for c in spec.coordinates], v=spec.speed_symbols,

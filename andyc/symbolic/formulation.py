@@ -24,7 +24,7 @@ other use of M (projection, impacts, energy, linearization), keep M.
 The operation counts are those of the numerical kernels (andyc/numerics/linalg.py: cholesky with
 solve_lower and solve_upper, ltdl with ltdl_solve), a multiplication, an addition, a division or a
 square root counting one: the same for every state, from M's pattern alone; with the symbolic
-assembly of M and G added (count_ops of the intermediates they reach, before cse) when ABA is among the
+assembly of M and G added (the operations of the intermediates they reach, before cse) when ABA is among the
 alternatives, whose own count is that of its intermediates the same way: all three then count the whole
 of dv/dt.
 """
@@ -42,7 +42,8 @@ LTDL_GAIN = 0.6     # the tree factorization is chosen when it needs at most thi
                     # stream through rows, the tree's reads its parents from a table. Measured (bench/large.py,
                     # kernels): on chains (0.69 .. 0.96 of the operations) the tree's is 1.0 .. 2x slower,
                     # on a quadruped's tree (0.44) and a humanoid's (0.22) 0.3 .. 0.6x the time.
-ABA_GAIN = 1.0     # ABA is chosen when its count is at most this fraction of the chosen factorization's
+ABA_GAIN = 0.75    # ABA is chosen when its count is at most this fraction of the chosen factorization's: where
+                   # the counts are about even (the double pendulum, the swing bar) the model keeps M's path
 
 
 @dataclass
@@ -63,7 +64,10 @@ class ForwardDynamics:
                 DENSE: "dense Cholesky of M"}[self.chosen]
         depth = f"; tree depth {max(_depths(self.parent)) + 1}" if self.parent else ""
         note = "; flows with constraint rows: dense (the Gram solves and the projection use its factor)" if rows else ""
-        kind = "operations of dv/dt" if ABA in self.operations else "factor + solve operations"
+        if ABA in self.operations:
+            kind = "operations of dv/dt"
+        else:
+            kind, ops = "factor + solve operations", ops + f", {ABA} n/a (constraint rows: M is needed)"
         return f"forward dynamics: {what}{depth}; {kind}: {ops}{note}"
 
 
@@ -122,19 +126,32 @@ def pattern_of(M: sp.Matrix) -> list[set]:
     return [{j for j in range(n) if j != i and (M[i, j] != 0 or M[j, i] != 0)} for i in range(n)]
 
 
+def _operations(expr) -> int:
+    """Arithmetic operations of expr as written: an n-ary sum or product n - 1, a power or a function one (a
+    product by -1, a negation, counts one). Close to sp.count_ops, without its cost (it is called on every
+    intermediate M reaches)."""
+    total = 0
+    for node in sp.preorder_traversal(expr):
+        if node.is_Add or node.is_Mul:
+            total += len(node.args) - 1
+        elif node.is_Pow or node.is_Function:
+            total += 1
+    return total
+
+
 def reached_operations(exprs, pool: dict) -> int:
-    """count_ops of `exprs` and of the intermediates of `pool` they reach (before cse)."""
+    """Operations (_operations) of `exprs` and of the intermediates of `pool` they reach (before cse)."""
     seen, stack, total = set(), [], 0
     for e in exprs:
         e = sp.sympify(e)
-        total += sp.count_ops(e)
+        total += _operations(e)
         stack.extend(e.free_symbols)
     while stack:
         s = stack.pop()
         if s in seen or s not in pool:
             continue
         seen.add(s)
-        total += sp.count_ops(pool[s])
+        total += _operations(pool[s])
         stack.extend(pool[s].free_symbols)
     return int(total)
 
@@ -144,8 +161,8 @@ def choose(M: sp.Matrix, force: str | None = None, aba=None, G: sp.Matrix | None
     """The forward dynamics of M dv/dt = G: the tree's LTDL when M has a tree pattern and it needs at most
     LTDL_GAIN of the dense operations, else dense; `force` (DENSE, LTDL or ABA) overrides the counts (LTDL
     still needs the pattern, ABA its derivation: ValueError without). `aba` (aba.ArticulatedBody or None),
-    G and `pool` (the model's intermediates) put ABA among the alternatives: then each count is that of
-    the whole dv/dt (module docstring) and ABA is chosen when it is the lowest by ABA_GAIN."""
+    G and `pool` (the model's intermediates) count the whole dv/dt (module docstring), ABA's too where it
+    applies (`aba` not None), and ABA is chosen when its count is at most ABA_GAIN of the other's."""
     n = M.rows
     tree = tree_of(pattern_of(M))
     ops = {DENSE: dense_operations(n), LTDL: None if tree is None else ltdl_operations(tree[0])}
