@@ -44,6 +44,8 @@ LTDL_GAIN = 0.6     # the tree factorization is chosen when it needs at most thi
                     # on a quadruped's tree (0.44) and a humanoid's (0.22) 0.3 .. 0.6x the time.
 ABA_GAIN = 0.75    # ABA is chosen when its count is at most this fraction of the chosen factorization's: where
                    # the counts are about even (the double pendulum, the swing bar) the model keeps M's path
+ABA_SAVING = 100   # ... and saves at least this many operations: below, a few nanoseconds per call, not worth
+                   # results that differ in the last bits (a 1-DOF pendulum: 27 against 9)
 
 
 @dataclass
@@ -162,7 +164,8 @@ def choose(M: sp.Matrix, force: str | None = None, aba=None, G: sp.Matrix | None
     LTDL_GAIN of the dense operations, else dense; `force` (DENSE, LTDL or ABA) overrides the counts (LTDL
     still needs the pattern, ABA its derivation: ValueError without). `aba` (aba.ArticulatedBody or None),
     G and `pool` (the model's intermediates) count the whole dv/dt (module docstring), ABA's too where it
-    applies (`aba` not None), and ABA is chosen when its count is at most ABA_GAIN of the other's."""
+    applies (`aba` not None), and ABA is chosen when its count is at most ABA_GAIN of the other's and it
+    saves at least ABA_SAVING operations."""
     n = M.rows
     tree = tree_of(pattern_of(M))
     ops = {DENSE: dense_operations(n), LTDL: None if tree is None else ltdl_operations(tree[0])}
@@ -180,7 +183,7 @@ def choose(M: sp.Matrix, force: str | None = None, aba=None, G: sp.Matrix | None
         ops[ABA] = None
         if aba is not None:
             ops[ABA] = reached_operations(aba.vdot, {**pool, **dict(aba.assignments)})
-            if force is None and ops[ABA] <= ABA_GAIN * ops[chosen]:
+            if force is None and ops[ABA] <= ABA_GAIN * ops[chosen] and ops[chosen] - ops[ABA] >= ABA_SAVING:
                 chosen = ABA
     parent, order = tree if tree is not None and chosen == LTDL else ([], [])
     return ForwardDynamics(chosen, parent, order, ops)
