@@ -307,6 +307,8 @@ def test_tree_formulation_equals_dense(robot):
     assert len(module.MASS_ORDER) == module.NV, f"{name}: M has no tree pattern"
     if ROBOTS[name][1] == "floating":
         assert module.FORMULATION in ("ltdl", "aba") and (module.NT == module.NV) == (module.FORMULATION == "ltdl")
+    if name == "solo12":        # (so the floating base's ABA is checked here against the dense path and pin.aba)
+        assert module.FORMULATION == "aba" and module.NB == module.NV
     rng = np.random.default_rng(27)
     n, nq = module.NV, module.NQ
     for _ in range(5):
