@@ -2,7 +2,9 @@
 compiled loop, `pin.aba` and MuJoCo's `mj_forward` from Python), RK4 steps/s against MuJoCo's RK4 C loop
 (`mj_step` with nstep), the URDF robots solo12 and g1, and the IFToMM A02 N-four-bar (us per projection
 step, build time by stage, B0 against the reduced exact motion; bench/large_models.py); and the factor +
-solve kernels alone, dense against the tree's LTDL, which the choice of formulation rests on.
+solve kernels alone, dense against the tree's LTDL, which the choice of formulation rests on. Each chain row
+says which formulation the build chose (dense, ltdl or aba: andyc/symbolic/formulation.py); a robot's line
+times M, G + dense, M, G + LTDL and, when chosen, the articulated-body algorithm's leaf, in the same rounds.
 
 On a loaded machine absolute times move: every figure comes from `--rounds` alternated rounds (andyc, then
 each peer, then andyc again ...), printed as min .. max, and ratios are taken within a round.
