@@ -76,7 +76,9 @@ def _spatial_inertia(m, c: sp.Matrix, Ic: sp.Matrix) -> sp.Matrix:
     return sp.Matrix(sp.BlockMatrix([[Ic + m * cx * cx.T, m * cx], [m * cx.T, m * sp.eye(3)]]))
 
 
-def _links(spec: Spec, terms) -> list | None:
+def _links(spec: Spec) -> list | None:
+    """The links (moving frames, parents first) with their joints and inertias, or None when a speed moves two
+    links or none."""
     q = [c.q for c in spec.coordinates]
     v = spec.speed_symbols
     n = len(v)
@@ -219,7 +221,7 @@ def articulated_body(spec: Spec, terms) -> ArticulatedBody | None:
     or None when it does not apply (module docstring)."""
     if spec.constraints:
         return None
-    links = _links(spec, terms)
+    links = _links(spec)
     if links is None:
         return None
     n = len(spec.speed_symbols)
