@@ -2,7 +2,9 @@
 compiled loop, `pin.aba` and MuJoCo's `mj_forward` from Python), RK4 steps/s against MuJoCo's RK4 C loop
 (`mj_step` with nstep), the URDF robots solo12 and g1, and the IFToMM A02 N-four-bar (us per projection
 step, build time by stage, B0 against the reduced exact motion; bench/large_models.py); and the factor +
-solve kernels alone, dense against the tree's LTDL, which the choice of formulation rests on.
+solve kernels alone, dense against the tree's LTDL, which the choice of formulation rests on. Each chain row
+says which formulation the build chose (dense, ltdl or aba: andyc/symbolic/formulation.py); a robot's line
+times M, G + dense, M, G + LTDL and, when chosen, the articulated-body algorithm's leaf, in the same rounds.
 
 On a loaded machine absolute times move: every figure comes from `--rounds` alternated rounds (andyc, then
 each peer, then andyc again ...), printed as min .. max, and ratios are taken within a round.
@@ -131,7 +133,7 @@ def chain_section(tmp: Path, sizes, rounds: int) -> None:
         ratios = [_spread(_ratios(times, "andyc", k)) if k in times else "-" for k in ("pin", "mujoco")]
         rk4 = _spread(rk4_ratios(model, mj, rounds)) if mj is not None else "-"
         print(f"{n:>3} {build:>8.1f} {cells[0]:>14} {cells[1]:>14} {cells[2]:>14} {ratios[0]:>12} {ratios[1]:>12} "
-              f"{rk4:>17}  {agree}", flush=True)
+              f"{rk4:>17}  {agree}; {model.module.FORMULATION}", flush=True)
     print("RK4 andyc/MuJoCo: andyc's RK4 steps/s (andyc.simulate, dt = 1e-3, 5 s, logging every 1000 steps) over "
           "MuJoCo's (mj_step with nstep = 5000, integrator RK4), per round; > 1: andyc faster.")
 
@@ -175,8 +177,9 @@ def rk4_ratios(model, mj, rounds: int, t_end: float = 5.0, dt: float = 1e-3) -> 
 
 def formulation_loops(model) -> dict:
     """name -> timer (us per evaluation) of M dv/dt = G solved both ways in the same build: the generated M and G
-    (the leaf `dynamics`) then the dense Cholesky, or the tree's LTDL (when M has a tree): the formulation's
-    gain alone, A/B in one process."""
+    (the leaf `dynamics`) then the dense Cholesky, or the tree's LTDL (when M has a tree), or the articulated-body
+    algorithm's leaf `forward_dynamics` (when the build chose it: no M): the formulation's gain alone, A/B in one
+    process."""
     numerics = model.numerics
     call, borrowed, linalg = numerics.model.call, numerics.model.borrowed, numerics.linalg
     cholesky_, lower, upper = linalg.cholesky, linalg.solve_lower, linalg.solve_upper
@@ -208,6 +211,16 @@ def formulation_loops(model) -> dict:
             acc += G[0]
         return acc
 
+    @njit(cache=False)
+    def aba(n, m, w, x, u, p, d):
+        x, u, p, d, M, G = borrowed(x), borrowed(u), borrowed(p), borrowed(d), w.M, w.G
+        acc = 0.0
+        for _ in range(n):
+            x[0] += 1e-12
+            call(m.forward_dynamics, (0.0, x, u, p, d, M, G))
+            acc += G[0]
+        return acc
+
     (m, w, x, u, p, d, _), keep = _rhs_arguments(model)
 
     def timed(f, *extra):
@@ -221,6 +234,8 @@ def formulation_loops(model) -> dict:
     out = {"dense": timed(dense)}
     if len(order):
         out["ltdl"] = timed(tree, parent, order)
+    if getattr(model.module, "NB", 0):
+        out["aba"] = timed(aba)
     return out
 
 
@@ -254,7 +269,9 @@ def robot_section(tmp: Path, names, rounds: int) -> None:
         print(f"  andyc rhs {_spread(times['andyc'])} us, pin.aba {_spread(times['pin'])} us, andyc/pin.aba "
               f"{_spread(_ratios(times, 'andyc', 'pin'))}; M, G + dense {_spread(times['dense'])} us"
               + (f", M, G + ltdl {_spread(times['ltdl'])} us, ltdl/dense {_spread(_ratios(times, 'ltdl', 'dense'))}"
-                 if "ltdl" in times else ""), flush=True)
+                 if "ltdl" in times else "")
+              + (f", ABA {_spread(times['aba'])} us, ABA/pin.aba {_spread(_ratios(times, 'aba', 'pin'))}, ABA/dense "
+                 f"{_spread(_ratios(times, 'aba', 'dense'))}" if "aba" in times else ""), flush=True)
 
 
 def _solves(model) -> dict:

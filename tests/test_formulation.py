@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from andyc.numerics.linalg import cholesky, ltdl, ltdl_solve, solve_lower, solve_upper
-from andyc.symbolic.formulation import DENSE, LTDL, dense_operations, ltdl_operations, tree_of
+from andyc.symbolic.formulation import ABA, DENSE, LTDL, dense_operations, ltdl_operations, tree_of
 from tests.support import MODELS
 
 SHIPPED = sorted(p.stem for p in MODELS.glob("*.yaml"))
@@ -119,7 +119,7 @@ def test_shipped_models_tree_formulation_equals_dense(shipped):
     module = shipped.module
     if len(module.MASS_ORDER) == 0:
         pytest.skip(f"{module.NAME}: M has no tree pattern (the dense path only)")
-    assert module.FORMULATION in (DENSE, LTDL) and (module.NT > 0) == (module.FORMULATION == LTDL)
+    assert module.FORMULATION in (DENSE, LTDL, ABA) and (module.NT > 0) == (module.FORMULATION == LTDL)
     rng = np.random.default_rng(27)
     x0 = module.initial_state()
     nq, nv = module.NQ, module.NV

@@ -300,12 +300,15 @@ def test_forward_dynamics_equals_aba(robot):
 def test_tree_formulation_equals_dense(robot):
     """Issue 27: every robot's M has the tree pattern, and dv/dt = M^-1 G by its LTDL (forced on, also where the
     operation counts chose dense) equals the dense Cholesky path's to 1e-12; the rhs (the chosen one) too.
-    M and G come from the same generated code either way. The floating-base robots get LTDL by the counts."""
+    M and G come from the same generated code either way. The floating-base robots get LTDL or the
+    articulated-body algorithm (tests/test_aba.py) by the counts, not the dense path."""
     name, _, _, module = robot
     linalg = module.NUMERICS.linalg
     assert len(module.MASS_ORDER) == module.NV, f"{name}: M has no tree pattern"
     if ROBOTS[name][1] == "floating":
-        assert module.FORMULATION == "ltdl" and module.NT == module.NV
+        assert module.FORMULATION in ("ltdl", "aba") and (module.NT == module.NV) == (module.FORMULATION == "ltdl")
+    if name == "solo12":        # (so the floating base's ABA is checked here against the dense path and pin.aba)
+        assert module.FORMULATION == "aba" and module.NB == module.NV
     rng = np.random.default_rng(27)
     n, nq = module.NV, module.NQ
     for _ in range(5):

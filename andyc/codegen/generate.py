@@ -32,7 +32,7 @@ from andyc.codegen.leaves import leaves, state_names
 from andyc.codegen.printer import to_code
 from andyc.numerics.compiler import library_file
 from andyc.spec.display import display
-from andyc.symbolic.formulation import DENSE, LTDL, choose, pattern_of, tree_of
+from andyc.symbolic.formulation import ABA, LTDL, choose, pattern_of, tree_of
 from andyc.symbolic.model import SymbolicModel
 from andyc.symbolic import sparse_rows
 
@@ -95,10 +95,11 @@ def _slip_tables(model: SymbolicModel) -> dict:
 def _forward_context(model: SymbolicModel) -> dict:
     """The tree of M (when it has one) and the formulation the runtime uses (andyc.symbolic.formulation)."""
     fwd = model.forward or choose(model.M)
-    tree = tree_of(pattern_of(model.M)) if fwd.chosen == DENSE else (fwd.parent, fwd.order)
+    tree = (fwd.parent, fwd.order) if fwd.chosen == LTDL else tree_of(pattern_of(model.M))
     parent, order = tree if tree is not None else ([], [])
     return {"formulation": fwd.chosen, "forward_operations": fwd.operations, "mass_parent": parent,
-            "mass_order": order, "nt": len(order) if fwd.chosen == LTDL else 0}
+            "mass_order": order, "nt": len(order) if fwd.chosen == LTDL else 0,
+            "nb": model.dof if fwd.chosen == ABA else 0}
 
 
 def _constrained_context(model: SymbolicModel) -> dict:

@@ -15,12 +15,15 @@ import sympy as sp
 from andyc.codegen.c_leaves import NoC, c_lines
 from andyc.codegen.printer import function_body
 from andyc.numerics.layout import scratch_layout
+from andyc.symbolic.formulation import ABA
 from andyc.symbolic.model import SymbolicModel
 
 STATE = "t, x, u, p, d"
 DOCS = {
     "dynamics": "M (NV, NV) and G (NV,) with M dv/dt = G (ANDY eq. 8); then the power of each element that does work "
                 "into G[NV:] (andyc/symbolic/work.py).",
+    "forward_dynamics": "dv/dt into G[:NV] by the articulated-body algorithm (andyc/symbolic/aba.py), no M; then the "
+                        "power of each element that does work into G[NV:], as `dynamics`. M is left as it is.",
     "dynamics_constraints": "`dynamics` and `constraints_into` in one pass that shares their subexpressions.",
     "constraints_into": "phi (NH,), c (NC,: dphi/dt, then the nonholonomic rows), A = dc/dv (NC, NV), kappa "
                         "(NC,) with dc/dt = A dv/dt + kappa (ANDY eq. 11), into the rows of the scratch S "
@@ -139,6 +142,10 @@ def leaves(model: SymbolicModel) -> Leaves:
             + [(S(at['A'] + i, j), cons.A[i, j]) for i in range(cons.nc) for j in range(n)]
             + [(S(at['kappa'], i), e) for i, e in enumerate(cons.kappa)])
     out.add("dynamics", f"{STATE}, M, G", mass + force + mirror)
+    if model.forward is not None and model.forward.chosen == ABA:
+        out.pool.update(model.aba.assignments)
+        out.add("forward_dynamics", f"{STATE}, M, G",
+                [(f"G[{i}]", e) for i, e in enumerate(model.aba.vdot)] + force[n:])
     out.add("energy", STATE, [("e", model.energy)], returns="e")
     out.add("power", STATE, [("w", model.power)], returns="w")
     frames = list(model.frame_positions)

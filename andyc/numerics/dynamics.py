@@ -33,6 +33,12 @@ def rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode):
         if status == OK:
             status = constraint_force(model, p, d, flow, mode, M, G, S)
             upper(model, M, G)
+    elif model.nb > 0:                  # a by the articulated-body algorithm (Featherstone 2008), no M
+        call(model.forward_dynamics, (t, x, u, p, d, M, G))
+        status = OK
+        for i in range(nv):             # (a singular articulated inertia divides by zero)
+            if not math.isfinite(G[i]):
+                status = SINGULAR_MASS
     elif model.nt > 0:                  # a = M^-1 G along the tree of M (LTDL, Featherstone 2005)
         call(model.dynamics, (t, x, u, p, d, M, G))
         status = OK if ltdl(M, model.mass_parent, model.mass_order, nv, 0.0) else SINGULAR_MASS

@@ -39,6 +39,8 @@ marked STATE; k is a jump's index; S is the scratch of layout.py:
     closed_form(t, u, p, x)                   the exact solution the model declares, into x
     energy_law(k, STATE, grad) -> Phi_e       flow k's declared energy law and dPhi_e/dv into grad (NV); NaN
                                               where the flow keeps the built-in law (dynamics.project)
+    forward_dynamics(STATE, M, G)             dv/dt into G[:NV] by the articulated-body algorithm, where the
+                                              model has it (NB = NV), then the powers into G[NV:] as dynamics
     drive_power(STATE, xdot)                  the power driving the links that depend on t, from dv/dt in xdot,
                                               into xdot[NX + its work slot] (integrator.stage_powers)
 
@@ -55,7 +57,8 @@ import numpy as np
 from .compiler import NUMBA, cfunc, jit
 from .layout import RETURNS, VECTORS, scratch_layout
 
-SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj", "nw", "nt")   # nt: speeds under LTDL (or 0)
+SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj", "nw", "nt", "nb")   # nt: speeds under LTDL
+                                                                                       # (or 0), nb: under ABA
 ROWS = ("s_a", "s_c", "s_w") + tuple(f"s_{name}" for name in VECTORS)  # the first row of each part of S
 TABLES = ("quaternions",                            # index in x of each quaternion signal's w
           "flow_rows", "flow_nrows", "flow_nhrows",  # active rows of each flow (holonomic first), then -1
@@ -68,7 +71,7 @@ TABLES = ("quaternions",                            # index in x of each quatern
           "row_ptr", "row_cols", "flow_envelope")    # the rows' sparsity (sparse_rows.py; row_ptr empty: dense)
 LEAF_NAMES = ("dynamics", "dynamics_constraints", "constraints_into", "signal_rates", "energy", "power",
               "frame_poses", "constraint_gains", "restitution", "guard", "guard_rate", "enabled", "reset",
-              "flow_inputs", "closed_form", "energy_law", "drive_power")
+              "flow_inputs", "closed_form", "energy_law", "drive_power", "forward_dynamics")
 WORK = {    # the arrays of Work: name -> shape, from the sizes and the scratch layout
     "M": ("nv", "nv"), "G": ("ng",), "S": ("rows", "width"),
     "k": (4, "na"), "xt": ("na",), "x1": ("na",), "xb": ("na",), "xc": ("na",), "x_event": ("na",),
@@ -104,6 +107,7 @@ if NUMBA:
         "closed_form": types.void(_f8, _P, _P, _P),
         "energy_law": _f8(_i8, *_STATE, _P),
         "drive_power": types.void(*_STATE, _P),
+        "forward_dynamics": types.void(*_STATE, _P, _P),
     }
     INPUTS_SIGNATURE = _i8(_f8, _ARRAYS, _ARRAYS, _ARRAYS, _i8, _ARRAYS, _ARRAYS)
 
@@ -251,9 +255,9 @@ def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_sl
            jump_contact, row_work, mass_parent, mass_order, row_ptr, row_cols, flow_envelope, leaves):
     (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
      constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form, energy_law,
-     drive_power) = leaves
+     drive_power, forward_dynamics) = leaves
     return Model(sizes[0], sizes[1], sizes[2], sizes[3], sizes[4], sizes[5], sizes[6], sizes[7], sizes[8], sizes[9],
-                 sizes[10], sizes[11],
+                 sizes[10], sizes[11], sizes[12],
                  rows[0], rows[1], rows[2], rows[3], rows[4], rows[5], rows[6], rows[7], rows[8], rows[9], rows[10],
                  rows[11], rows[12],
                  borrowed(quaternions), borrowed(flow_rows), borrowed(flow_nrows), borrowed(flow_nhrows),
@@ -264,7 +268,7 @@ def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_sl
                  borrowed(row_ptr), borrowed(row_cols), borrowed(flow_envelope),
                  dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
                  constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form,
-                 energy_law, drive_power,
+                 energy_law, drive_power, forward_dynamics,
                  (quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, flow_slip_dir, impact_rows,
                   impact_nrows,
                   jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact,

@@ -69,3 +69,8 @@ def energy_law(k, t, x, u, p, d, grad):
 @leaf("drive_power")
 def drive_power(t, x, u, p, d, xdot):
     return None
+
+
+@leaf("forward_dynamics")
+def forward_dynamics(t, x, u, p, d, M, G):
+    return None

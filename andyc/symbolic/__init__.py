@@ -7,8 +7,9 @@
     reduce.py       bodies fixed to one moving frame merged into one
     work.py         the power of every element that does work (the energy balance E - E0 - W)
     emitter.py      the ordered intermediate assignments;  model.py: SymbolicModel and its summary
-    formulation.py  the forward dynamics each model gets: dense Cholesky of M, or LTDL along its tree
+    formulation.py  the forward dynamics each model gets: dense Cholesky of M, LTDL along its tree, or ABA
     sparse_rows.py  the constrained solve each model gets: dense, or along the tree and the rows' supports
+    aba.py          Featherstone's articulated-body algorithm, derived symbolically (dv/dt without M)
     linearize.py    A, B by exact forward-mode derivatives;  eom.py: the equations written out for reading
 """
 
@@ -18,6 +19,7 @@ import time
 
 from andyc.spec.expressions import TIME
 from andyc.spec.model import Spec
+from andyc.symbolic.aba import articulated_body
 from andyc.symbolic.constraints import FrameQuantities, constraint_terms
 from andyc.symbolic.dynamics import assemble, element_terms
 from andyc.symbolic.emitter import Emitter
@@ -50,6 +52,9 @@ def derive(spec: Spec) -> SymbolicModel:
     laws = energy_law_terms(spec, quantities)
     work_names, powers, row_work, prescribed = work_slots(spec, terms, constraints)
     rates = {sym: rate for K in kin.values() for sym, rate in K.signal_rates.items()}
+    # ABA (aba.py) for the unconstrained rhs, chosen from the operation counts of the whole dv/dt.
+    aba = articulated_body(spec, terms) if not spec.constraints else None
+    forward = choose(M, aba=aba, G=G, pool=dict(emit.assignments)) if not spec.constraints else choose(M)
     return SymbolicModel(
         spec=spec, t=TIME,
         q=[c.q for c in spec.coordinates], v=spec.speed_symbols,
@@ -60,7 +65,7 @@ def derive(spec: Spec) -> SymbolicModel:
         frame_positions={f.name: kin[f.name].r for f in spec.frames if not f.internal},
         frame_rotations={f.name: kin[f.name].R for f in spec.frames if not f.internal},
         elements=terms, powers=powers, work_names=work_names, row_work=row_work,
-        constraints=constraints, hybrid=hybrid, energy_laws=laws, prescribed=prescribed, forward=choose(M), derive_seconds=time.perf_counter() - start)
+        constraints=constraints, hybrid=hybrid, energy_laws=laws, prescribed=prescribed, forward=forward, aba=aba, derive_seconds=time.perf_counter() - start)
 
 
 __all__ = ["derive", "SymbolicModel"]

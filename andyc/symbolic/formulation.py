@@ -16,10 +16,17 @@ is the latest of i's neighbours before it. The factorization is exact (no fill-i
 neighbour of i before it lies on i's chain i, lambda(i), lambda(lambda(i)), ... (then eliminating
 a speed only updates entries between its own ancestors); otherwise the dense path is used.
 
+The third, Featherstone's articulated-body algorithm (andyc/symbolic/aba.py), gives dv/dt without M: its
+cost grows like the number of links, M's symbolic assembly like n^2 .. n^3 on a chain. It applies to an
+unconstrained tree whose links each have their own speeds (aba.py); flows with constraint rows, and every
+other use of M (projection, impacts, energy, linearization), keep M.
+
 The operation counts are those of the numerical kernels (andyc/numerics/linalg.py: cholesky with
 solve_lower and solve_upper, ltdl with ltdl_solve), a multiplication, an addition, a division or a
-square root counting one: the same for every state, from M's pattern alone. Both run after the same
-generated M and G (the leaf `dynamics`), whose count is the model's OPERATIONS["dynamics"].
+square root counting one: the same for every state, from M's pattern alone; with the symbolic
+assembly of M and G added (the operations of the intermediates they reach, before cse) when ABA is among the
+alternatives, whose own count is that of its intermediates the same way: all three then count the whole
+of dv/dt.
 """
 
 from __future__ import annotations
@@ -28,13 +35,17 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-DENSE, LTDL = "dense", "ltdl"
-FORMULATIONS = (DENSE, LTDL)
+DENSE, LTDL, ABA = "dense", "ltdl", "aba"
+FORMULATIONS = (DENSE, LTDL, ABA)
 LTDL_GAIN = 0.6     # the tree factorization is chosen when it needs at most this fraction of the dense
                     # operations: the dense kernels run with sizes as constants up to n = 8 (unrolled) and
                     # stream through rows, the tree's reads its parents from a table. Measured (bench/large.py,
                     # kernels): on chains (0.69 .. 0.96 of the operations) the tree's is 1.0 .. 2x slower,
                     # on a quadruped's tree (0.44) and a humanoid's (0.22) 0.3 .. 0.6x the time.
+ABA_GAIN = 0.75    # ABA is chosen when its count is at most this fraction of the chosen factorization's: where
+                   # the counts are about even (the double pendulum, the swing bar) the model keeps M's path
+ABA_SAVING = 100   # ... and saves at least this many operations: below, a few nanoseconds per call, not worth
+                   # results that differ in the last bits (a 1-DOF pendulum: 27 against 9)
 
 
 @dataclass
@@ -48,13 +59,18 @@ class ForwardDynamics:
 
     def describe(self, rows: bool = False) -> str:
         """One line for `andyc check`; `rows`: the model has constraint rows (their flows stay dense)."""
-        ops = ", ".join(f"{name} {'n/a (M has no tree pattern)' if n is None else n}"
-                        for name, n in self.operations.items())
-        what = ("sparse LTDL along the tree of M (Featherstone 2005)" if self.chosen == LTDL
-                else "dense Cholesky of M")
+        why = {LTDL: "n/a (M has no tree pattern)", ABA: "n/a (not a tree of links with their own speeds)"}
+        ops = ", ".join(f"{name} {why[name] if n is None else n}" for name, n in self.operations.items())
+        what = {LTDL: "sparse LTDL along the tree of M (Featherstone 2005)",
+                ABA: "articulated-body algorithm (Featherstone 2008, Table 7.1), no M",
+                DENSE: "dense Cholesky of M"}[self.chosen]
         depth = f"; tree depth {max(_depths(self.parent)) + 1}" if self.parent else ""
         note = "; flows with constraint rows: see the constrained solve" if rows else ""
-        return f"forward dynamics: {what}{depth}; factor + solve operations: {ops}{note}"
+        if ABA in self.operations:
+            kind = "operations of dv/dt"
+        else:
+            kind, ops = "factor + solve operations", ops + f", {ABA} n/a (constraint rows: M is needed)"
+        return f"forward dynamics: {what}{depth}; {kind}: {ops}{note}"
 
 
 def _depths(parent: list) -> list:
@@ -112,18 +128,62 @@ def pattern_of(M: sp.Matrix) -> list[set]:
     return [{j for j in range(n) if j != i and (M[i, j] != 0 or M[j, i] != 0)} for i in range(n)]
 
 
-def choose(M: sp.Matrix, force: str | None = None) -> ForwardDynamics:
+def _operations(expr) -> int:
+    """Arithmetic operations of expr as written: an n-ary sum or product n - 1, a power or a function one (a
+    product by -1, a negation, counts one). Close to sp.count_ops, without its cost (it is called on every
+    intermediate M reaches)."""
+    total = 0
+    for node in sp.preorder_traversal(expr):
+        if node.is_Add or node.is_Mul:
+            total += len(node.args) - 1
+        elif node.is_Pow or node.is_Function:
+            total += 1
+    return total
+
+
+def reached_operations(exprs, pool: dict) -> int:
+    """Operations (_operations) of `exprs` and of the intermediates of `pool` they reach (before cse)."""
+    seen, stack, total = set(), [], 0
+    for e in exprs:
+        e = sp.sympify(e)
+        total += _operations(e)
+        stack.extend(e.free_symbols)
+    while stack:
+        s = stack.pop()
+        if s in seen or s not in pool:
+            continue
+        seen.add(s)
+        total += _operations(pool[s])
+        stack.extend(pool[s].free_symbols)
+    return int(total)
+
+
+def choose(M: sp.Matrix, force: str | None = None, aba=None, G: sp.Matrix | None = None,
+           pool: dict | None = None) -> ForwardDynamics:
     """The forward dynamics of M dv/dt = G: the tree's LTDL when M has a tree pattern and it needs at most
-    LTDL_GAIN of the dense operations, else dense; `force` (DENSE or LTDL) overrides the counts (LTDL still
-    needs the pattern: ValueError without)."""
+    LTDL_GAIN of the dense operations, else dense; `force` (DENSE, LTDL or ABA) overrides the counts (LTDL
+    still needs the pattern, ABA its derivation: ValueError without). `aba` (aba.ArticulatedBody or None),
+    G and `pool` (the model's intermediates) count the whole dv/dt (module docstring), ABA's too where it
+    applies (`aba` not None), and ABA is chosen when its count is at most ABA_GAIN of the other's and it
+    saves at least ABA_SAVING operations."""
     n = M.rows
     tree = tree_of(pattern_of(M))
     ops = {DENSE: dense_operations(n), LTDL: None if tree is None else ltdl_operations(tree[0])}
     if force == LTDL and tree is None:
         raise ValueError("M has no tree pattern: the LTDL factorization would fill in")
+    if force == ABA and aba is None:
+        raise ValueError("the articulated-body algorithm does not apply to this model")
     if force is not None:
         chosen = force
     else:
         chosen = LTDL if tree is not None and ops[LTDL] <= LTDL_GAIN * ops[DENSE] else DENSE
+    if pool is not None:
+        assembly = reached_operations(list(M.upper_triangular()) + list(G), pool)
+        ops = {k: None if x is None else x + assembly for k, x in ops.items()}
+        ops[ABA] = None
+        if aba is not None:
+            ops[ABA] = reached_operations(aba.vdot, {**pool, **dict(aba.assignments)})
+            if force is None and ops[ABA] <= ABA_GAIN * ops[chosen] and ops[chosen] - ops[ABA] >= ABA_SAVING:
+                chosen = ABA
     parent, order = tree if tree is not None and chosen == LTDL else ([], [])
     return ForwardDynamics(chosen, parent, order, ops)

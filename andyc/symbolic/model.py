@@ -9,6 +9,7 @@ import sympy as sp
 from andyc.errors import plural
 from andyc.spec.model import Spec
 from andyc.symbolic.constraints import ConstraintTerms
+from andyc.symbolic.aba import ArticulatedBody
 from andyc.symbolic.formulation import ForwardDynamics
 from andyc.symbolic.hybrid import HybridTerms
 
@@ -45,6 +46,7 @@ class SymbolicModel:
     prescribed: tuple = ()    # (slot, a, b): the power a . dv/dt + b driving the links that depend on t (work.py)
     energy_laws: list = field(default_factory=list)  # per flow: (Phi_e, dPhi_e/dv) of its declared law, or None
     forward: ForwardDynamics | None = None  # how dv/dt = M^-1 G is solved (formulation.py); None: dense
+    aba: ArticulatedBody | None = None      # dv/dt by the articulated-body algorithm (aba.py), where it applies
     derive_seconds: float = 0.0
 
     @property
