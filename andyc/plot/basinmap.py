@@ -19,7 +19,7 @@ def plot_basin(axes: list, classes: np.ndarray, periods: np.ndarray, names: dict
     found = sorted({int(p) for p in np.asarray(periods)[np.asarray(classes) == 2]})
     if found:
         labels[2] = f"orbit of period {', '.join(map(str, found))}"
-    fig = sweep_figure(True, axes, classes, "class", title=title, outcomes={c: labels[c] for c in names if c},
+    fig = sweep_figure(True, axes, classes, "class", title=title, outcomes={c: labels[c] for c in names},   # (every code: the colours go by position)
                        colours=CLASS_COLOURS)
     ax = fig.axes[0]
     marks = np.atleast_2d(np.asarray(marks, dtype=float))
