@@ -129,3 +129,20 @@ def test_bad_basin_requests_are_usage_errors(args, message, shipped_build, tmp_p
     assert result.exit_code == 2, result.output
     assert message in result.stderr and len(result.stderr.strip().splitlines()) == 1, result.stderr
     assert not (tmp_path / "b.zarr").exists() and not (tmp_path / "runs").exists()
+
+
+def test_the_map_draws_each_class_in_its_colour():
+    """Each class's cells take that class's colour (the categorical map goes by position in the codes)."""
+    from matplotlib.colors import to_rgba
+
+    from andyc.analysis.basins import CLASSES
+    from andyc.plot.basinmap import CLASS_COLOURS, basin_figure
+
+    classes = np.array([[1, 3], [2, 4]])
+    fig = basin_figure([("a", np.array([0.0, 1.0])), ("b", np.array([0.0, 1.0]))], classes, np.array([[1, 0], [2, 0]]),
+                       CLASSES, [(0.0, 0.0)])
+    mesh = fig.axes[0].collections[0]
+    for code in (1, 2, 3, 4):
+        assert np.allclose(mesh.cmap(mesh.norm(code)), to_rgba(CLASS_COLOURS[code]))
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert labels == ["cycle", "orbit of period 2", "falls", "other", "cycle (fixed point)"]

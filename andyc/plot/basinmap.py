@@ -15,6 +15,12 @@ def plot_basin(axes: list, classes: np.ndarray, periods: np.ndarray, names: dict
     """Write the basin map to `out` (PNG). axes: [(name, values)] of the grid's two components; classes: the
     codes over the grid; periods: the other orbits' periods (named in the legend); names: {code: class};
     marks: the cycle's visits, a (name_1 value, name_2 value) each."""
+    with write_atomic(out) as tmp:
+        basin_figure(axes, classes, periods, names, marks, title).savefig(tmp, dpi=110)
+
+
+def basin_figure(axes, classes, periods, names, marks, title=""):
+    """The Figure of plot_basin."""
     labels = dict(names)
     found = sorted({int(p) for p in np.asarray(periods)[np.asarray(classes) == 2]})
     if found:
@@ -27,5 +33,4 @@ def plot_basin(axes: list, classes: np.ndarray, periods: np.ndarray, names: dict
     handles, _ = ax.get_legend_handles_labels()
     legend = ax.get_legend()
     ax.legend(handles=list(legend.legend_handles) + handles, loc="best", fontsize=8, framealpha=0.8)
-    with write_atomic(out) as tmp:
-        fig.savefig(tmp, dpi=110)
+    return fig
