@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import andyc
-from andyc.analysis.basins import CYCLE, FALLS, classify, make_basin, start_state
+from andyc.analysis.basins import CYCLE, FALLS, OTHER_ORBIT, classify, make_basin, start_state
 from andyc.analysis.cycles import find_cycle
 from andyc.runtime.sensitivities import load_derivatives
 from tests.support import MODELS
@@ -71,6 +71,21 @@ def test_too_little_speed_falls_back(gait):
     assert slow["run"].state[:, model.state_names.index("y")].min() < 0.5
     # the stance leg swung back: th1 grew (the hip went back up the slope) before it fell
     assert slow["run"].state[-1, model.state_names.index("x")] < x["x"]
+
+
+def test_past_the_period_doubling_a_start_reaches_the_period_two_gait(compiled):
+    """At slope 0.08 rad, past the first period doubling (0.0766 rad, tests/test_continuation.py), the period-1 gait
+    is unstable: a start near it ends on another orbit, of period 2: its step times alternate, two distinct ones
+    that repeat."""
+    model = compiled(MODEL)
+    cycle = find_cycle(model, "strike", parameters={"slope": 0.08})
+    assert cycle.converged and max(abs(cycle.multipliers)) > 1
+    basin = make_basin(model, cycle, steps=100, tol=TOL, t_step=T_STEP, dt=1e-3, event_tol=1e-14, fall=FALL)
+    x = dict(zip(model.state_names, cycle.state))
+    found = classify(model, basin, held(model), [x["th1_dot"] + 0.01, x["th2_dot"]])
+    assert found["class"] == OTHER_ORBIT and found["period"] == 2 and found["distance"] > 100 * TOL
+    steps = np.diff(found["times"])[-6:]
+    assert np.max(np.abs(steps[2:] - steps[:-2])) < 1e-6 and abs(steps[-1] - steps[-2]) > 1e-3
 
 
 def test_starting_states_are_on_the_constraint_manifold_with_the_grid_values(gait):
