@@ -161,3 +161,19 @@ def test_the_map_draws_each_class_in_its_colour():
         assert np.allclose(mesh.cmap(mesh.norm(code)), to_rgba(CLASS_COLOURS[code]))
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert labels == ["cycle", "orbit of period 2", "falls", "other", "cycle (fixed point)"]
+
+
+def test_a_start_that_cannot_meet_the_constraints_is_recorded_failed(gait):
+    """A hip 1.5 leg lengths up cannot have its stance foot on the ground: the worker records the start as failed,
+    class other, with the reason; the batch goes on."""
+    from andyc.analysis.sweeps.worker import Settings, empty_results, record
+    from andyc.runtime.status import FAILED
+
+    model, cycle, basin = gait
+    settings = Settings.of(model, ("y", "th1_dot"), basin.t_step * basin.steps, basin=basin)
+    out = empty_results(model, settings, 2)
+    record(out, 0, model, [], settings, [1.5, -1.0])
+    record(out, 1, model, [], settings, [cycle.state[model.state_names.index("y")], -1.0])
+    assert out["outcome"][0] == FAILED and out["basin"][0] == 4
+    assert out["message"][0].startswith("cannot put the start on the constraint manifold with y, th1_dot held")
+    assert out["outcome"][1] != FAILED and out["basin"][1] in (CYCLE, FALLS)

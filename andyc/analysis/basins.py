@@ -18,7 +18,8 @@ for at most `t_step` seconds), for at most K steps, and is classified:
     other orbit  after K steps, y_K repeats with a period m <= max_period (|P(y_K - y_{K-m})|_inf <= tol,
                  the smallest such m) and lies more than 100 tol from the cycle's visits (so that a point
                  still converging onto the cycle, slowly, is not taken for another orbit)
-    other        none of these within K steps
+    other        none of these within K steps, or a start that could not run (its grid values held, the
+                 constraints cannot be met; a run that raised): its outcome is then "failed", with the message
 
 A point stops as soon as it is classified. The classes, their codes and the period m of an other orbit are
 what the sweep store records (`basin`, `basin_period`, with `basin_steps` the steps run and
@@ -217,6 +218,7 @@ def record_point(out: dict, row: int, model, settings, point) -> None:
         text = str(exc) if isinstance(exc, SimulationError) else f"{type(exc).__name__}: {exc}"
         out["outcome"][row], out["message"][row] = FAILED, printable(text)[:MESSAGE_CHARS]
         out["wall"][row], out["cpu"][row] = time.perf_counter() - start, time.thread_time() - cpu
+        out["basin"][row] = OTHER           # (not 0, "not run": it ran, and could not be classified)
         return
     run = found["run"]
     out["outcome"][row] = outcome(run.status)
