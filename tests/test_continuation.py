@@ -194,7 +194,8 @@ def extrapolated(values):
 
 
 def garcia_stride(z, gamma):
-    """An independent stride function of the simplest walker (beta = 0), written from Garcia et al.'s eq. (2)-(5):
+    """An independent stride function of the simplest walker (beta = 0), Garcia et al.'s equations of motion and
+    heel-strike rule:
     theta'' = sin(theta - gamma), phi'' = sin(theta - gamma) + sin(phi) (theta'^2 - cos(theta - gamma)); heel strike
     at phi = 2 theta past mid-stance (scuffing ignored): theta+ = -theta, theta'+ = cos(2 theta) theta',
     phi'+ = cos(2 theta) (1 - cos 2 theta) theta'. SciPy's DOP853 at 1e-13. (theta, theta') just after a strike ->
