@@ -129,6 +129,8 @@ def test_basin_command_agrees_with_plain_runs(gait, shipped_build, tmp_path):
                 gap = np.abs(run.state[-1, keep] - cycle.state[keep]).max()
                 assert gap < 10 * TOL, (th1_dot, th2_dot, gap)
     assert "classes: cycle " in result.stdout and "wrote " in result.stdout
+    drawn = invoke("plot", store, "-o", tmp_path / "again.png")         # andyc plot STORE: the classes by default
+    assert drawn.exit_code == 0 and (tmp_path / "again.png").stat().st_size > 10_000, drawn.output
 
 
 @pytest.mark.parametrize("args, message", [
