@@ -14,6 +14,7 @@ import pytest
 
 import andyc
 from andyc.analysis.continuation import Continuer
+from andyc.analysis.cycles import find_cycle
 from tests.support import MODELS
 from tests.support.cli import invoke
 from tests.support.gaits import gait_step
@@ -174,3 +175,111 @@ def test_compass_gait_settles_onto_the_branches(doubling):
     assert np.max(np.abs(tail[2:] - tail[:-2])) < 1e-9                  # repeats every two steps
     assert np.min(np.abs(tail[1:] - tail[:-1])) > 5e-3                  # and alternates
     assert np.sort(tail[-2:]) == pytest.approx(np.sort(q2.step_times), abs=1e-8)
+
+
+# ---- the simplest walking model: the published period doubling -------------------------------------------------
+
+SIMPLEST = MODELS / "simplest_walker_step.yaml"
+BETAS = (1e-6, 2e-6)            # foot / hip mass: the paper's beta = 0 by Richardson's extrapolation, 2 f(b) - f(2b)
+# Garcia's simulation code for the paper ("All code by Mariano Garcia ... used to produce results for the paper";
+# its header comment: "initial conditions gam=0.009 long step to 1e-10"): theta, theta' just after a heel strike
+GARCIA_LONG_GAIT = (0.20031090049483, -0.19983247291764)
+PUBLISHED_PD = 0.015            # the abstract: the period-one gait "is stable when 0 < gamma < 0.015 rad"
+
+
+def extrapolated(values):
+    """f(0) from f(beta) and f(2 beta) (the map depends smoothly on beta): 2 f(b) - f(2b), error O(b^2)."""
+    a, b = (np.asarray(v) for v in values)
+    return 2 * a - b
+
+
+def garcia_stride(z, gamma):
+    """An independent stride function of the simplest walker (beta = 0), Garcia et al.'s equations of motion and
+    heel-strike rule:
+    theta'' = sin(theta - gamma), phi'' = sin(theta - gamma) + sin(phi) (theta'^2 - cos(theta - gamma)); heel strike
+    at phi = 2 theta past mid-stance (scuffing ignored): theta+ = -theta, theta'+ = cos(2 theta) theta',
+    phi'+ = cos(2 theta) (1 - cos 2 theta) theta'. SciPy's DOP853 at 1e-13. (theta, theta') just after a strike ->
+    the same after the next, and the step's time."""
+    from scipy.integrate import solve_ivp
+
+    th, thd = z
+    y0 = [th, 2 * th, thd, (1 - math.cos(2 * th)) * thd]
+
+    def rates(t, y):
+        s = math.sin(y[0] - gamma)
+        return [y[2], y[3], s, s + math.sin(y[1]) * (y[2] ** 2 - math.cos(y[0] - gamma))]
+
+    def mid(t, y):
+        return y[0]
+
+    def strike(t, y):
+        return y[1] - 2 * y[0]
+    mid.terminal = strike.terminal = True
+    mid.direction = -1
+    first = solve_ivp(rates, (0, 10), y0, method="DOP853", rtol=1e-13, atol=1e-13, events=mid)
+    second = solve_ivp(rates, (first.t[-1], first.t[-1] + 10), first.y[:, -1], method="DOP853", rtol=1e-13,
+                       atol=1e-13, events=strike)
+    th, _, thd, _ = second.y_events[0][0]
+    return np.array([-th, math.cos(2 * th) * thd]), second.t_events[0][0]
+
+
+def garcia_fixed_point(gamma, z=GARCIA_LONG_GAIT, h=1e-6):
+    """Newton on garcia_stride with central differences: (z*, its eigenvalues, the step time)."""
+    z = np.array(z, float)
+    for _ in range(30):
+        J = np.column_stack([(garcia_stride(z + h * e, gamma)[0] - garcia_stride(z - h * e, gamma)[0]) / (2 * h)
+                             for e in np.eye(2)])
+        r = garcia_stride(z, gamma)[0] - z
+        if np.max(np.abs(r)) < 1e-13:
+            break
+        z = z - np.linalg.solve(J - np.eye(2), r)
+    return z, np.linalg.eigvals(J), garcia_stride(z, gamma)[1]
+
+
+@pytest.fixture(scope="module")
+def simplest(compiled, shipped_build):
+    andyc.build_derivatives(SIMPLEST, shipped_build)
+    return compiled(SIMPLEST)
+
+
+def test_simplest_walker_long_gait_is_garcias(simplest):
+    """The fixed point at gamma = 0.009 (the paper's example slope), extrapolated to beta = 0, against the initial
+    conditions in Garcia's simulation code for Garcia, Chatterjee, Ruina & Coleman, "The simplest walking model:
+    stability, complexity, and scaling", J. Biomech. Eng. 120(2):281-288 (1998), given there "to 1e-10"; the step
+    time and the multipliers against garcia_stride (SciPy, the paper's equations, central differences). (The
+    eigenvalues in the code's comment, -0.19121 +/- 0.55633i, are not compared: the paper's equations integrated
+    here give -0.190100 +/- 0.557599i, as andyc does, and agree with the fixed point to 1e-10.)"""
+    found = []
+    for beta in BETAS:
+        cycle = find_cycle(simplest, "strike", parameters={"beta": beta}, tol=1e-9, t_max=10)
+        assert cycle.converged, cycle.message
+        s = dict(zip(cycle.state_names, cycle.state))
+        mu = cycle.multipliers
+        assert abs(mu[2]) < 1e-6         # the swing leg's speed, which the strike takes away as beta -> 0
+        found.append((s["th1"], s["th1_dot"], cycle.period, mu[0], mu[1]))
+    th, thd, period, mu1, mu2 = extrapolated(found)
+    assert abs(th - GARCIA_LONG_GAIT[0]) < 1e-9 and abs(thd - GARCIA_LONG_GAIT[1]) < 1e-9
+    z, eig, step = garcia_fixed_point(0.009)
+    assert np.max(np.abs(z - [th, thd])) < 1e-9 and abs(period - step) < 1e-8
+    assert np.max(np.abs(np.sort_complex(eig) - np.sort_complex([mu1, mu2]))) < 1e-6
+
+
+def test_simplest_walker_period_doubling_is_the_published_one(simplest):
+    """The period-one (long) gait continued over the slope from 0.009 loses stability by a period doubling at
+    gamma = 0.01508844 (extrapolated to beta = 0), the published value: Garcia, Chatterjee, Ruina & Coleman, J.
+    Biomech. Eng. 120(2):281-288 (1998), abstract: "The model exhibits two period-one gait cycles, one of which is
+    stable when 0 < gamma < 0.015 rad" (two digits). Independently, garcia_stride's eigenvalue at that slope is -1."""
+    located = []
+    for beta in BETAS:
+        result = Continuer(simplest, "strike", "slope", {"beta": beta}, tol=1e-9, t_max=10, ds=0.01).run(
+            0.009, 0.02, branch_switch=False)
+        pd = [sp for sp in result.branches[0].specials if sp.kind == "period doubling"]
+        assert pd and pd[0].located and pd[0].bracket <= 1e-10
+        assert np.min(np.abs(pd[0].point.multipliers + 1)) < 1e-7
+        located.append(pd[0].point.parameter)
+    gamma = float(extrapolated(located))
+    assert round(gamma, 3) == PUBLISHED_PD                   # (found: 0.0150884379)
+    z = np.array(GARCIA_LONG_GAIT)
+    for g in np.linspace(0.009, gamma, 7)[1:]:               # Newton from the last slope's fixed point
+        z, eig, _ = garcia_fixed_point(g, z)
+    assert np.min(np.abs(eig + 1)) < 1e-6                    # d(mu)/d(gamma) ~ 100: gamma to ~1e-8

@@ -222,9 +222,9 @@ def _apply_jump(model, k, x, u, p, d) -> None:
         raise CycleError(f"{model.name}: jump '{model.jump_names[k]}' failed at the iterate (status {status})")
 
 
-def _section_rows(model, derivatives, flow: int, k: int, p, y, parameters: bool = False):
-    """(h, dh/dy): the source flow's constraint rows (phi, c) and jump k's guard at y = (x, d); with parameters,
-    (h, dh/dy, dh/dp)."""
+def _section_rows(model, derivatives, flow: int, k: int, p, y, parameters: bool = False, guard: bool = True):
+    """(h, dh/dy): the flow's constraint rows (phi, c) and jump k's guard at y = (x, d); with parameters,
+    (h, dh/dy, dh/dp); without guard, the constraint rows only (andyc.analysis.basins' starting states)."""
     nx, ny = model.nx, len(y)
     held = np.asarray(model.input_defaults, float)
     x, d = y[:nx], y[nx:]
@@ -233,8 +233,8 @@ def _section_rows(model, derivatives, flow: int, k: int, p, y, parameters: bool 
     rows = [int(r) for r in model.module.FLOW_ROWS[flow] if r >= 0]
     g, dg = derivatives.guard_terms(k, 0.0, x, held, p, d)
     hol = [r for r in rows if r < model.nh]
-    h = np.concatenate([phi[hol], c[rows], [g]])
-    W = np.vstack([dphi[hol], dc[rows], dg[None]])
+    h = np.concatenate([phi[hol], c[rows], [g] if guard else []])
+    W = np.vstack([dphi[hol], dc[rows]] + ([dg[None]] if guard else []))
     if parameters:
         return h, W[:, :ny], W[:, ny:ny + len(p)]
     return h, W[:, :ny]

@@ -46,13 +46,27 @@ from andyc.outputs import check_folder, check_output, write_text
 @click.option("--plot-state", default=None, metavar="NAME",
               help="--continue: the state (just after the jump) the bifurcation diagram draws (default: the one that "
                    "varies most).")
+@click.option("--basin", "basin", multiple=True, metavar="NAME=FROM:TO:COUNT",
+              help="The basin of attraction of the orbit over a grid of two starting states (give it twice): each "
+                   "start classified as reaching the cycle, falling, another orbit or other; run on the sweep engine.")
+@click.option("--steps", default=50, show_default=True, type=COUNT, help="--basin: steps (crossings) per start at most.")
+@click.option("--basin-tol", default=1e-6, show_default=True, type=POSITIVE,
+              help="--basin: a start reaches the cycle when a crossing is this close to it (largest component).")
+@click.option("--fall", default="", metavar="CONDITION",
+              help="--basin: a step after which this holds falls, a comparison of the step's run as a sweep's "
+                   "--metric, e.g. 'min(y) < 0.5' (a step that does not reach the section falls too).")
+@click.option("--workers", default=None, type=Number(1, 4096, integer=True), metavar="N",
+              help="--basin: processes of the local Dask cluster (default: one per core).")
+@click.option("--batch", default=None, type=Number(1, 1_000_000, integer=True), metavar="N",
+              help="--basin: starts per task (default: about 8 tasks per worker).")
 @click.option("-o", "--out", default=None, metavar="FILE.json",
               help="Where to write the result (default: runs/<name>_cycle_<JUMP>.json; with --continue "
                    "runs/<name>_continuation_<JUMP>_<NAME>.json, with the branch table FILE.csv and the plot FILE.png "
-                   "beside it).")
+                   "beside it; with --basin the store runs/<name>_basin_<JUMP>.zarr, with the map .png beside it).")
 @build_dir_option()
 def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, continue_range, ds, ds_min, ds_max,
-          max_points, locate_tol, branch_switch, plot_state, out, build_dir):
+          max_points, locate_tol, branch_switch, plot_state, basin, steps, basin_tol, fall, workers, batch, out,
+          build_dir):
     """Find FILE's periodic orbit through the jump JUMP: Newton's method on the Poincaré map with its exact
     Jacobian (rk4 sensitivities and saltation matrices); print the fixed point just after the jump, the period,
     the Floquet multipliers and the residual of each iterate, and write them as JSON. Exit 1 when it does not
@@ -60,13 +74,19 @@ def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, 
 
     With --continue NAME=A:B, follow the orbit from NAME = A to B by pseudo-arclength continuation, print each
     point and the located folds, branch points and period doublings, and write the branches as JSON and CSV with
-    a plot (bifurcation diagram and multipliers). Exit 1 when no orbit is found at A."""
+    a plot (bifurcation diagram and multipliers). Exit 1 when no orbit is found at A.
+
+    With --basin NAME=FROM:TO:COUNT twice, classify each start of that grid (the other components at the fixed
+    point, put on the constraint manifold) as reaching the cycle, falling, another orbit or other, on the sweep
+    engine's workers, into a Zarr store with its map."""
     import andyc
     from andyc.analysis.cycles import CycleError, find_cycle
 
     parameters = parse_sets(at, "--at")
     swept = _continue_range(continue_range) if continue_range is not None else None
-    if out is not None:
+    if basin and swept is not None:
+        raise Refused("--basin and --continue: give one of them")
+    if out is not None and not basin:
         check_output(out, [file], "cycle file")
     check_folder(build_dir, [file])
     model, _ = compiled(file, build_dir)
@@ -77,10 +97,16 @@ def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, 
     if unknown:
         raise click.BadParameter(f"no parameter named {', '.join(unknown)}; parameters: "
                                  f"{', '.join(model.parameter_names)}", param_hint="--at")
+    points = None
+    if basin:
+        from andyc.cli.basin import basin_points
+
+        points = basin_points(basin, model, fall)
     if swept is not None:
         return _continuation(file, build_dir, model, section, period, parameters, swept, out, plot_state,
                              dict(dt=dt, tol=tol, t_max=t_max, event_tol=event_tol, ds=ds, ds_min=ds_min,
                                   ds_max=ds_max, max_points=max_points, locate_tol=locate_tol), branch_switch)
+    store, out = (out, None) if basin else (None, out)
     out = out or f"runs/{model.name}_cycle_{section}.json"
     check_output(out, [file, model.path], "cycle file")
     try:
@@ -97,6 +123,11 @@ def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, 
     click.echo(f"wrote {out}")
     if not result.converged:
         sys.exit(1)
+    if points is not None:
+        from andyc.cli.basin import run_basin
+
+        run_basin(file, model, result, points, dict(steps=steps, tol=basin_tol, t_step=t_max, dt=dt,
+                                                   event_tol=event_tol, fall=fall), store, workers, batch)
 
 
 def _continue_range(text: str) -> tuple:

@@ -142,13 +142,14 @@ def _run(model, points, settings, out, scheduler, workers, batch, read) -> None:
 
 def plot_store(store, out, variable) -> None:
     """`andyc plot STORE`: a heat map of a variable over a grid's two swept names, or a line over one (samples:
-    a scatter); default variable: the first metric, else the outcome."""
+    a scatter); default variable: the first metric, else a basin's classes, else the outcome. Codes (the outcome,
+    the classes) are drawn one colour each, named by the variable's flag_meanings."""
     from andyc.plot.sweepmap import plot_sweep
 
     ds = _open(store)
     swept = list(ds.attrs.get("swept", []))
     metrics = [n for n in ds.data_vars if "expression" in ds[n].attrs]
-    variable = variable or (metrics[0] if metrics else "outcome")
+    variable = variable or (metrics[0] if metrics else "basin" if "basin" in ds.data_vars else "outcome")
     if variable not in ds.data_vars:
         raise click.BadParameter(f"{store} has no variable '{variable}'; metrics: {', '.join(metrics) or 'none'} "
                                  f"(or outcome, t_final, wall)", param_hint="--metric")
@@ -162,12 +163,14 @@ def plot_store(store, out, variable) -> None:
     out = out or str(Path(store).with_suffix(".png"))
     check_output(out, [], "plot")
     axes = [(n, ds[n].values) for n in swept]
-    outcomes = None
-    if variable == "outcome":
-        import json
-        outcomes = {int(k): v for k, v in json.loads(ds.attrs["outcomes"]).items()}
+    outcomes = colours = None
+    if "flag_meanings" in data.attrs:           # codes: the outcome, a basin's classes
+        outcomes = {int(c): m.replace("_", " ") for c, m in zip(data.attrs["flag_values"],
+                                                              data.attrs["flag_meanings"].split())}
+        if variable == "basin":
+            from andyc.plot.basinmap import CLASS_COLOURS as colours
     plot_sweep(ds.attrs["kind"] == "grid", axes, data.values, variable, data.attrs.get("expression", ""), out,
-               title=f"{ds.attrs['model']}: {variable}", outcomes=outcomes)
+               title=f"{ds.attrs['model']}: {variable}", outcomes=outcomes, colours=colours)
     click.echo(f"wrote {out}")
 
 

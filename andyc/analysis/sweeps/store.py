@@ -15,6 +15,9 @@ first jumps of a run) and `sample` (decimated trajectories). Variables, per poin
     wall, cpu        seconds the point took on its worker: wall-clock time, and the CPU time of its thread
     <metric>         each --metric, by its name
     trajectory       the state at `sample` evenly spaced times (trajectory_time), with --trajectory N
+    basin            a basin's class of each point (andyc.analysis.basins: 1 cycle, 2 other orbit, 3 falls,
+                     4 other), with basin_period, basin_steps and basin_distance; the run variables are
+                     then those of the point's last step (t_final: the time of all its steps)
 
 Attributes name the model, its build key and andyc's version, the sweep's points (their SHA-256, the kind,
 the seed) and the run options; a store made by another model, build or version, or for other points or
@@ -42,7 +45,7 @@ CHUNK_POINTS = 4096             # at most this many points in a chunk
 # Names of the store's own variables and dimensions, which a metric or a swept name must not take.
 RESERVED = ("outcome", "message", "t_final", "final", "final_discrete", "final_flow", "jump_count", "event_time",
             "event_jump", "wall", "cpu", "trajectory", "trajectory_time", "point", "state", "discrete", "jump", "event",
-            "sample")
+            "sample", "basin", "basin_period", "basin_steps", "basin_distance")
 
 
 class StoreError(ValueError):
@@ -132,6 +135,8 @@ def _variables(settings: Settings, results: dict) -> dict:
         out[name] = results["metrics"][:, j]
     if settings.trajectory:
         out["trajectory"], out["trajectory_time"] = results["trajectory"], results["trajectory_time"]
+    if settings.basin is not None:
+        out.update({k: results[k] for k in ("basin", "basin_period", "basin_steps", "basin_distance")})
     return out
 
 
@@ -176,6 +181,11 @@ def _skeleton(model, points: Points, settings: Settings):
     for name, text in settings.metrics:
         ds[name].attrs["expression"] = text
     ds["message"].attrs["max_characters"] = MESSAGE_CHARS
+    if settings.basin is not None:
+        from andyc.analysis.basins import CLASSES
+
+        ds["basin"].attrs.update({"flag_values": list(CLASSES), "flag_meanings": " ".join(
+            c.replace(" ", "_") for c in CLASSES.values())})
     return ds
 
 

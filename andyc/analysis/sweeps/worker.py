@@ -43,6 +43,7 @@ class Settings:
     metrics: tuple = ()         # (name, text)
     max_events: int = 20        # jump times kept per point
     trajectory: int = 0         # samples of the decimated trajectory kept per point (0: none)
+    basin: object = None        # an andyc.analysis.basins.Basin: each point classified step by step (record_point)
 
     @classmethod
     def of(cls, model, names, t_end: float, **options) -> "Settings":
@@ -60,7 +61,8 @@ class Settings:
         return {"t_end": self.t_end, "dt": self.dt, "method": self.method, "rtol": self.rtol, "atol": self.atol,
                 "fixed": [list(f) for f in self.fixed], "stop_after": [list(s) for s in self.stop_after],
                 "init": self.init, "timeout": self.timeout, "metrics": [list(m) for m in self.metrics],
-                "max_events": self.max_events, "trajectory": self.trajectory}
+                "max_events": self.max_events, "trajectory": self.trajectory,
+                **({"basin": self.basin.options()} if self.basin is not None else {})}
 
 
 _LOADED: dict = {}          # (build path, build key) -> CompiledModel: once per worker process
@@ -111,7 +113,9 @@ def empty_results(model, settings: Settings, n: int) -> dict:
             "event_jump": full((n, settings.max_events), -1, dtype=np.int16),
             "metrics": full((n, len(settings.metrics)), nan), "wall": full(n, nan), "cpu": full(n, nan),
             "trajectory": full((n, settings.trajectory, model.nx), nan),
-            "trajectory_time": full((n, settings.trajectory), nan)}
+            "trajectory_time": full((n, settings.trajectory), nan),
+            "basin": np.zeros(n, np.int8), "basin_period": np.zeros(n, np.int16), "basin_steps": np.zeros(n, np.int32),
+            "basin_distance": full(n, nan)}
 
 
 def simulate_point(model, settings: Settings, point, frames=()):
@@ -140,6 +144,10 @@ def record(out: dict, row: int, model, metrics: list, settings: Settings, point)
     from andyc.analysis.sweeps.metrics import evaluate
     from andyc.runtime.status import FAILED, outcome
 
+    if settings.basin is not None:
+        from andyc.analysis.basins import record_point
+
+        return record_point(out, row, model, settings, point)
     frames = tuple(dict.fromkeys(f for m in metrics for f in m.frames))
     start, cpu = time.perf_counter(), time.thread_time()
     try:

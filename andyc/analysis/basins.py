@@ -1,0 +1,238 @@
+"""Basins of attraction of a periodic orbit (`andyc cycle --basin`): which starting states reach it.
+
+The orbit is andyc.analysis.cycles' fixed point of the Poincaré map Q of a jump J (the section), with its
+visits y*_1..y*_N just after J (N = the period). A point of the grid is a starting state y0 = (x0, d0): the
+orbit's first visit y*_1 with the grid's components set (states only), then put back on the constraint
+manifold of J's target flow by Gauss-Newton on its rows (phi, c) = 0, moving only the other components
+(least-norm steps in them), so that the grid's values are the run's own. From y0 the point runs step by step,
+as `andyc sim --stop-after J=1` does (rk4, each step from the state just after the previous crossing of J,
+for at most `t_step` seconds), for at most K steps, and is classified:
+
+    cycle        some y_n (just after J's n-th crossing) is within tol of a visit y*_i, in the largest
+                 component of the difference, once the model's symmetries s are taken out
+                 (|(I - S S^T)(y_n - y*_i)|_inf <= tol, S the orthonormal symmetry directions of
+                 cycles.section_basis: a walker's place down the slope does not matter)
+    falls        the fall condition (a comparison of the step's run, as a sweep's metric: `min(y) < 0.5`)
+                 holds after a step, or a step does not reach J: no crossing within t_step, or the run
+                 ended early (blew up, Zeno, stopped, failed)
+    other orbit  after K steps, y_K repeats with a period m <= max_period (|P(y_K - y_{K-m})|_inf <= tol,
+                 the smallest such m) and lies more than 100 tol from the cycle's visits (so that a point
+                 still converging onto the cycle, slowly, is not taken for another orbit)
+    other        none of these within K steps, or a start that could not run (its grid values held, the
+                 constraints cannot be met; a run that raised): its outcome is then "failed", with the message
+
+A point stops as soon as it is classified. The classes, their codes and the period m of an other orbit are
+what the sweep store records (`basin`, `basin_period`, with `basin_steps` the steps run and
+`basin_distance` the distance of the last y_n from the cycle). The runs are the sweep engine's
+(andyc.analysis.sweeps): each worker runs record_point on its batch. See Schwab & Wisse, "Basin of attraction
+of the simplest walking model" (ASME DETC 2001), for such maps of a walker.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+CLASSES = {0: "not run", 1: "cycle", 2: "other orbit", 3: "falls", 4: "other"}
+CYCLE, OTHER_ORBIT, FALLS, OTHER = 1, 2, 3, 4
+OTHER_ORBIT_MARGIN = 100.0        # an other orbit lies more than this many tol from the cycle
+
+
+@dataclass(frozen=True)
+class Basin:
+    """A basin's classification, as plain data a sweep task carries (andyc.analysis.sweeps.worker.Settings)."""
+    section: int                # J's index
+    steps: int                  # K: steps at most
+    orbit: tuple                # the cycle's visits y*_i = (x, d) just after J, a tuple per visit
+    symmetries: tuple           # the symmetry directions in y, a tuple per direction (orthonormal)
+    tol: float
+    t_step: float               # the longest one step may take, s
+    dt: float
+    event_tol: float
+    fall: str = ""              # the fall condition (a comparison of the step's run), or "" for none
+    max_period: int = 8
+    parameters: tuple = ()      # (name, value) of the cycle's parameters
+
+    def options(self) -> dict:
+        return asdict(self)
+
+
+class BasinError(ValueError):
+    """A basin request that cannot run (a fall condition that is not a comparison); the message says why."""
+
+
+def make_basin(model, cycle, steps: int, tol: float, t_step: float, dt: float, event_tol: float, fall: str = "",
+               max_period: int = 8) -> Basin:
+    """The Basin of a converged andyc.analysis.cycles.Cycle: its visits just after the section (Q run once
+    more from the fixed point, no Jacobian) and its symmetries."""
+    from andyc.analysis.cycles import PoincareMap
+    from andyc.runtime.sensitivities import load_derivatives
+
+    k = model.jump_names.index(cycle.section)
+    p = model.parameters(cycle.parameters)
+    if fall:
+        fall_metric(model, fall)                    # refused here, before any worker runs
+    image = PoincareMap(model, load_derivatives(model), k, p, cycle.period_count, dt, t_step * cycle.period_count,
+                        event_tol)(cycle.before, jacobian=False)
+    if image.y is None:
+        raise BasinError(f"the cycle's fixed point did not come back to '{cycle.section}' ({image.status})")
+    visits = image.visits[1][:cycle.period_count]
+    sym = np.zeros((0, len(cycle.before))) if cycle.symmetries is None else cycle.symmetries.T
+    return Basin(k, steps, tuple(map(tuple, visits.tolist())), tuple(map(tuple, sym.tolist())), tol, t_step, dt,
+                 event_tol, fall, max_period, tuple(cycle.parameters.items()))
+
+
+def fall_metric(model, text: str):
+    """The parsed fall condition (andyc.analysis.sweeps.metrics); BasinError unless it is one comparison."""
+    from andyc.analysis.sweeps.metrics import MetricError, compile_metric
+
+    try:
+        metric = compile_metric("fall", text, model)
+    except MetricError as exc:
+        raise BasinError(str(exc).replace("--metric fall", f"--fall '{text}'")) from None
+    if not metric.compare:
+        raise BasinError(f"--fall '{text}': not a comparison; write a condition of a step's run, e.g. min(y) < 0.5")
+    return metric
+
+
+_CACHE: dict = {}           # (build path, build key, fall) -> (derivatives, fall metric): once per process
+
+
+def _loaded(model, basin: Basin):
+    from andyc.runtime.sensitivities import load_derivatives
+
+    key = (str(model.path), model.module.BUILD_KEY, basin.fall)
+    if key not in _CACHE:
+        _CACHE[key] = (load_derivatives(model), fall_metric(model, basin.fall) if basin.fall else None)
+    return _CACHE[key]
+
+
+def start_state(model, derivatives, basin: Basin, held: list, values, iterations: int = 20) -> np.ndarray:
+    """y0: the orbit's first visit with the components `held` (indices in y) set to `values`, put on the
+    constraint manifold of J's target flow by moving the other components only (Gauss-Newton, least-norm
+    steps). SimulationError when it cannot get there."""
+    from andyc.analysis.cycles import _section_rows
+    from andyc.errors import SimulationError
+
+    y = np.array(basin.orbit[0], dtype=float)
+    y[held] = values
+    flow = int(model.module.JUMP_TARGET[basin.section])
+    p = model.parameters(dict(basin.parameters))
+    free = np.setdiff1d(np.arange(len(y)), held)
+    for _ in range(iterations):
+        h, H = _section_rows(model, derivatives, flow, basin.section, p, y, guard=False)
+        if not len(h) or np.max(np.abs(h)) <= 1e-13 * max(1.0, np.max(np.abs(y))):
+            return y
+        y[free] -= np.linalg.lstsq(H[:, free], h, rcond=None)[0]
+    raise SimulationError(f"cannot put the start on the constraint manifold with {', '.join(_names(model, held))} "
+                          f"held (residual {np.max(np.abs(h)):.2g}); sweep other components")
+
+
+def _names(model, indices) -> list:
+    names = list(model.state_names) + list(model.discrete_names)
+    return [names[i] for i in indices]
+
+
+def classify(model, basin: Basin, held: list, values) -> dict:
+    """The point's class (see the module docstring) and its record: class, period, steps, distance, the
+    crossing times, the last run's status and state, the total time and jump counts."""
+    import andyc
+
+    derivatives, fall = _loaded(model, basin)
+    nx = model.nx
+    orbit = np.asarray(basin.orbit, dtype=float)
+    S = np.asarray(basin.symmetries, dtype=float).reshape(-1, orbit.shape[1]).T
+    project = np.eye(orbit.shape[1]) - S @ S.T
+
+    def distance(a, b):
+        return float(np.max(np.abs(project @ (a - b))))
+
+    y = start_state(model, derivatives, basin, held, values)
+    events = andyc.Events(tol=basin.event_tol, stop_after={model.jump_names[basin.section]: 1})
+    params = dict(basin.parameters)
+    flow = int(model.module.JUMP_TARGET[basin.section])
+    out = {"class": OTHER, "period": 0, "steps": 0, "distance": math.nan, "times": [], "t": 0.0,
+           "jump_count": np.zeros(model.nj, np.int32), "status": "", "run": None, "message": ""}
+    history = [y]
+    for n in range(1, basin.steps + 1):
+        run = andyc.simulate(model, basin.t_step, basin.dt, "rk4", parameters=params, x0=y[:nx], d0=y[nx:],
+                             flow0=flow, progress=False, init=andyc.Init("as-is"), events=events)
+        out["run"], out["status"], out["steps"] = run, run.status, n
+        jumps = run.events["jump"]
+        out["jump_count"] += np.bincount(jumps, minlength=model.nj)[:model.nj].astype(np.int32)
+        out["times"].extend((out["t"] + run.events["time"][jumps == basin.section]).tolist())
+        out["t"] += float(run.time[-1]) if len(run.time) else 0.0
+        crossed = run.finished and len(jumps) and jumps[-1] == basin.section
+        if fall is not None and _holds(fall, run):
+            out["class"], out["message"] = FALLS, f"step {n}: the fall condition holds ({basin.fall})"
+            return out
+        if not crossed:
+            out["class"] = FALLS
+            out["message"] = (f"step {n}: no crossing of '{model.jump_names[basin.section]}' within "
+                              f"{basin.t_step:g} s ({run.status})")
+            return out
+        y = np.concatenate([run.state[-1], run.discrete[-1]])
+        history.append(y)
+        out["distance"] = min(distance(y, o) for o in orbit)
+        if out["distance"] <= basin.tol:
+            out["class"], out["period"] = CYCLE, len(orbit)
+            out["message"] = f"step {n}: within {basin.tol:g} of the cycle"
+            return out
+    for m in range(1, basin.max_period + 1):
+        if m < len(history) and distance(history[-1], history[-1 - m]) <= basin.tol:
+            if out["distance"] > OTHER_ORBIT_MARGIN * basin.tol:
+                out["class"], out["period"] = OTHER_ORBIT, m
+                out["message"] = f"after {basin.steps} steps: an orbit of period {m}, {out['distance']:.3g} from the cycle"
+                return out
+            break
+    out["message"] = f"after {basin.steps} steps: {out['distance']:.3g} from the cycle, no orbit of period <= " \
+                     f"{basin.max_period}"
+    return out
+
+
+def _holds(metric, run) -> bool:
+    from andyc.analysis.sweeps.metrics import evaluate
+
+    try:
+        return evaluate(metric, run) == 1.0
+    except (ValueError, ArithmeticError, TypeError):
+        return False
+
+
+def record_point(out: dict, row: int, model, settings, point) -> None:
+    """A sweep worker's record of one basin point (andyc.analysis.sweeps.worker.record): its class into the
+    basin fields, the last step's run into the others; a failure is recorded, never raised."""
+    from andyc.analysis.sweeps.worker import MESSAGE_CHARS
+    from andyc.errors import SimulationError, printable
+    from andyc.runtime.status import FAILED, outcome
+
+    basin = settings.basin
+    held = [kind_index for (_, kind_index) in settings.kinds]
+    start, cpu = time.perf_counter(), time.thread_time()
+    try:
+        found = classify(model, basin, held, np.asarray(point, dtype=float))
+    except Exception as exc:            # a point's failure is its record, not the sweep's end
+        text = str(exc) if isinstance(exc, SimulationError) else f"{type(exc).__name__}: {exc}"
+        out["outcome"][row], out["message"][row] = FAILED, printable(text)[:MESSAGE_CHARS]
+        out["wall"][row], out["cpu"][row] = time.perf_counter() - start, time.thread_time() - cpu
+        out["basin"][row] = OTHER           # (not 0, "not run": it ran, and could not be classified)
+        return
+    run = found["run"]
+    out["outcome"][row] = outcome(run.status)
+    out["message"][row] = printable(found["message"])[:MESSAGE_CHARS]
+    out["wall"][row], out["cpu"][row] = time.perf_counter() - start, time.thread_time() - cpu
+    out["basin"][row], out["basin_period"][row] = found["class"], found["period"]
+    out["basin_steps"][row], out["basin_distance"][row] = found["steps"], found["distance"]
+    out["t_final"][row] = found["t"]
+    if len(run.time):
+        out["final"][row], out["final_discrete"][row], out["final_flow"][row] = (run.state[-1], run.discrete[-1],
+                                                                                run.flow[-1])
+    out["jump_count"][row] = found["jump_count"]
+    times = found["times"][:settings.max_events]
+    out["event_time"][row, :len(times)], out["event_jump"][row, :len(times)] = times, basin.section
+
+
+__all__ = ["Basin", "BasinError", "CLASSES", "make_basin", "classify", "start_state", "record_point"]
