@@ -23,7 +23,8 @@ second order in smooth motion at theta = 1/2). The step's contact problem (W = A
 solved by andyc.runtime.contact_problem (nonlinear Gauss-Seidel, then the active set it finds solved exactly).
 
 Logged per sample: the state, the contact states of the step that ends there as the flow (open, stick, slip +,
-slip -: from the impulses and slips of the solution, andyc.spec.contacts' mixed radix), and as the multipliers
+slip -: from the impulses and slips of the solution, in andyc.spec.contacts' mixed radix; a contact whose impulse
+leaves it lifting off, faster than REST_SPEED, is open: a bounce), and as the multipliers
 the mean forces P / h of the steps since the last sample (the impulse of each step is multiplier * dt with
 every = 1), in the rows and units the event-driven methods log their multipliers, so that plots and analyses
 read them alike. Sample 0 has the ideal multipliers of the initial mode. The `jumps` work slot takes the work
@@ -40,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 
 from andyc.errors import SimulationError
-from andyc.numerics.status import MESSAGES, SINGULAR_MASS
+from andyc.numerics.status import MESSAGES, REST_SPEED, SINGULAR_MASS
 from andyc.runtime.contact_problem import BILATERAL, NORMAL, OPEN, PLANAR, Block, solve
 from andyc.runtime.contacts import TOUCHING, friction_coefficients
 from andyc.runtime.inputs import inputs_at
@@ -146,8 +147,10 @@ class _Stepper:
             stats["unverified_steps"] += not sol.verified
             v_new = v_free + X @ sol.P
             impulses[R] = sol.P
-            for j, i in enumerate(touching):
-                states[i] = sol.states[len(self.bilateral) + j]
+            after = A @ v_new + b
+            for j, i in enumerate(touching):       # (a contact its impulse leaves lifting off is open after the step)
+                blk = blocks[len(self.bilateral) + j]
+                states[i] = sol.states[len(self.bilateral) + j] if after[blk.rows[0]] <= REST_SPEED else OPEN
             v_half = 0.5 * (v + v_new)
             if model.nj:                            # the `jumps` slot, last: the impulses' work
                 x[nx + model.nw - 1] += float(sol.P @ (A @ v_half + b))
@@ -170,7 +173,7 @@ def run_moreau(model, x, source, p, d, flow, t_end, dt, every, theta, bar, inter
     out_f, out_d, forces = np.empty(rows, dtype=np.int64), np.empty((rows, model.nd)), np.full((rows, model.nc), np.nan)
     out_t[0], out_x[0], out_f[0], out_d[0] = 0.0, x, flow, d
     out_u[0] = inputs_at(model, source, 0.0, x[:model.nx], p, d, flow)
-    stats = {"steps": 0, "contact_sweeps": 0, "unverified_steps": 0}
+    stats = {"steps": 0, "rhs_evaluations": 0, "contact_sweeps": 0, "unverified_steps": 0}
     row, message, t = 1, None, 0.0
     total, seen = np.zeros(model.nc), np.zeros(model.nc, dtype=bool)
 
@@ -191,7 +194,7 @@ def run_moreau(model, x, source, p, d, flow, t_end, dt, every, theta, bar, inter
             message = f"stopped: {exc}" + at(t)
             break
         t = (k + 1) * dt
-        stats["steps"] = k + 1
+        stats["steps"] = stats["rhs_evaluations"] = k + 1        # (one evaluation of M and G a step)
         active = ~np.isnan(impulses)
         total[active] += impulses[active]
         seen |= active

@@ -1,0 +1,173 @@
+"""The moreau method (andyc.runtime.timestepping): Moreau-Jean time-stepping against closed forms, and its
+contact problem (andyc.runtime.contact_problem) against the complementarity conditions themselves."""
+
+import math
+
+import numpy as np
+import pytest
+
+import andyc
+from andyc.errors import SimulationError
+from andyc.runtime.contact_problem import BILATERAL, NORMAL, OPEN, PLANAR, SLIP_NEG, SLIP_POS, STICK, Block, solve
+from tests.support import MODELS
+from tests.support.cli import invoke
+
+G = 9.81
+H = 1e-3
+
+
+@pytest.fixture(scope="module")
+def ball_run(compiled):
+    return andyc.simulate(compiled("bouncing_ball_contact"), 10.0, dt=H, method="moreau")
+
+
+def test_ball_impact_times_within_two_steps(ball_run):
+    """The impact times t1 = sqrt(2 h0 / g), t_(k+1) = t_k + 2 e^k t1: the step that takes an impact is the first
+    whose predicted mid-point gap y_k + h v_k / 2 is <= 0, so it starts within a step of the touch, and each
+    flight of the discrete ball (exact parabolas between impacts at theta = 1/2, launched up to a step late)
+    shifts the later ones by a fraction of a step: the first three within 2 h."""
+    run, e = ball_run, 0.8
+    force = np.nan_to_num(run.multipliers[:, 0])
+    starts = np.nonzero((force[1:] > 0) & (force[:-1] == 0))[0]        # the step from sample i to i + 1
+    t1 = math.sqrt(2 * 1.0 / G)
+    exact = [t1, t1 + 2 * e * t1, t1 + 2 * e * t1 + 2 * e ** 2 * t1]
+    assert np.all(np.abs(run.time[starts[:3]] - exact) <= 2 * H)
+
+
+def test_ball_rests_after_the_zeno_point(ball_run):
+    """Past t_inf = t1 (1 + 2e / (1 - e)) = 4.0637 s the ball rests to t = 10 s: speed 0 to 1e-12, mean normal
+    force P / h = m g to 1e-10, closed. From t_inf + 0.2 s: in the index set the rebound is v_(k+1) = -e v_k
+    (Newton's law, step by step) from speeds of order g h, so 1e-12 comes log(1e-12 / (g h)) / log(e) = 103 steps
+    later. Its height stays within h^2 g of 0: it rests where its last approach left it, in the step it entered
+    the index set (from a positive gap, with y + h v / 2 <= 0), a step's travel h |v| from 0 at a speed |v| of at
+    most one step of gravity, g h (a faster one bounces out again)."""
+    run = ball_run
+    late = run.time >= 4.0637 + 0.2
+    assert run.finished and run.time[-1] == pytest.approx(10.0)
+    assert np.max(np.abs(run.column("y_dot")[late])) <= 1e-12
+    assert np.max(np.abs(run.multipliers[late, 0] - 1.0 * G)) <= 1e-10
+    assert np.max(np.abs(run.column("y")[late])) <= H ** 2 * G
+    assert set(run.contact_modes[late, 0]) == {1}
+    # (the impulses' work is in the `jumps` slot: E - E0 - W is the scheme's own error, exact parabolas here)
+    assert np.max(np.abs(run.energy_balance)) <= 1e-9
+
+
+@pytest.mark.parametrize("mu", [0.7, 0.3])
+def test_block_sticks_or_slides(compiled, mu):
+    """tan th = 0.546 for th = 0.5: mu = 0.7 sticks (moves <= 1e-12 m over 5 s, friction m g sin th); mu = 0.3
+    slides down at a = g (sin th - mu cos th), x = -a t^2 / 2 along the slope (the trapezoidal theta = 1/2 is
+    exact for a constant acceleration: 1e-10 m)."""
+    th = 0.5
+    run = andyc.simulate(compiled("block_incline"), 5.0, dt=H, method="moreau", parameters={"th": th, "mu": mu})
+    x, y, t = run.column("x"), run.column("y"), run.time
+    along, normal = math.cos(th) * x + math.sin(th) * y, math.cos(th) * y - math.sin(th) * x
+    assert np.max(np.abs(normal)) <= 1e-12
+    assert np.allclose(run.multipliers[1:, 0], G * math.cos(th), rtol=0, atol=1e-10)
+    if mu > math.tan(th):
+        assert np.max(np.abs(along)) <= 1e-12
+        assert np.allclose(run.multipliers[1:, 1], G * math.sin(th), rtol=0, atol=1e-10)
+        assert set(run.contact_modes[1:, 0]) == {STICK}
+    else:
+        a = G * (math.sin(th) - mu * math.cos(th))
+        assert np.max(np.abs(along + 0.5 * a * t ** 2)) <= 1e-10
+        assert set(run.contact_modes[1:, 0]) == {SLIP_NEG}     # slipping down: backwards
+
+
+def test_theta_one_is_backward_euler_in_the_speeds(compiled):
+    """theta = 1: x_(k+1) = x_k + h v_(k+1), so under a constant acceleration -a the slope position is
+    -a (t^2 + h t) / 2 exactly (the sum of h^2 a (1 + ... + n)); 1e-10 m over 2 s."""
+    th, mu = 0.5, 0.3
+    run = andyc.simulate(compiled("block_incline"), 2.0, dt=H, method="moreau", parameters={"th": th, "mu": mu},
+                         stepping=andyc.TimeStepping(theta=1.0))
+    along = math.cos(th) * run.column("x") + math.sin(th) * run.column("y")
+    a, t = G * (math.sin(th) - mu * math.cos(th)), run.time
+    assert np.max(np.abs(along + 0.5 * a * (t ** 2 + H * t))) <= 1e-10
+
+
+def test_rod_lands_on_both_supports_without_turning(compiled):
+    """The rod falls flat onto two supports (e = 0): both take the same impulses in every step, to 1e-12 of the
+    largest, it never turns (tilt and its rate 1e-12), and it rests with m g / 2 on each (mean force, 1e-10)."""
+    run = andyc.simulate(compiled("rod_drop"), 1.0, dt=H, method="moreau")
+    left, right = (np.nan_to_num(run.multipliers[:, k]) * H for k in range(2))
+    assert np.max(left) > 1.0                           # the impact: about m sqrt(2 g h0) / 2 = 1.57 N s each
+    assert np.max(np.abs(left - right)) <= 1e-12 * np.max(left)
+    assert np.max(np.abs(run.column("th"))) <= 1e-12 and np.max(np.abs(run.column("th_dot"))) <= 1e-12
+    assert abs(run.column("y_dot")[-1]) <= 1e-12
+    assert np.allclose(run.multipliers[-1], G / 2, rtol=0, atol=1e-10)
+
+
+def test_usage_errors(compiled):
+    with pytest.raises(SimulationError, match="needs contacts"):
+        andyc.simulate(compiled("pendulum_a01"), 0.1, method="moreau")
+    with pytest.raises(SimulationError, match=r"theta is 0\.3; use a value in \[0\.5, 1\]"):
+        andyc.simulate(compiled("bouncing_ball_contact"), 0.1, method="moreau", stepping=andyc.TimeStepping(0.3))
+
+
+@pytest.mark.parametrize("args, message", [
+    (("pendulum_a01.yaml", "--method", "moreau"), "the moreau method needs contacts"),
+    (("bouncing_ball_contact.yaml", "--method", "moreau", "--theta", "1.5"), "theta is 1.5; use a value in [0.5, 1]"),
+    (("bouncing_ball_contact.yaml", "--theta", "0.7"), "--theta is the moreau method's, not rk4's"),
+])
+def test_cli_usage_errors_exit_2(shipped_build, tmp_path, args, message):
+    result = invoke("sim", MODELS / args[0], *args[1:], "--t-end", 0.1, "--build-dir", shipped_build,
+                    "-o", tmp_path / "run.h5")
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0]
+    assert not (tmp_path / "run.h5").exists()
+
+
+def _check(W, w0, blocks, P, tol=1e-9):
+    """The step problem's conditions at P (andyc.runtime.contact_problem's docstring), to tol."""
+    w = w0 + W @ P
+    for b in blocks:
+        n = b.rows[0]
+        if b.kind == BILATERAL:
+            assert abs(w[n]) <= tol
+            continue
+        assert P[n] >= -tol and w[n] >= -tol and abs(P[n] * w[n]) <= tol
+        if b.kind == PLANAR:
+            t = b.rows[1]
+            assert abs(P[t]) <= b.mu * P[n] + tol
+            if abs(P[t]) < b.mu * P[n] - 1e-6:
+                assert abs(w[t]) <= tol                 # inside the cone: no slip
+            elif abs(w[t]) > tol:
+                assert P[t] * w[t] <= 0 and abs(P[t]) >= b.mu * P[n] - tol     # against the slip, on the edge
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_contact_problem_solves_its_conditions(seed):
+    """Random step problems (W = A M^-1 A^T of random A and M; 5 contacts, some with friction, and a bilateral
+    row): the Gauss-Seidel answer, polished, satisfies Newton's and Coulomb's conditions; and started from the
+    states it found (the warm start) it gives the same impulses without a sweep."""
+    rng = np.random.default_rng(seed)
+    nv = 12
+    blocks, m = [Block(BILATERAL, (0,))], 1
+    for i in range(5):
+        if i % 2:
+            blocks.append(Block(PLANAR, (m, m + 1), float(rng.uniform(0.1, 1.0))))
+            m += 2
+        else:
+            blocks.append(Block(NORMAL, (m,)))
+            m += 1
+    A = rng.normal(size=(m, nv))
+    B = rng.normal(size=(nv, nv))
+    W = A @ np.linalg.inv(B @ B.T + nv * np.eye(nv)) @ A.T
+    w0 = rng.normal(size=m)
+    sol = solve(W, w0, blocks)
+    assert sol.verified and sol.sweeps > 0
+    _check(W, w0, blocks, sol.P)
+    again = solve(W, w0, blocks, sol.states)
+    assert again.sweeps == 0 and np.allclose(again.P, sol.P, rtol=0, atol=1e-12)
+
+
+def test_contact_problem_local_cases():
+    """One contact with friction on a unit point mass (W = I): approaching at 1 with slip 0.2, mu = 0.5 sticks
+    (P = (1, -0.2)); with slip 2 it slides (P_n = 1, P_t = -0.5, slip after 1.5); leaving, it stays open."""
+    blocks = [Block(PLANAR, (0, 1), 0.5)]
+    stick = solve(np.eye(2), np.array([-1.0, 0.2]), blocks)
+    assert stick.states == [STICK] and np.allclose(stick.P, [1.0, -0.2], rtol=0, atol=1e-15)
+    slide = solve(np.eye(2), np.array([-1.0, 2.0]), blocks)
+    assert slide.states == [SLIP_POS] and np.allclose(slide.P, [1.0, -0.5], rtol=0, atol=1e-15)
+    leave = solve(np.eye(2), np.array([1.0, 2.0]), blocks)
+    assert leave.states == [OPEN] and not leave.P.any()
