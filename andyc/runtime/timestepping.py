@@ -94,6 +94,8 @@ class _Stepper:
         self.phi, self.c = np.empty(model.nh), np.empty(model.nc)
         self.A, self.kappa = np.empty((model.nc, self.nv)), np.empty(model.nc)
         self.guess = None           # the last step's blocks and states (a warm start)
+        self.nu = len(model.input_names)
+        self.no_inputs = np.zeros(0)
 
     def constraints(self, t, x, u, d):
         self.model.module.constraints(t, x, u, self.p, d, self.phi, self.c, self.A, self.kappa)
@@ -105,13 +107,16 @@ class _Stepper:
         nx = model.nx
         state = x[:nx]
         v = state[nq:nq + nv].copy()
-        predicted = state.copy()
-        predicted[:nq] += 0.5 * h * v[:nq]
         mid = state.copy()
         mid[:nq] += theta * h * v[:nq]
         tm = t + theta * h
-        u = inputs_at(model, source, tm, mid, p, d, flow)
-        self.constraints(t + 0.5 * h, predicted, u, d)
+        u = inputs_at(model, source, tm, mid, p, d, flow) if self.nu else self.no_inputs
+        if theta == 0.5:                            # (the predicted point is the mid point)
+            self.constraints(tm, mid, u, d)
+        else:
+            predicted = state.copy()
+            predicted[:nq] += 0.5 * h * v[:nq]
+            self.constraints(t + 0.5 * h, predicted, u, d)
         touching = [i for i, r in enumerate(self.rows) if self.phi[r] <= TOUCHING]
         self.numerics._dynamics(model.ref, tm, mid, u, p, d, self.M, self.G)
         try:            # (M^-1 from its Cholesky factor: also the test that M is positive definite)
@@ -124,7 +129,8 @@ class _Stepper:
         states = [OPEN] * len(self.rows)
         v_new = v_free
         if touching or self.bilateral:
-            self.constraints(tm, mid, u, d)
+            if theta != 0.5:
+                self.constraints(tm, mid, u, d)
             R, blocks = list(self.bilateral), [Block(BILATERAL, (k,)) for k in range(len(self.bilateral))]
             for i in touching:
                 if self.stick[i] >= 0:
@@ -203,7 +209,8 @@ def run_moreau(model, x, source, p, d, flow, t_end, dt, every, theta, bar, inter
             break
         if (k + 1) % every == 0 or k + 1 == n_steps:
             out_t[row], out_x[row], out_f[row], out_d[row] = t, x, flow, d
-            out_u[row] = inputs_at(model, source, t, x[:model.nx], p, d, flow)
+            if nu:
+                out_u[row] = inputs_at(model, source, t, x[:model.nx], p, d, flow)
             forces[row] = np.where(seen, total, np.nan) / (dt * (every if (k + 1) % every == 0 else (k + 1) % every))
             total[:], seen[:] = 0.0, False
             row += 1
