@@ -96,6 +96,17 @@ def test_rod_lands_on_both_supports_without_turning(compiled):
     assert np.allclose(run.multipliers[-1], G / 2, rtol=0, atol=1e-10)
 
 
+def test_every_logs_the_mean_force_of_its_steps(compiled):
+    """Logging one sample in 10 keeps the same steps: the states at the common samples are the every-step run's,
+    and each sample's force is the mean of its 10 steps' (so sum(force) 10 h is the same total impulse)."""
+    model = compiled("rod_drop")
+    one = andyc.simulate(model, 1.0, dt=H, method="moreau")
+    ten = andyc.simulate(model, 1.0, dt=H, method="moreau", every=10)
+    assert np.array_equal(ten.state, one.state[::10])
+    impulses = np.nan_to_num(one.multipliers[1:]).reshape(-1, 10, 2).sum(axis=1) * H
+    assert np.allclose(np.nan_to_num(ten.multipliers[1:]) * 10 * H, impulses, rtol=0, atol=1e-14)
+
+
 def test_rocking_block_against_housner(compiled):
     """The rocking block (tests/test_rocking_block.py: the quadrature of its free rocking, Housner's ratio): its
     first two impacts (th crossing level) come in the steps that hold the exact times, and the angular velocity
