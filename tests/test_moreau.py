@@ -8,7 +8,8 @@ import pytest
 
 import andyc
 from andyc.errors import SimulationError
-from andyc.runtime.contact_problem import BILATERAL, NORMAL, OPEN, PLANAR, SLIP_NEG, SLIP_POS, STICK, Block, solve
+from andyc.runtime.contact_problem import (BILATERAL, NORMAL, OPEN, PLANAR, SLIDE, SLIP_NEG, SLIP_POS, SPATIAL, STICK,
+                                           Block, solve)
 from tests.support import MODELS
 from tests.support.cli import invoke
 
@@ -125,6 +126,39 @@ def test_rocking_block_against_housner(compiled):
     assert run.stats["unverified_steps"] == 0
 
 
+@pytest.mark.parametrize("th, mu", [(0.3, 0.5), (0.5, 0.3)], ids=["stops", "slides-on"])
+def test_spatial_friction_block_against_the_reference(compiled, th, mu):
+    """The block pushed across the incline at 1 m/s (spatial friction; tests/test_spatial_friction.py's independent
+    SciPy integration): the path converges at first order (the friction's direction is the slip's after each step,
+    an O(h) lag): off the reference by at most 1e-3 m at h = 1e-3 and half that, to 10 %, at h / 2. With
+    mu > tan th it sticks within 2 h of the reference's stop (its path O(h) off) and stays, moving <= 1e-12 m,
+    held by the friction m g sin th up the slope (mean force, 1e-10)."""
+    from tests.test_spatial_friction import sliding_reference, slope_coordinates
+
+    sol, t_stop = sliding_reference(th, mu, 1.0, 1.0)
+    errors = []
+    for h in (H, H / 2):
+        run = andyc.simulate(compiled("block_incline_spatial"), 1.0, dt=h, method="moreau",
+                             parameters={"th": th, "mu": mu})
+        s, w = slope_coordinates(run, th)
+        ref = sol(np.minimum(run.time, t_stop or 1.0))
+        errors.append(max(np.max(np.abs(s - ref[0])), np.max(np.abs(w - ref[1]))))
+        assert run.stats["unverified_steps"] == 0
+    assert errors[0] <= 1e-3 and 0.45 <= errors[1] / errors[0] <= 0.55
+    modes = run.contact_modes[1:, 0]
+    if t_stop is None:
+        assert set(modes) == {SLIDE}
+        return
+    stuck = 1 + np.nonzero(modes == STICK)[0]
+    assert abs(run.time[stuck[0]] - t_stop) <= 2 * H / 2
+    assert np.all(np.diff(stuck) == 1) and stuck[-1] == len(run.time) - 1      # and it stays
+    rest = run.state[stuck[0]:, :3]
+    assert np.max(np.abs(rest - rest[-1])) <= 1e-12
+    friction = run.multipliers[stuck[0] + 1:, 1:3]   # friction_slope_1 (up the slope), _2 (across); after the
+    #                                                  step that stops it (its impulse stops the slip left)
+    assert np.allclose(friction, [G * math.sin(th), 0.0], rtol=0, atol=1e-10)
+
+
 def test_usage_errors(compiled):
     with pytest.raises(SimulationError, match="needs contacts"):
         andyc.simulate(compiled("pendulum_a01"), 0.1, method="moreau")
@@ -155,30 +189,28 @@ def _check(W, w0, blocks, P, tol=1e-9):
             assert abs(w[n]) <= tol
             continue
         assert P[n] >= -tol and w[n] >= -tol and abs(P[n] * w[n]) <= tol
-        if b.kind == PLANAR:
-            t = b.rows[1]
-            assert abs(P[t]) <= b.mu * P[n] + tol
-            if abs(P[t]) < b.mu * P[n] - 1e-6:
-                assert abs(w[t]) <= tol                 # inside the cone: no slip
-            elif abs(w[t]) > tol:
-                assert P[t] * w[t] <= 0 and abs(P[t]) >= b.mu * P[n] - tol     # against the slip, on the edge
+        if b.kind in (PLANAR, SPATIAL):
+            t = list(b.rows[1:])
+            Pt, slip = P[t], w[t]
+            assert np.linalg.norm(Pt) <= b.mu * P[n] + tol
+            if np.linalg.norm(Pt) < b.mu * P[n] - 1e-6:
+                assert np.linalg.norm(slip) <= tol       # inside the cone: no slip
+            elif np.linalg.norm(slip) > tol:             # on its edge, against the slip
+                assert np.allclose(Pt, -b.mu * P[n] * slip / np.linalg.norm(slip), rtol=0, atol=tol)
 
 
 @pytest.mark.parametrize("seed", range(20))
 def test_contact_problem_solves_its_conditions(seed):
-    """Random step problems (W = A M^-1 A^T of random A and M; 5 contacts, some with friction, and a bilateral
-    row): the Gauss-Seidel answer, polished, satisfies Newton's and Coulomb's conditions; and started from the
-    states it found (the warm start) it gives the same impulses without a sweep."""
+    """Random step problems (W = A M^-1 A^T of random A and M; 6 contacts, frictionless, planar and spatial, and
+    a bilateral row): the Gauss-Seidel answer, polished, satisfies Newton's and Coulomb's conditions; and started
+    from the states it found (the warm start) it gives the same impulses without a sweep."""
     rng = np.random.default_rng(seed)
-    nv = 12
+    nv = 14
     blocks, m = [Block(BILATERAL, (0,))], 1
-    for i in range(5):
-        if i % 2:
-            blocks.append(Block(PLANAR, (m, m + 1), float(rng.uniform(0.1, 1.0))))
-            m += 2
-        else:
-            blocks.append(Block(NORMAL, (m,)))
-            m += 1
+    for i in range(6):
+        kind = (NORMAL, PLANAR, SPATIAL)[i % 3]
+        blocks.append(Block(kind, tuple(range(m, m + kind)), float(rng.uniform(0.1, 1.0))))
+        m += kind
     A = rng.normal(size=(m, nv))
     B = rng.normal(size=(nv, nv))
     W = A @ np.linalg.inv(B @ B.T + nv * np.eye(nv)) @ A.T
@@ -186,7 +218,7 @@ def test_contact_problem_solves_its_conditions(seed):
     sol = solve(W, w0, blocks)
     assert sol.verified and sol.sweeps > 0
     _check(W, w0, blocks, sol.P)
-    again = solve(W, w0, blocks, sol.states)
+    again = solve(W, w0, blocks, sol)
     assert again.sweeps == 0 and np.allclose(again.P, sol.P, rtol=0, atol=1e-12)
 
 

@@ -8,8 +8,8 @@ Moreau-Jean scheme) write it, at a fixed step h, with theta in [1/2, 1] (TimeSte
     index set   I = {contact i : g_i(q_k + h v_k / 2) <= 0}           (the gap at the predicted mid point)
     M (v_{k+1} - v_k) = h G(t_{k+theta}, q_{k+theta}, v_k) + A^T P     (M, G, A at the mid point)
     each contact in I:  0 <= u_n,k+1 + e u_n,k  _|_  P_n >= 0         (Newton's law at velocity level)
-                        planar Coulomb on P_t: |P_t| <= mu P_n, the slip u_t,k+1 = 0 inside the cone, P_t against it
-                        on its edge
+                        Coulomb on P_t (planar, or spatial: P_t in the disk): |P_t| <= mu P_n, the slip u_t,k+1 = 0
+                        inside the cone, P_t = -mu P_n u_t,k+1 / |u_t,k+1| on its edge
     the model's own (bilateral) rows:  c_{k+1} = A v_{k+1} + b = 0
     q_{k+1} = q_k + h ((1 - theta) v_k + theta v_{k+1})
 
@@ -31,7 +31,7 @@ read them alike. Sample 0 has the ideal multipliers of the initial mode. The `ju
 of the contact impulses, P . (A v_{k+1/2} + b) with v_{k+1/2} = (v_k + v_{k+1}) / 2 (the energy an impulse
 changes in the step), so that E - E0 - W measures the scheme's own energy error.
 
-Not covered: spatial friction, nonholonomic or quaternion signals (q moves by v only), hand-written jumps
+Not covered: nonholonomic or quaternion signals (q moves by v only), hand-written jumps
 (refused with one line: TimeStepping's messages); bilateral rows hold at velocity level only, so their
 positions drift (O(h^2) a step at theta = 1/2). A Python loop calling the compiled leaves: about 10^4 steps/s.
 """
@@ -42,7 +42,7 @@ import numpy as np
 
 from andyc.errors import SimulationError
 from andyc.numerics.status import MESSAGES, REST_SPEED, SINGULAR_MASS
-from andyc.runtime.contact_problem import BILATERAL, NORMAL, OPEN, PLANAR, Block, solve
+from andyc.runtime.contact_problem import BILATERAL, NORMAL, OPEN, PLANAR, SPATIAL, Block, solve
 from andyc.runtime.contacts import TOUCHING, friction_coefficients
 from andyc.runtime.inputs import inputs_at
 from andyc.runtime.status import INTERRUPTED, at, ending, nonfinite
@@ -59,10 +59,6 @@ def check_model(model, theta: float) -> None:
     if not model.contact_names:
         raise SimulationError(f"{model.source}: the moreau method needs contacts (a contacts: section), and this "
                               "model has none; use another --method (rk4, projection, ...)")
-    if 2 in model.tangents:
-        name = model.contact_names[model.tangents.index(2)]
-        raise SimulationError(f"{model.source}: contact '{name}' has spatial friction, which the moreau method does "
-                              "not handle yet; use the event-driven methods (rk4, projection, ...)")
     if model.ns:
         raise SimulationError(f"{model.source}: the moreau method moves q by v, and this model has "
                               f"{model.ns} signal(s) (quaternions or nonholonomic); use another --method")
@@ -88,6 +84,7 @@ class _Stepper:
             if model.jump_contact[k] >= 0 and model.jump_kinds[k][0] == "impact":
                 self.e[model.jump_contact[k]] = value
         self.mu = friction_coefficients(model, p)
+        self.tangents = model.tangents
         self.numerics = model.numerics.api
         self.M = np.zeros((self.nv, self.nv))
         self.G = np.zeros(model.module.SIZES["ng"])
@@ -133,7 +130,10 @@ class _Stepper:
                 self.constraints(tm, mid, u, d)
             R, blocks = list(self.bilateral), [Block(BILATERAL, (k,)) for k in range(len(self.bilateral))]
             for i in touching:
-                if self.stick[i] >= 0:
+                if self.tangents[i] == 2:
+                    blocks.append(Block(SPATIAL, (len(R), len(R) + 1, len(R) + 2), float(self.mu[i])))
+                    R += [self.rows[i], self.stick[i], self.stick[i] + 1]
+                elif self.stick[i] >= 0:
                     blocks.append(Block(PLANAR, (len(R), len(R) + 1), float(self.mu[i])))
                     R += [self.rows[i], self.stick[i]]
                 else:
@@ -148,7 +148,7 @@ class _Stepper:
             key = tuple(R)
             guess = self.guess[1] if self.guess is not None and self.guess[0] == key else None
             sol = solve(A @ X, w0, blocks, guess)
-            self.guess = (key, sol.states)
+            self.guess = (key, sol)
             stats["contact_sweeps"] += sol.sweeps
             stats["unverified_steps"] += not sol.verified
             v_new = v_free + X @ sol.P
