@@ -74,6 +74,20 @@ def test_block_sticks_or_slides(compiled, mu):
         assert set(run.contact_modes[1:, 0]) == {SLIP_NEG}     # slipping down: backwards
 
 
+def test_ball_thrown_sliding_rolls_at_five_sevenths(compiled):
+    """The ball thrown sliding at v0 = 2 m/s without spin (mu = 0.2): its slip falls at (7/2) mu g and it rolls from
+    t* = 2 v0 / (7 mu g) at 5 v0 / 7 (the friction impulses have no moment about the contact point, so its angular
+    momentum about it, m r v + I w, is kept through the step that stops the slip too): the speed to 1e-12, the
+    first rolling sample within a step of t*."""
+    v0, mu = 2.0, 0.2
+    run = andyc.simulate(compiled("ball_rolling"), 1.0, dt=H, method="moreau")
+    rolling = run.contact_modes[:, 0] == STICK
+    first = np.nonzero(rolling)[0][0]
+    assert np.all(rolling[first:]) and 0.0 <= run.time[first] - 2 * v0 / (7 * mu * G) <= H
+    assert np.max(np.abs(run.column("x_dot")[first:] - 5 * v0 / 7)) <= 1e-12
+    assert np.max(np.abs(run.column("x_dot")[first:] + 0.1 * run.column("th_dot")[first:])) <= 1e-12
+
+
 def test_theta_one_is_backward_euler_in_the_speeds(compiled):
     """theta = 1: x_(k+1) = x_k + h v_(k+1), so under a constant acceleration -a the slope position is
     -a (t^2 + h t) / 2 exactly (the sum of h^2 a (1 + ... + n)); 1e-10 m over 2 s."""
@@ -162,6 +176,8 @@ def test_spatial_friction_block_against_the_reference(compiled, th, mu):
 def test_usage_errors(compiled):
     with pytest.raises(SimulationError, match="needs contacts"):
         andyc.simulate(compiled("pendulum_a01"), 0.1, method="moreau")
+    with pytest.raises(SimulationError, match=r"moves q by v, and this model has 4 signal\(s\)"):
+        andyc.simulate(compiled("ball_sliding_spatial"), 0.1, method="moreau")
     with pytest.raises(SimulationError, match=r"theta is 0\.3; use a value in \[0\.5, 1\]"):
         andyc.simulate(compiled("bouncing_ball_contact"), 0.1, method="moreau", stepping=andyc.TimeStepping(0.3))
 
