@@ -196,6 +196,24 @@ def test_cli_usage_errors_exit_2(shipped_build, tmp_path, args, message):
     assert not (tmp_path / "run.h5").exists()
 
 
+def test_cli_run_file_and_plot(shipped_build, tmp_path):
+    """`andyc sim --method moreau` writes the run file the plots read: its flows (contact modes) and mean forces as
+    the in-process run's, and `andyc plot` draws it."""
+    from andyc.runtime.run import read_h5
+
+    h5, png = tmp_path / "rod.h5", tmp_path / "rod.png"
+    result = invoke("sim", MODELS / "rod_drop.yaml", "--t-end", 0.5, "--method", "moreau", "--theta", 0.75,
+                    "--build-dir", shipped_build, "-o", h5)
+    assert result.exit_code == 0, result.output
+    assert "moreau" in result.stdout and "500 steps" in result.stdout
+    run = read_h5(h5)
+    model = andyc.compile_model(MODELS / "rod_drop.yaml", shipped_build)[0]
+    again = andyc.simulate(model, 0.5, dt=H, method="moreau", stepping=andyc.TimeStepping(0.75))
+    assert run.method == "moreau" and np.array_equal(run.flow, again.flow)
+    assert np.array_equal(run.multipliers, again.multipliers, equal_nan=True)
+    assert invoke("plot", h5, "-o", png).exit_code == 0 and png.stat().st_size > 10_000
+
+
 def _check(W, w0, blocks, P, tol=1e-9):
     """The step problem's conditions at P (andyc.runtime.contact_problem's docstring), to tol."""
     w = w0 + W @ P
