@@ -19,15 +19,15 @@ andyc.runtime.contacts enumerates the active sets of an impact; a time-stepping 
 contacts, where enumeration (up to 4^n cases) is not an option. So the step's problem is solved as Jean 1999
 does (The non-smooth contact dynamics method, CMAME 177, sec. 5): nonlinear Gauss-Seidel over the contacts
 (NSGS, a projected Gauss-Seidel whose local problem, one contact's normal and tangential impulses, is solved
-exactly: open, sticking, sliding either way; spatial sliding by bisection on the slip's direction), each sweep
-O(rows^2). Gauss-Seidel converges only linearly (and
-slowly where W is nearly singular), so its answer is then polished: the contact states it found (open, stick,
-slip +, slip -; a spatial slide with its direction) fix an active set, whose linear equations are solved by least squares (redundant rows allowed,
-as in andyc.runtime.contacts) and checked against every inequality; a checked solution is exact to rounding,
-one that fails the check leaves the Gauss-Seidel answer (counted: Solution.verified False). The last step's
-states are tried first (a warm start: a resting or sliding contact keeps its state, and the step then costs one
-least-squares solve, no sweep). No Python LCP library is kept well enough to depend on (Siconos' bindings are
-not on PyPI for our Pythons; Lemke's pivoting would be a second, exact algorithm the polish already gives).
+exactly: open, sticking, sliding either way; a spatial slide's direction by the secant method, else bisection),
+each sweep O(rows^2). Gauss-Seidel converges only linearly (and slowly where W is nearly singular), so its
+answer is then polished: the contact states it found (open, stick, slip +, slip -; a spatial slide with its
+direction) fix an active set, whose linear equations are solved by least squares (redundant rows allowed, as in
+andyc.runtime.contacts) and checked against every inequality; a checked solution is exact to rounding, one that
+fails the check leaves the Gauss-Seidel answer (counted: Solution.verified False). The last step's solution is
+tried first (a warm start: a resting or sliding contact keeps its state, and the step then costs one
+least-squares solve, no sweep). No Python LCP library is kept well enough to depend on (PyPI's lemkelcp is a
+0.1 of 2016; Siconos is not on PyPI), and Lemke's pivoting would not take Coulomb's disk.
 """
 
 from __future__ import annotations

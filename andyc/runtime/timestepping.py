@@ -2,10 +2,12 @@
 
 Moreau's theta-scheme as Jean 1999 (The non-smooth contact dynamics method, CMAME 177, 235-257, sec. 4) and
 Acary & Brogliato 2008 (Numerical Methods for Nonsmooth Dynamical Systems, Springer, sec. 10.1, the
-Moreau-Jean scheme) write it, at a fixed step h, with theta in [1/2, 1] (TimeStepping.theta, 1/2 by default):
+Moreau-Jean scheme; its equation numbers are not quoted here: the book was not at hand to check them) write it,
+at a fixed step h, with theta in [1/2, 1] (TimeStepping.theta, 1/2 by default):
 
     q_{k+theta} = q_k + theta h v_k
-    index set   I = {contact i : g_i(q_k + h v_k / 2) <= 0}           (the gap at the predicted mid point)
+    index set   I = {contact i : g_i(q_k + h v_k / 2) <= 0}           (the gap predicted half a step on, for
+                                                                        every theta)
     M (v_{k+1} - v_k) = h G(t_{k+theta}, q_{k+theta}, v_k) + A^T P     (M, G, A at the mid point)
     each contact in I:  0 <= u_n,k+1 + e u_n,k  _|_  P_n >= 0         (Newton's law at velocity level)
                         Coulomb on P_t (planar, or spatial: P_t in the disk): |P_t| <= mu P_n, the slip u_t,k+1 = 0
@@ -16,25 +18,27 @@ Moreau-Jean scheme) write it, at a fixed step h, with theta in [1/2, 1] (TimeSte
 with G everything but the inertia term (M dv/dt = G), A the rows' Jacobian and u = A v + b their velocity
 residuals (a gap's normal speed, a stick row's slip) at the mid point. The index set's test is g_i <= TOUCHING
 (1e-12, andyc.runtime.contacts) rather than <= 0: a block sliding on a slope has its gap at a rounding either
-side of 0, and one step left out of the set would let it fall for a step (g h^2 into the slope). No contact is located in time: an impact
-is an impulse within the step that finds the gap closed, a contact at rest carries P_n = m g h each step, and the
-impact times accumulating at a Zeno point need nothing special (the scheme is O(h) in time across impacts,
-second order in smooth motion at theta = 1/2). The step's contact problem (W = A M^-1 A^T over the rows) is
-solved by andyc.runtime.contact_problem (nonlinear Gauss-Seidel, then the active set it finds solved exactly).
+side of 0, and one step left out of the set would let it fall for a step (g h^2 into the slope). No contact is
+located in time: an impact is an impulse within the step that finds the gap closed, a contact at rest carries
+P_n = m g h each step, and the impact times accumulating at a Zeno point need nothing special (the scheme is
+O(h) in time across impacts and where the friction's direction turns, second order in smooth motion at
+theta = 1/2). The step's contact problem (W = A M^-1 A^T over the rows) is solved by
+andyc.runtime.contact_problem (nonlinear Gauss-Seidel, then the active set it finds solved exactly).
 
 Logged per sample: the state, the contact states of the step that ends there as the flow (open, stick, slip +,
 slip -: from the impulses and slips of the solution, in andyc.spec.contacts' mixed radix; a contact whose impulse
-leaves it lifting off, faster than REST_SPEED, is open: a bounce), and as the multipliers
-the mean forces P / h of the steps since the last sample (the impulse of each step is multiplier * dt with
-every = 1), in the rows and units the event-driven methods log their multipliers, so that plots and analyses
-read them alike. Sample 0 has the ideal multipliers of the initial mode. The `jumps` work slot takes the work
-of the contact impulses, P . (A v_{k+1/2} + b) with v_{k+1/2} = (v_k + v_{k+1}) / 2 (the energy an impulse
-changes in the step), so that E - E0 - W measures the scheme's own energy error.
+leaves it lifting off, faster than REST_SPEED, is open: a bounce), and as the multipliers the mean forces P / h
+of the steps since the last sample (the impulse of each step is multiplier * dt with every = 1), in the rows and
+units the event-driven methods log their multipliers, so that plots and analyses read them alike (NaN: a row in
+no step's problem since the last sample). Sample 0 has the ideal multipliers of the initial mode. The `jumps`
+work slot takes the work of the contact impulses, P . (A v_{k+1/2} + b) with v_{k+1/2} = (v_k + v_{k+1}) / 2
+(the energy an impulse changes in the step), so that E - E0 - W measures the scheme's own energy error.
 
 The bilateral rows, held at velocity level at the mid point, drift; after each step the state is put back on
 them (positions, then speeds) by the projection method's Braun & Goldfarb corrections (andyc_numerics'
 dynamics.project over the rows of the flow with every contact open: the bilateral ones). Not covered:
-nonholonomic or quaternion signals (q moves by v only), hand-written jumps (refused with one line: check_model). A Python loop calling the compiled leaves: about 10^4 steps/s.
+nonholonomic or quaternion signals (q moves by v only), hand-written jumps (refused with one line:
+check_model). A Python loop calling the compiled leaves: 2e3 to 7e3 steps/s on the 2-core machine (README).
 """
 
 from __future__ import annotations
