@@ -179,6 +179,32 @@ def test_spatial_friction_block_against_the_reference(compiled, th, mu):
     assert np.allclose(friction, [G * math.sin(th), 0.0], rtol=0, atol=1e-10)
 
 
+def test_four_redundant_supports(compiled, tmp_path_factory):
+    """A rod dropped tilted (0.05 rad) onto four supports (its ends and at +-L/6: four contacts, the schema's most
+    without friction, on 2 speeds: W = A M^-1 A^T of rank 2): every step's problem is solved and verified, no
+    support ever pulls, and it comes to rest (speeds 1e-12) on the supports its landing left touching, their
+    mean forces summing to m g (1e-10) with no moment about the centre (1e-10)."""
+    text = (MODELS / "rod_drop.yaml").read_text().split("\n# andyc test:")[0] + "\n"
+    text = text.replace("name: rod_drop", "name: rod_four").replace("th: {initial: 0}", "th: {initial: 0.05}")
+    text = text.replace("  - {name: right_end, parent: rod, translation: [L/2, 0, 0]}\n",
+                        "  - {name: right_end, parent: rod, translation: [L/2, 0, 0]}\n"
+                        "  - {name: left_in, parent: rod, translation: [-L/6, 0, 0]}\n"
+                        "  - {name: right_in, parent: rod, translation: [L/6, 0, 0]}\n")
+    text += ("  - {name: left_inner, gap: left_in.y, restitution: e}\n"
+             "  - {name: right_inner, gap: right_in.y, restitution: e}\n")
+    path = tmp_path_factory.mktemp("moreau") / "rod_four.yaml"
+    path.write_text(text)
+    run = andyc.simulate(compiled(path), 2.0, dt=H, method="moreau")
+    assert run.finished and run.stats["unverified_steps"] == 0
+    forces = run.multipliers[1:]
+    assert np.nanmin(forces) >= 0.0
+    assert np.max(np.abs(run.state[-1, 2:])) <= 1e-12
+    end = np.nan_to_num(run.multipliers[-1])
+    th = run.column("th")[-1]
+    arms = math.cos(th) * np.array([-0.5, 0.5, -1 / 6, 1 / 6])        # left, right, left_inner, right_inner
+    assert abs(end.sum() - G) <= 1e-10 and abs(end @ arms) <= 1e-10
+
+
 PENDULUM_WALL = """\
 name: pendulum_wall
 description: A pendulum in Cartesian coordinates (a bilateral rod) striking a wall (a contact).
