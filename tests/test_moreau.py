@@ -11,6 +11,7 @@ from andyc.errors import SimulationError
 from andyc.runtime.contact_problem import (BILATERAL, NORMAL, OPEN, PLANAR, SLIDE, SLIP_NEG, SLIP_POS, SPATIAL, STICK,
                                            Block, solve)
 from tests.support import MODELS
+from tests.support.references import RATIO, impact_times, sliding_reference, slope_coordinates
 from tests.support.cli import invoke
 
 G = 9.81
@@ -134,8 +135,6 @@ def test_rocking_block_against_housner(compiled):
     one step either side of the first impact step has Housner's ratio 1 - (3/2) sin^2 alpha to 10 h (O(h): the
     impulse acts at the step's mid point, up to h |w| off level, and gravity turns the block over the three steps;
     measured 3.7 h at h = 1e-3, 0.3 h at 1e-4)."""
-    from tests.test_rocking_block import RATIO, impact_times
-
     run = andyc.simulate(compiled("rocking_block"), 1.2, dt=H, method="moreau")
     th, w, t = run.column("th"), run.column("th_dot"), run.time
     level = np.nonzero(th[1:] * th[:-1] < 0)[0]
@@ -153,8 +152,6 @@ def test_spatial_friction_block_against_the_reference(compiled, th, mu):
     an O(h) lag): off the reference by at most 1e-3 m at h = 1e-3 and half that, to 10 %, at h / 2. With
     mu > tan th it sticks within 2 h of the reference's stop (its path O(h) off) and stays, moving <= 1e-12 m,
     held by the friction m g sin th up the slope (mean force, 1e-10)."""
-    from tests.test_spatial_friction import sliding_reference, slope_coordinates
-
     sol, t_stop = sliding_reference(th, mu, 1.0, 1.0)
     errors = []
     for h in (H, H / 2):
