@@ -20,7 +20,8 @@ from andyc.runtime.methods import MAX_STEPS, METHODS
 @click.command()
 @click.argument("file", type=click.Path(dir_okay=False))
 @click.option("--t-end", default=10.0, show_default=True, type=POSITIVE, help="End time, s.")
-@click.option("--dt", default=1e-3, show_default=True, type=POSITIVE, help="Step (rk4, moreau) or output spacing (adaptive methods), s.")
+@click.option("--dt", default=1e-3, show_default=True, type=POSITIVE,
+              help="Step (rk4, moreau) or output spacing (adaptive methods), s.")
 @click.option("--method", default="rk4", show_default=True,
               type=click.Choice(list(METHODS)))
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
