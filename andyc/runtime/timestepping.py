@@ -92,7 +92,8 @@ class _Stepper:
                 self.e[model.jump_contact[k]] = value
         self.mu = friction_coefficients(model, p)
         self.tangents = model.tangents
-        self.numerics = model.numerics.api
+        self.numerics = model.numerics.api      # (its _dynamics: M and G from one evaluation of the leaf, where the
+        #                                         module's mass_matrix and generalized_force would make two)
         self.M = np.zeros((self.nv, self.nv))
         self.G = np.zeros(model.module.SIZES["ng"])
         self.phi, self.c = np.empty(model.nh), np.empty(model.nc)
