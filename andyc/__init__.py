@@ -7,7 +7,8 @@ The pipeline has four stages, each handing one object to the next::
     generate(model, dir)  -> BuildResult     (andyc.codegen)
     simulate(compiled)    -> Run             (andyc.runtime)
 
-simulate's options are grouped into small objects: Events, Init and Projection (andyc.runtime.options).
+simulate's options are grouped into small objects: Events, Init, Projection and TimeStepping
+(andyc.runtime.options).
 
 `build` and `compile_model` chain the first three; the CLI is a thin layer
 over these functions. The names are imported on first use, so that a command
@@ -19,7 +20,8 @@ __version__ = "0.1.0"
 _NAMES = {"Diagnostic": "andyc.errors", "SpecError": "andyc.errors",
           "load": "andyc.spec.load", "derive": "andyc.symbolic", "generate": "andyc.codegen.generate",
           "build": "andyc.pipeline", "compile_model": "andyc.pipeline", "build_derivatives": "andyc.pipeline", "simulate": "andyc.runtime.simulate",
-          "Events": "andyc.runtime.options", "Init": "andyc.runtime.options", "Projection": "andyc.runtime.options"}
+          "Events": "andyc.runtime.options", "Init": "andyc.runtime.options", "Projection": "andyc.runtime.options",
+          "TimeStepping": "andyc.runtime.options"}
 
 __all__ = ["__version__", *_NAMES]
 

@@ -125,3 +125,19 @@ def contacts_benchmark(tmp: Path) -> None:
                 resolve_impact(model, t, x.copy(), u, p, d, 0, False)
             best = min(best, (time.perf_counter() - tic) / 200)
         print(f"  one contact impact solved (Python, {label}): {best * 1e6:.0f} us")
+    moreau_benchmark(ball, build)
+
+
+def moreau_benchmark(ball, build: Path) -> None:
+    """The moreau method (Moreau-Jean time-stepping, a Python loop over the compiled leaves): steps per second on
+    the resting ball and the rocking block, against rk4 / projection's event-driven runs of the same models."""
+    block = andyc.compile_model(ROOT / "models" / "rocking_block.yaml", build)[0]
+    for label, model, t_end, options, event_driven in (
+            ("resting ball, 10 s", ball, 10.0, {"parameters": {"h0": 0.0}}, "rk4"),
+            ("rocking block, 5 s (rocks, then rests on both corners)", block, 5.0, {}, "projection")):
+        moreau = _best_run(model, t_end, 1e-3, repeats=3, method="moreau", **options)
+        events = _best_run(model, t_end, 1e-3, repeats=3, method=event_driven, **options)
+        s = moreau.stats
+        print(f"  moreau, {label}: {s['steps'] / s['wall_seconds']:.3g} steps/s ({s['contact_sweeps']} Gauss-Seidel "
+              f"sweeps, {s['unverified_steps']} steps unverified); {event_driven}: {_steps_per_second(events):.3g} "
+              "steps/s")

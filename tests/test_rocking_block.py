@@ -31,46 +31,11 @@ a finite time, where the block rests on both corners.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
-from scipy.integrate import quad
 
 import andyc
-
-M, B, H, G, TH0 = 1.0, 0.2, 0.6, 9.81, 0.2           # models/rocking_block.yaml's defaults
-R = math.hypot(B, H)
-ALPHA = math.atan2(B, H)
-I_O = 4 * M * R ** 2 / 3
-K = 2 * M * G * R / I_O
-RATIO = 1 - 1.5 * math.sin(ALPHA) ** 2
-
-
-def quarter_period(A: float) -> float:
-    """T(A)/4, the time from amplitude A to level, by quadrature (the module's docstring)."""
-    if A <= 0.0:
-        return 0.0
-
-    def integrand(s):
-        return 2 * s / math.sqrt(2 * K * math.sin(ALPHA - A + s * s / 2) * math.sin(s * s / 2))
-
-    return quad(integrand, 0.0, math.sqrt(A), epsabs=0.0, epsrel=1e-13, limit=200)[0]
-
-
-def amplitude(w: float) -> float:
-    """The tilt at which a block leaving level at angular speed w stops: cos(alpha - A) = cos(alpha) + w^2 / k."""
-    return ALPHA - math.acos(min(1.0, math.cos(ALPHA) + w * w / K))
-
-
-def impact_times(n: int) -> np.ndarray:
-    """The first n impact times, from the quadrature and the closed-form ratio."""
-    w = math.sqrt(K * (math.cos(ALPHA - TH0) - math.cos(ALPHA)))      # at the first impact
-    times = [quarter_period(TH0)]
-    while len(times) < n:
-        w *= RATIO
-        times.append(times[-1] + 2 * quarter_period(amplitude(w)))
-    return np.array(times)
+from tests.support.references import G, M, RATIO, TH0, impact_times, quarter_period
 
 
 @pytest.fixture(scope="module")

@@ -29,6 +29,7 @@ import pytest
 import andyc
 from andyc.errors import SpecError
 from andyc.runtime.run import read_h5
+from tests.support.references import sliding_reference, slope_coordinates
 
 G, MU, R = 9.81, 0.2, 0.1
 OPEN, STICK, SLIP = 0, 1, 2
@@ -131,36 +132,6 @@ def _world_spin(state):
 
 
 # -- a block pushed across an incline ---------------------------------------------------------------------
-
-def sliding_reference(th, mu, v0, t_end):
-    """An independent integration (SciPy DOP853) of a point sliding on the incline, in the slope's coordinates
-    (s up the slope, w across): s'' = -g sin th - mu g cos th s'/|v|, w'' = -mu g cos th w'/|v|, from rest at the
-    origin with speed v0 across. Returns the dense solution and the time it stops (None if it slides to t_end):
-    located where |v| = 1e-7, then the rest by d|v|/dt there (|v| falls linearly at the end: its error is
-    far below 1e-12 s)."""
-    from scipy.integrate import solve_ivp
-
-    def rhs(t, y):
-        speed = math.hypot(y[2], y[3])
-        friction = mu * G * math.cos(th) / speed
-        return [y[2], y[3], -G * math.sin(th) - friction * y[2], -friction * y[3]]
-
-    def slow(t, y):
-        return math.hypot(y[2], y[3]) - 1e-7
-    slow.terminal = True
-    sol = solve_ivp(rhs, (0.0, t_end), [0.0, 0.0, 0.0, v0], method="DOP853", rtol=1e-13, atol=1e-14,
-                    dense_output=True, events=slow)
-    if not sol.t_events[0].size:
-        return sol.sol, None
-    speed = sol.y_events[0][0][2:]
-    size = np.linalg.norm(speed)
-    rate = -G * math.sin(th) * speed[0] / size - mu * G * math.cos(th)
-    return sol.sol, sol.t_events[0][0] - size / rate
-
-
-def slope_coordinates(run, th):
-    return (math.cos(th) * run.column("x") + math.sin(th) * run.column("z"), run.column("y"))
-
 
 @pytest.mark.parametrize("th, mu", [(0.3, 0.5), (0.5, 0.3)], ids=["stops", "slides-on"])
 def test_block_pushed_across_the_slope_curves_down_it(block, th, mu):

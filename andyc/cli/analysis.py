@@ -119,8 +119,8 @@ def stability(file, methods, steps, horizons, tol, blowup, residual_tol, gains, 
         ["rk4", "projection", "lagrange", "baumgarte"] if model.nc else ["rk4"])
     adaptive = [m for m in chosen if m not in FIXED_STEP]
     if adaptive:
-        raise click.BadParameter(f"{', '.join(adaptive)}: the scan is over steps, for fixed-step methods",
-                                 param_hint="--methods")
+        raise click.BadParameter(f"{', '.join(adaptive)}: the scan is over steps, for the methods "
+                                 f"{', '.join(FIXED_STEP)}", param_hint="--methods")
     parameters, inputs = split_sets(overrides, model.input_names)
     options = {"parameters": parameters, "inputs": inputs}
     try:

@@ -20,7 +20,8 @@ from andyc.runtime.methods import MAX_STEPS, METHODS
 @click.command()
 @click.argument("file", type=click.Path(dir_okay=False))
 @click.option("--t-end", default=10.0, show_default=True, type=POSITIVE, help="End time, s.")
-@click.option("--dt", default=1e-3, show_default=True, type=POSITIVE, help="Step (rk4) or output spacing (adaptive methods), s.")
+@click.option("--dt", default=1e-3, show_default=True, type=POSITIVE,
+              help="Step (rk4, moreau) or output spacing (adaptive methods), s.")
 @click.option("--method", default="rk4", show_default=True,
               type=click.Choice(list(METHODS)))
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
@@ -53,6 +54,8 @@ from andyc.runtime.methods import MAX_STEPS, METHODS
               help="End the run right after the N-th occurrence of JUMP.")
 @click.option("--rtol", default=1e-8, show_default=True, type=TOLERANCE, help="Relative tolerance (adaptive methods).")
 @click.option("--atol", default=1e-10, show_default=True, type=POSITIVE, help="Absolute tolerance (adaptive methods).")
+@click.option("--theta", default=0.5, show_default=True, type=float,
+              help="The moreau method's theta, in [0.5, 1]: M and the forces at q_k + theta h v_k (0.5: trapezoidal).")
 @click.option("--timeout", default=None, type=POSITIVE, metavar="SECONDS",
               help="Stop the run after this much wall time, keeping its samples (also when a controller never "
                    "returns).")
@@ -63,8 +66,8 @@ from andyc.runtime.methods import MAX_STEPS, METHODS
 @build_dir_option("--out-dir")
 @format_option
 def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, frames, init, init_tol, energy_correction,
-        energy_tol, event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, timeout, sensitivities, build_dir,
-        fmt):
+        energy_tol, event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, theta, timeout, sensitivities,
+        build_dir, fmt):
     """Build FILE if needed, simulate it and write run files.
 
     The model's simulate: section gives the options not given here (then the defaults shown).
@@ -92,6 +95,8 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
     max_instant_jumps, zeno_tol, rtol, atol = (given[k] for k in ("max_instant_jumps", "zeno_tol", "rtol", "atol"))
     frames = given["frames"]
     stops = model.simulate.get("stop_after", {}) if not stop_after else stops
+    if method != "moreau" and click.get_current_context().get_parameter_source("theta").name == "COMMANDLINE":
+        raise Refused(f"--theta is the moreau method's, not {method}'s; drop it, or use --method moreau")
     if t_end / dt > MAX_STEPS:
         raise click.BadParameter(f"t_end / dt = {t_end / dt:.3g} steps, past the limit of {MAX_STEPS:.0e}; raise "
                                  f"--dt or shorten --t-end", param_hint="--dt")
@@ -135,7 +140,7 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
                                                              energy_tol=energy_tol),
                                  events=andyc.Events(tol=event_tol, max_instant_jumps=max_instant_jumps,
                                                      zeno_tol=zeno_tol, stop_after=stops),
-                                 sensitivities=sensitivities)
+                                 sensitivities=sensitivities, stepping=andyc.TimeStepping(theta=theta))
     except InitialStateError as exc:        # a problem of the model: exit 1, as andyc check's
         refused = exc.located(file)
     except SimulationError as exc:

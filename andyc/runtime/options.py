@@ -7,6 +7,7 @@ controllers), each passed to simulate() as one argument:
 Events      where guard crossings are located, and when jumps stop a run
 Init        what a constrained run does with an initial state off its constraint manifold
 Projection  what the fixed-step methods correct after each step
+TimeStepping  the moreau method's theta
 
 Light: importing this imports neither NumPy nor Numba nor SciPy.
 """
@@ -73,3 +74,14 @@ class Projection:
     normalize: bool = True
     energy_correction: bool | None = None
     energy_tol: float = 1e-6
+
+
+@dataclass(frozen=True)
+class TimeStepping:
+    """The moreau method's scheme (andyc.runtime.timestepping; the other methods ignore it).
+
+    theta  in [1/2, 1]: where in the step M and the forces are taken, q_{k+theta} = q_k + theta h v_k, and
+           q_{k+1} = q_k + h ((1 - theta) v_k + theta v_{k+1}); 1/2 (trapezoidal) is second order in smooth
+           motion and keeps a free oscillation's energy, 1 (backward Euler in the speeds) damps it
+    """
+    theta: float = 0.5

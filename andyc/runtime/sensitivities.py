@@ -105,9 +105,10 @@ def check(model, method: str, source, controller, projection=None) -> None:
     # the slots that can do work in these methods ('baumgarte' holds the soft terms' work: 0 but in that method)
     work = [w for w in getattr(model, "work_names", ()) if w not in ("jumps", "baumgarte")]
     if method not in ("rk4", "lagrange", "projection"):
+        what = {"baumgarte": "baumgarte terms are", "moreau": "moreau method's impulses are"}.get(method,
+                                                                                                 "adaptive methods are")
         why = (f"method '{method}': sensitivities follow the rk4, lagrange and projection methods only (the "
-               f"{'baumgarte terms are' if method == 'baumgarte' else 'adaptive methods are'} not differentiated); "
-               f"use --method rk4")
+               f"{what} not differentiated); use --method rk4")
     elif controller is not None or source.drives or model.input_expressions:
         why = "inputs driven by expressions, tables or a controller are not differentiated; hold the inputs"
     elif model.input_names and np.any(np.asarray(m.FLOW_SETS_INPUT)):

@@ -7,6 +7,8 @@
                        declares it conserved)
     lagrange           rk4 with Lagrange multipliers (ANDY eq. 10-12)
     baumgarte          rk4 with multipliers and soft terms (ANDY eq. 15)
+    moreau             Moreau-Jean time-stepping for models with contacts: impulses
+                       in every step, no event location (andyc.runtime.timestepping)
     DOP853 Radau LSODA scipy's adaptive solvers, stepped one step at a time so
                        that a failed run keeps what it computed
 
@@ -16,6 +18,7 @@ driver; _Assembly turns the driver's log into the Run. The concepts live in thei
     options.py     Events, Init, Projection: the run's options, grouped
     initial.py     the initial state: its consistency with the constraints, its projection, independent rows
     fixed_step.py  the fixed-step driver over the build's compiled loop
+    timestepping.py  the moreau method's driver, a Python loop over the compiled leaves
     adaptive.py    the adaptive driver over SciPy's solvers, with event location on the dense output
     events.py      the jumps as they happen (EventLog: loops, Zeno, stop_after), applied from Python
     status.py      the run's status and its messages
@@ -49,11 +52,12 @@ from andyc.runtime.fixed_step import MODE, run_fixed_step
 from andyc.runtime.initial import consistent_initial_state, initial_state, require_independent_rows
 from andyc.runtime.inputs import InputSource, input_source, inputs_at
 from andyc.runtime.interrupts import Interrupts
-from andyc.runtime.methods import FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
-from andyc.runtime.options import Events, Init, Projection
+from andyc.runtime.methods import ADAPTIVE, FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
+from andyc.runtime.options import Events, Init, Projection, TimeStepping
 from andyc.runtime.progress import Progress
 from andyc.runtime.run import Run, unit_quaternions
 from andyc.runtime.status import lost_constraints
+from andyc.runtime.timestepping import check_model, run_moreau
 
 
 def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str = "rk4", *,
@@ -61,7 +65,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
              flow0: str | int | None = None, every: int = 1, frames=None, rtol: float = 1e-8, atol: float = 1e-10,
              controller=None, progress: bool | None = None, interrupts: Interrupts | None = None,
              events: Events = Events(), init: Init = Init(), projection: Projection = Projection(),
-             sensitivities=False) -> Run:
+             sensitivities=False, stepping: TimeStepping = TimeStepping()) -> Run:
     """Integrate `model` from t = 0 to t_end and return the logged Run.
 
     dt is the step of the fixed-step methods and the output spacing of the adaptive ones; every N logs one
@@ -78,7 +82,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     events: event location and the stops of hybrid runs (Events: tol, max_instant_jumps, zeno_tol,
     stop_after); init: what a constrained run does with an initial state off the constraint manifold
     (Init: mode, tol); projection: what the fixed-step methods correct after each step (Projection:
-    normalize, energy_correction, energy_tol). See andyc.runtime.options.
+    normalize, energy_correction, energy_tol); stepping: the moreau method's scheme (TimeStepping: theta). See
+    andyc.runtime.options.
 
     sensitivities: also compute the exact derivatives of the run's end state, Run.sensitivities: "x0" dx(T)/dx0,
     "d0" dx(T)/dd0, "p" dx(T)/dp (x0 and d0 held), "time" dT/d(x0, d0, p) (nonzero when the run ends
@@ -91,8 +96,11 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     _check_option("events", events, Events)
     _check_option("init", init, Init)
     _check_option("projection", projection, Projection)
+    _check_option("stepping", stepping, TimeStepping)
     if method not in METHODS:
         raise SimulationError(f"unknown method '{method}'; available: {', '.join(METHODS)}")
+    if method == "moreau":
+        check_model(model, stepping.theta)
     projection = _energy_correction(model, method, projection)
     if not (math.isfinite(t_end) and math.isfinite(dt) and t_end > 0 and dt > 0 and every >= 1):
         raise SimulationError(f"need t_end > 0, dt > 0 and every >= 1, got t_end={t_end}, dt={dt}, every={every}")
@@ -126,7 +134,11 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
                        projection.energy_correction, initial, start)
     try:
         with interrupts.watching():
-            if method in FIXED_STEP:
+            forces = None
+            if method == "moreau":
+                log, status, stats, forces = run_moreau(model, x, source, p, d, flow, t_end, dt, every,
+                                                        stepping.theta, bar, interrupts, run_of)
+            elif method in FIXED_STEP:
                 log, status, stats = run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, projection,
                                                     bar, jumps, interrupts, run_of, tangent)
             else:
@@ -135,7 +147,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
             interrupts.stopped = True
     finally:
         bar.close()
-    run = run_of(log, status, stats)
+    run = run_of(log, status, stats, forces)
     if tangent is not None:
         run.sensitivities = tangent.result()
     return run
@@ -227,8 +239,9 @@ class _Assembly:
     initial: dict               # figures of the initial state's consistency (consistent_initial_state)
     start: float                # perf_counter() when the run started
 
-    def __call__(self, log, status: str, stats: dict) -> Run:
-        model, p, frame_names, fixed = self.model, self.p, self.frame_names, self.method in FIXED_STEP
+    def __call__(self, log, status: str, stats: dict, forces=None) -> Run:
+        """forces: the moreau method's mean contact forces (N, nc), its multipliers from the second sample on."""
+        model, p, frame_names, fixed = self.model, self.p, self.frame_names, self.method not in ADAPTIVE
         stats = {**stats, "wall_seconds": time.perf_counter() - self.start, "jumps": len(self.jumps.times),
                  **self.initial}
         t_log, x_log, u_log, f_log, d_log = log        # x_log: the state, then the work (andyc.runtime.work)
@@ -240,6 +253,8 @@ class _Assembly:
         phi, c, lam = np.empty((n, model.nh)), np.empty((n, model.nc)), np.empty((n, model.nc))
         if model.nc:
             integrator.evaluate_constraints(model.ref, work(model).ref, log, p, phi, c, lam)
+        if forces is not None:
+            lam[1:] = forces[1:]
         slip, slip_2 = slip_speeds(model, t_log, x_log, u_log, p, d_log) if model.contact_names else (None, None)
         frames_out, rotations = {}, {}
         if frame_names:
