@@ -191,7 +191,7 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool, fired: int = 
             states[i] = _stuck(model, d, i) if np.hypot(*slip) <= REST_SPEED else _set_direction(model, d, i, slip)
         else:
             states[i] = 1 if stick[i] < 0 else _slip_state(after[stick[i]])
-    return model.contact_flow(states)
+    return _settle(model, t, x, u, p, d, states)
 
 
 def _at_rest(model, t, x, u, p, d, R: list) -> int:
@@ -323,6 +323,11 @@ def initial_mode(model, t, x, u, p, d) -> int:
             states[i] = STICK if np.hypot(*slip) <= REST_SPEED else _set_direction(model, d, i, slip)
         elif s and stick[i] >= 0:
             states[i] = _slip_state(c[stick[i]])
+    return _settle(model, t, x, u, p, d, states)
+
+
+def _settle(model, t, x, u, p, d, states: list) -> int:
+    """The flow of the contacts closed in `states` (at rest) less those that would pull (initial_mode's rule)."""
     at_rest = [i for i, s in enumerate(states) if s]
     mode = _drop_pulling(model, t, x, u, p, d, list(states))
     if _complementary(model, t, x, u, p, d, mode, [i for i in at_rest if not mode[i]]):
@@ -393,7 +398,8 @@ def _painleve(model, t, x, u, p, d, i: int, state: int, mu: float) -> None:
         direction = slip / np.hypot(*slip) if np.hypot(*slip) > SLIP_TINY else d[k:k + 2]
         tangent, sigma = direction @ A[t1:t1 + 2], 1.0
     if not normal @ np.linalg.solve(M, normal - sigma * mu * tangent) > 0.0:
-        raise SimulationError(f"contact '{model.contact_names[i]}' at the start: {MESSAGES[PAINLEVE]}")
+        when = "at the start" if t == 0.0 else f"coming to rest at t = {t:.12g} s"
+        raise SimulationError(f"contact '{model.contact_names[i]}' {when}: {MESSAGES[PAINLEVE]}")
 
 
 def open_side(model, t, x, u, p, d, g0: dict) -> None:

@@ -134,7 +134,7 @@ def finish_jump(model, k, t, x_before, x, u, p, d, flow: int, jumps: EventLog) -
         try:
             flow = resolve_impact(model, t, x, u, p, d, flow, jumps.zeno(t) is not None or jumps.impact_again(t),
                                   model.jump_contact[k])
-        except (FloatingPointError, np.linalg.LinAlgError) as exc:
+        except (FloatingPointError, np.linalg.LinAlgError, SimulationError) as exc:
             return flow, f"stopped: contact impact in jump '{model.jump_names[k]}': {exc}" + at(t)
     elif model.jump_kinds and model.jump_kinds[k][0] == "stop":        # a slip ends: stick, or slip back
         try:
