@@ -136,3 +136,19 @@ def test_the_reference_gait_needs_its_trailing_foot_through_the_slope():
     speed = math.sqrt(g) * w0 * math.sin(th0) + par["l1"] * math.sin(qo1) * wo1 + par["l2"] * math.sin(qo2) * wo2
     assert abs(height) < 1e-4
     assert -0.06 < speed < -0.055
+
+
+def test_a_knee_strike_that_knocks_the_stance_knee_open_settles(walker):
+    """Two stops coupled through the bodies: at this start (another slope and stops) the swing knee's strike at
+    0.5329 s leaves the stance knee opening at a rounding's speed (4e-9 m/s) that its acceleration (-110 rad/s^2)
+    closes at once, and each knee's impact knocked the other open again: the run stopped at 0.5334 s after 100
+    jumps without time advancing. A second impact at one instant is now taken as accumulated (plastic, the touching
+    contacts at rest, then the mode in which the closed contacts push and the open ones open): both knees shut."""
+    p = {"a": 0.04589023273694572, "dk": 0.1776194502146184, "s0": 0.17108270177402046,
+         "w0": -0.8560875864802184, "wo1": 1.8722288447620965, "wo2": -1.6137662849142376}
+    run = andyc.simulate(walker, 0.7, dt=1e-3, method="projection", parameters=p, progress=False)
+    assert run.finished
+    names = run.event_names()
+    assert names.count("oknee_stop_impact_17") >= 1 and len(names) < 20
+    both_shut = walker.contact_flow([1, 0, 1, 1])          # inner foot sticking, both knees at their stops
+    assert run.flow[np.searchsorted(run.time, 0.6)] == both_shut

@@ -22,8 +22,11 @@ inequality is taken.
 An open contact approaching slower than REST_SPEED (andyc.numerics.status) takes no impact (nor does the
 integrator's `instant` fire its jump): right after a liftoff its gap is a rounding from zero, at rest.
 Modes after the impact: a touching contact whose normal speed after is at most REST_SPEED closes (e = 0, or a
-rebound too slow to matter); the others are open. When the jump times accumulate (Zeno: the EventLog's
-test, the same that stops a hand-written bouncing ball), the impact is solved plastic (e = 0 for every
+rebound too slow to matter), less those whose normal force would then pull, chosen as initial_mode chooses
+(_settle); the others are open. When the jump times accumulate (Zeno: the EventLog's test, the same that stops a
+hand-written bouncing ball; or a second contact impact at the same instant, EventLog.impact_again: two stops
+coupled through the bodies, each impact knocking the other open by a rounding, as a walker's knee strike and its
+stance knee), the impact is solved plastic (e = 0 for every
 contact), and the touching contacts are then set at rest (_at_rest), so the run goes on from the accumulation
 point: the ball comes to rest, and so does a rocking block on both its corners.
 
