@@ -1,7 +1,8 @@
 """The contacts section of bench/run.py (issue 21): steps per second of runs whose contacts open and close,
 the cost of contact handling per step against the same model without its contacts (item 8: the resting ball,
-the rocking block; alternated rounds in one run, min and max), the cost of a contact's impact against a
-hand-written jump of the same motion, and one impact's solve alone."""
+the rocking block; the knee walker with contacts against the hand-guarded one; alternated rounds in one run, min
+and max), the cost of a contact's impact against a hand-written jump of the same motion, and one impact's solve
+alone."""
 
 from __future__ import annotations
 
@@ -76,7 +77,32 @@ def contact_cost(tmp: Path, build: Path, rounds: int = 7) -> None:
               f"{max(without_us):.2f} us/step; contact handling {min(extra):.2f} .. {max(extra):.2f} us/step "
               f"(x{min(a / b for a, b in zip(with_us, without_us)):.2f} .. "
               f"x{max(a / b for a, b in zip(with_us, without_us)):.2f})")
-    print("    walker with contacts: not measured (no passive walker with unilateral feet that walks 20 steps yet)")
+    walker_cost(build, rounds)
+
+
+def walker_cost(build: Path, rounds: int) -> None:
+    """The knee walker with its feet and knee stops as contacts (64 modes, no hand-written jump) against the
+    hand-guarded walker (six flows, six jumps), alternated rounds: the same bodies and the same 3 s at dt = 1e-3
+    (projection), but not the same motion (the contact walker's 3 strides with flights against 5 steps of the
+    reference's gait), so the difference per step is contact handling together with what the gaits' events cost."""
+    contact = andyc.compile_model(ROOT / "models" / "passive_walker_contact.yaml", build)[0]
+    hand = andyc.compile_model(ROOT / "models" / "passive_walker.yaml", build)[0]
+    options = {"method": "projection"}
+    _us_per_step(contact, 0.01, 1e-3, options), _us_per_step(hand, 0.01, 1e-3, options)       # compile
+    with_us, without_us = [], []
+    for _ in range(rounds):
+        a, run = _us_per_step(contact, 3.0, 1e-3, options)
+        b, plain = _us_per_step(hand, 3.0, 1e-3, options)
+        with_us.append(a)
+        without_us.append(b)
+    extra = [a - b for a, b in zip(with_us, without_us)]
+    print(f"    walker with contacts (feet with friction, knee stops: 64 modes), 3 s at dt = 0.001 (projection): "
+          f"{run.stats['jumps']} jumps; {1e6 / max(with_us):.3g} .. {1e6 / min(with_us):.3g} steps/s "
+          f"({min(with_us):.2f} .. {max(with_us):.2f} us/step); the hand-guarded walker ({plain.stats['jumps']} "
+          f"jumps) {min(without_us):.2f} .. {max(without_us):.2f} us/step; contact handling {min(extra):.2f} .. "
+          f"{max(extra):.2f} us/step (x{min(a / b for a, b in zip(with_us, without_us)):.2f} .. "
+          f"x{max(a / b for a, b in zip(with_us, without_us)):.2f}; not the same motion: the contact walker does not "
+          "walk the reference's gait)")
 
 
 def contacts_benchmark(tmp: Path) -> None:

@@ -22,8 +22,11 @@ inequality is taken.
 An open contact approaching slower than REST_SPEED (andyc.numerics.status) takes no impact (nor does the
 integrator's `instant` fire its jump): right after a liftoff its gap is a rounding from zero, at rest.
 Modes after the impact: a touching contact whose normal speed after is at most REST_SPEED closes (e = 0, or a
-rebound too slow to matter); the others are open. When the jump times accumulate (Zeno: the EventLog's
-test, the same that stops a hand-written bouncing ball), the impact is solved plastic (e = 0 for every
+rebound too slow to matter), less those whose normal force would then pull, chosen as initial_mode chooses
+(_settle); the others are open. When the jump times accumulate (Zeno: the EventLog's test, the same that stops a
+hand-written bouncing ball; or a second contact impact at the same instant, EventLog.impact_again: two stops
+coupled through the bodies, each impact knocking the other open by a rounding, as a walker's knee strike and its
+stance knee), the impact is solved plastic (e = 0 for every
 contact), and the touching contacts are then set at rest (_at_rest), so the run goes on from the accumulation
 point: the ball comes to rest, and so does a rocking block on both its corners.
 
@@ -58,7 +61,7 @@ with friction sticking if it does not slip and the friction it needs is inside t
 from __future__ import annotations
 
 import math
-from itertools import product
+from itertools import combinations, product
 
 import numpy as np
 
@@ -89,9 +92,12 @@ def _terms(model, t, x, u, p, d):
     return M, phi, c, A
 
 
-def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool) -> int:
+def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool, fired: int = -1) -> int:
     """Apply the impulses of the contacts touching at (t, x) to x's speeds, in place; the new flow (the states of
-    the contacts after). plastic: e = 0 for every contact (the impact times accumulate)."""
+    the contacts after). plastic: e = 0 for every contact (the impact times accumulate). fired: the contact whose
+    impact jump this is; on zero (|gap| <= TOUCHING) it takes part whatever its speed, even one a rounding above
+    zero (a gap left opening at 4e-9 m/s by the impact before and accelerated closed: its root is located at the
+    step's start), so that the plastic impact of accumulated impacts sets it at rest too."""
     nq, nv = model.nq, model.nv
     M, phi, c, A = _terms(model, t, x, u, p, d)
     e = np.zeros(len(model.contact_names))
@@ -107,7 +113,8 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool) -> int:
     contact_row = set(rows) | {r for r in stick if r >= 0}
     bilateral = [r for r in model.active_rows(flow) if r not in contact_row]
     touching = [i for i, r in enumerate(rows)
-                if states[i] or (c[r] < -REST_SPEED and phi[r] <= max(SIMULTANEOUS * -c[r], TOUCHING))]
+                if states[i] or (c[r] < -REST_SPEED and phi[r] <= max(SIMULTANEOUS * -c[r], TOUCHING))
+                or (i == fired and abs(phi[r]) <= TOUCHING)]
     used = rows + bilateral + [r for r in stick if r >= 0] + [r + 1 for i, r in enumerate(stick) if spatial[i]]
     scale = max(1.0, float(np.max(np.abs(c[used])))) if used else 1.0
     tol = 1e-10 * scale
@@ -187,7 +194,7 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool) -> int:
             states[i] = _stuck(model, d, i) if np.hypot(*slip) <= REST_SPEED else _set_direction(model, d, i, slip)
         else:
             states[i] = 1 if stick[i] < 0 else _slip_state(after[stick[i]])
-    return model.contact_flow(states)
+    return _settle(model, t, x, u, p, d, states)
 
 
 def _at_rest(model, t, x, u, p, d, R: list) -> int:
@@ -303,11 +310,14 @@ def initial_mode(model, t, x, u, p, d) -> int:
     """The flow a run starts in: the contacts touching (|gap| <= TOUCHING) at rest (|normal speed| <= REST_SPEED),
     less those whose normal force in that mode is negative, the most negative first, one at a time (dropping one
     changes the others' forces); each with friction slipping its way if its slip speed exceeds REST_SPEED, else
-    sticking if the friction it needs is inside the cone (else slipping, _cone_state)."""
+    sticking if the friction it needs is inside the cone (else slipping, _cone_state). Should a contact so dropped
+    then close again at once (its gap's acceleration negative in that mode: two stops coupled through the bodies,
+    a walker's two knees, where dropping the most negative is the wrong one), the modes are enumerated instead, the
+    fewest dropped first, for the first in which the closed contacts push and the dropped ones open
+    (_complementary): the acceleration-level complementarity problem of Pfeiffer & Glocker (1996, ch. 6)."""
     _, phi, c, _ = _terms(model, t, x, u, p, d)
     rows = model.contact_rows
     stick = list(model.contact_stick_rows) or [-1] * len(rows)
-    mu = friction_coefficients(model, p)
     states = [int(abs(phi[r]) <= TOUCHING and abs(c[r]) <= REST_SPEED) for r in rows]
     tangents = model.tangents
     for i, s in enumerate(states):
@@ -316,6 +326,29 @@ def initial_mode(model, t, x, u, p, d) -> int:
             states[i] = STICK if np.hypot(*slip) <= REST_SPEED else _set_direction(model, d, i, slip)
         elif s and stick[i] >= 0:
             states[i] = _slip_state(c[stick[i]])
+    return _settle(model, t, x, u, p, d, states)
+
+
+def _settle(model, t, x, u, p, d, states: list) -> int:
+    """The flow of the contacts closed in `states` (at rest) less those that would pull (initial_mode's rule)."""
+    at_rest = [i for i, s in enumerate(states) if s]
+    mode = _drop_pulling(model, t, x, u, p, d, list(states))
+    if _complementary(model, t, x, u, p, d, mode, [i for i in at_rest if not mode[i]]):
+        return model.contact_flow(mode)
+    for n in range(1, len(at_rest) + 1):
+        for dropped in combinations(at_rest, n):
+            trial = [0 if i in dropped else s for i, s in enumerate(states)]
+            if _complementary(model, t, x, u, p, d, trial, dropped, pushing=True):
+                return model.contact_flow(_drop_pulling(model, t, x, u, p, d, trial))
+    return model.contact_flow(mode)
+
+
+def _drop_pulling(model, t, x, u, p, d, states: list) -> list:
+    """The contacts' states less those whose normal force is negative, the most negative first, one at a time;
+    each sticking one then sticking or slipping by its cone (initial_mode)."""
+    rows, tangents = model.contact_rows, model.tangents
+    stick = list(model.contact_stick_rows) or [-1] * len(rows)
+    mu = friction_coefficients(model, p)
     while any(states):
         flow = model.contact_flow(states)
         lam = model.module.multipliers(t, x, u, p, d, flow)
@@ -331,7 +364,28 @@ def initial_mode(model, t, x, u, p, d) -> int:
         if cone == states:
             break
         states = cone
-    return model.contact_flow(states)
+    return states
+
+
+def _complementary(model, t, x, u, p, d, states: list, dropped, pushing: bool = False) -> bool:
+    """In the mode of `states`, no dropped contact's gap accelerates closed (A_i dv/dt + kappa_i >= -tol) and, with
+    `pushing`, every closed contact pushes (its normal force >= -tol); tol is 1e-10 of the largest term."""
+    flow = model.contact_flow(states)
+    nq, nv = model.nq, model.nv
+    phi, c, A, kappa = np.empty(model.nh), np.empty(model.nc), np.empty((model.nc, nv)), np.empty(model.nc)
+    model.module.constraints(t, x, u, p, d, phi, c, A, kappa)
+    try:
+        vdot = model.module.rhs(t, x, u, p, d, flow)[nq:nq + nv]
+        lam = model.module.multipliers(t, x, u, p, d, flow)
+    except FloatingPointError:
+        return False
+    rows = model.contact_rows
+    accel = [A[rows[i]] @ vdot + kappa[rows[i]] for i in dropped]
+    scale = 1e-10 * max([1.0, float(np.max(np.abs(vdot)))] + [abs(a) for a in accel])
+    if any(a < -scale for a in accel):
+        return False
+    return not pushing or all(lam[r] >= -1e-10 * max(1.0, float(np.max(np.abs(lam)))) for i, r in enumerate(rows)
+                              if states[i])
 
 
 def _painleve(model, t, x, u, p, d, i: int, state: int, mu: float) -> None:
@@ -347,7 +401,8 @@ def _painleve(model, t, x, u, p, d, i: int, state: int, mu: float) -> None:
         direction = slip / np.hypot(*slip) if np.hypot(*slip) > SLIP_TINY else d[k:k + 2]
         tangent, sigma = direction @ A[t1:t1 + 2], 1.0
     if not normal @ np.linalg.solve(M, normal - sigma * mu * tangent) > 0.0:
-        raise SimulationError(f"contact '{model.contact_names[i]}' at the start: {MESSAGES[PAINLEVE]}")
+        when = "at the start" if t == 0.0 else f"coming to rest at t = {t:.12g} s"
+        raise SimulationError(f"contact '{model.contact_names[i]}' {when}: {MESSAGES[PAINLEVE]}")
 
 
 def open_side(model, t, x, u, p, d, g0: dict) -> None:

@@ -94,6 +94,14 @@ class EventLog:
         t_inf = times[-1] + dts[-1] * ratio / (1.0 - ratio)
         return (t_inf, ratio) if t_inf - times[-1] < self.zeno_tol else None
 
+    def impact_again(self, t: float) -> bool:
+        """The last jump was a contact's impact at this same instant (within the event tolerance): a second impact
+        at once is the limit of impacts whose times accumulate (two stops coupled through the bodies, each impact
+        knocking the other open a rounding's worth: a walker's knee strike and its stance knee), taken as Zeno's."""
+        return (bool(self.times) and self.model.jump_contact[self.jumps[-1]] >= 0
+                and self.model.jump_kinds[self.jumps[-1]][0] == "impact"
+                and t - self.times[-1] <= self.event_tol * max(1.0, abs(t)))
+
     def table(self) -> dict:
         n, nx, nd = len(self.times), self.model.nx, self.model.nd
         return {"time": np.array(self.times), "jump": np.array(self.jumps, dtype=np.int32),
@@ -124,8 +132,9 @@ def finish_jump(model, k, t, x_before, x, u, p, d, flow: int, jumps: EventLog) -
     function, the record. Returns (the flow it lands in, a stop message or None)."""
     if model.jump_contact and model.jump_contact[k] >= 0:
         try:
-            flow = resolve_impact(model, t, x, u, p, d, flow, jumps.zeno(t) is not None)
-        except (FloatingPointError, np.linalg.LinAlgError) as exc:
+            flow = resolve_impact(model, t, x, u, p, d, flow, jumps.zeno(t) is not None or jumps.impact_again(t),
+                                  model.jump_contact[k])
+        except (FloatingPointError, np.linalg.LinAlgError, SimulationError) as exc:
             return flow, f"stopped: contact impact in jump '{model.jump_names[k]}': {exc}" + at(t)
     elif model.jump_kinds and model.jump_kinds[k][0] == "stop":        # a slip ends: stick, or slip back
         try:

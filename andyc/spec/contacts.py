@@ -56,7 +56,8 @@ OPEN, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3      # a contact's state (without f
 SLIDE = 2                                          # spatial friction: 0 open, 1 stick, 2 slip (one state)
 STATE_SUFFIX = {STICK: "_stick", SLIP_POS: "_slip_pos", SLIP_NEG: "_slip_neg"}
 SPATIAL_SUFFIX = {STICK: "_stick", SLIDE: "_slip"}
-MAX_MODES = 16                                     # flows: 4 contacts without friction, 2 with
+MAX_MODES = 64                                     # flows: 4 contacts, at most 2 of them with friction (a walker's
+#                                                    feet with friction, its knees' stops without: 4 x 4 x 2 x 2)
 
 
 @dataclass(frozen=True)
@@ -123,8 +124,8 @@ def build_contacts(written: list, constraints: list, has_hybrid: bool, scope: Sc
     n_flows = flow_of([r - 1 for r in radix], radix) + 1
     if n_flows > MAX_MODES:
         scope.report.error(("contacts",), f"{len(contacts)} contacts, {sum(r != 2 for r in radix)} with friction, "
-                           f"make {n_flows} modes, more than {MAX_MODES}", "with friction, give at most 2 contacts "
-                           "(each has 4 modes: open, stick, slip forwards, slip backwards); without, at most 4")
+                           f"make {n_flows} modes, more than {MAX_MODES}", "give at most 4 contacts, at most 2 of them "
+                           "with friction (each has 4 modes: open, stick, slip forwards, slip backwards)")
         return contacts, [], []
     contact_rows = {c.name for c in contacts} | {c.stick for c in contacts if c.stick}
     bilateral = tuple(c.name for c in constraints if c.name not in contact_rows)
