@@ -120,7 +120,7 @@ def contacts_benchmark(tmp: Path) -> None:
         run = _best_run(model, t_end, dt, **options)
         print(f"  {label}: {run.stats['jumps']} jumps, {_steps_per_second(run):.3g} steps/s "
               f"({run.stats['wall_seconds'] * 1e3:.1f} ms)")
-    # Friction (planar Coulomb): a slipping contact's force is solved non-symmetrically (numerics.dynamics.slip_rows),
+    # Friction (planar Coulomb): a slipping contact's force is solved non-symmetrically (numerics.slipping.slip_rows),
     # a sticking one by the symmetric solve of one more row; the same block slipping and sticking.
     rolling = andyc.compile_model(ROOT / "models" / "ball_rolling.yaml", build)[0]
     block = andyc.compile_model(ROOT / "models" / "block_incline.yaml", build)[0]

@@ -77,7 +77,7 @@ def _slip_tables(model: SymbolicModel) -> dict:
     """FLOW_SLIP, FLOW_SLIP_MU and FLOW_SLIP_DIR (NF, NC), for each flow's r-th active row: a slipping contact's
     normal row gets -sigma (t + 1), t its stick row, sigma = +1 slipping forwards (spatial friction: t + 1, t the
     first of its two stick rows), the index of the jump whose coefficient is its mu, and (spatial) 1 + the index in
-    d of the first of the two discrete states holding its slip's direction (andyc.numerics.dynamics.slip_rows);
+    d of the first of the two discrete states holding its slip's direction (andyc.numerics.slipping.slip_rows);
     0 elsewhere."""
     rows, nc, h = model.constraints.rows, model.constraints.nc, model.hybrid
     jump_index = {j.name: k for k, j in enumerate(model.spec.jumps)}

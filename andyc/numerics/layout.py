@@ -9,7 +9,7 @@ there (Model holds the rows).
     A      NC rows   every constraint row's Jacobian A (NC, NV)
     C      NC rows   the rows in use, whitened: C = A L^-T (linalg.whiten)
     W      WIDTH rows   the Gram matrix C C^T of the rows in use (linalg.solve_gram); in a flow where a
-                        contact slips, the rows' force directions D = B L^-T instead (dynamics.slip_rows)
+                        contact slips, the rows' force directions D = B L^-T instead (slipping.slip_rows)
     phi    1 row     holonomic residuals (NH)
     cv     1 row     velocity-level residuals c = A v + b (NC)
     kappa  1 row     dc/dt = A dv/dt + kappa (NC)

@@ -34,6 +34,6 @@ OPEN_SIDE = float("inf")    # what a gap on zero that is opening starts a step w
 #                             runtime.adaptive): positive, of no known size, so that the root search bisects until
 #                             a trial finds it open (regula falsi from 0+ would try the step's start again and again)
 HOLD = 0.5          # a fixed step holds a spatial slip's direction where h times its rate exceeds this (slip_direction)
-SLIP_TINY = 1e-13   # m/s: a spatial slip at most this slow has no direction of its own (dynamics.slip_unit)
+SLIP_TINY = 1e-13   # m/s: a spatial slip at most this slow has no direction of its own (slipping.slip_unit)
 SLIP_STOP = -2      # JUMP_CONTACT of a contact's slip ending (andyc.spec.contacts): not an impact, and at once
 #                     (integrator.instant) only when its slip speed reverses faster than a rounding

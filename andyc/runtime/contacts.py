@@ -235,7 +235,7 @@ def _direction_index(model, i: int) -> int:
 
 def _set_direction(model, d, i: int, direction) -> int:
     """Contact i (spatial friction) slips along `direction` (made unit) from here: into its discrete states
-    (numerics.dynamics.slip_unit reads them while the slip is slower than SLIP_TINY). Returns SLIP."""
+    (numerics.slipping.slip_unit reads them while the slip is slower than SLIP_TINY). Returns SLIP."""
     k = _direction_index(model, i)
     d[k:k + 2] = np.asarray(direction, dtype=float) / np.hypot(*direction)
     d[k + 2] = 0.0          # (not held: the integrator decides at its next step)
@@ -391,11 +391,11 @@ def _complementary(model, t, x, u, p, d, states: list, dropped, pushing: bool = 
 def _painleve(model, t, x, u, p, d, i: int, state: int, mu: float) -> None:
     """SimulationError if contact i, slipping (state), has A_n M^-1 (A_n - sigma mu J_t)^T <= 0: its negative
     normal force is then no reason to open it (open, it would close faster: Painleve's paradox, no consistent
-    mode; numerics.dynamics.solve_slipping refuses the same during a run)."""
+    mode; numerics.slipping.solve_slipping refuses the same during a run)."""
     M, _, c, A = _terms(model, t, x, u, p, d)
     normal, tangent = A[model.contact_rows[i]], A[model.contact_stick_rows[i]]
     sigma = 1.0 if state == SLIP_POS else -1.0
-    if model.tangents[i] == 2:          # along the slip's direction (as numerics.dynamics.slip_unit)
+    if model.tangents[i] == 2:          # along the slip's direction (as numerics.slipping.slip_unit)
         t1, k = model.contact_stick_rows[i], _direction_index(model, i)
         slip = c[t1:t1 + 2]
         direction = slip / np.hypot(*slip) if np.hypot(*slip) > SLIP_TINY else d[k:k + 2]

@@ -25,7 +25,7 @@ Coulomb friction, planar (a contact with `friction: mu` and `slip:`, the speed o
 tangent, linear in the speeds): its stick row (`<contact>_stick`, slip = 0, nonholonomic; its multiplier
 `friction_<contact>`, the friction force along +tangent) and four states instead of two: open, stick (gap and
 stick rows active), slip forwards and slip backwards (gap row active; its normal force lam_n carries the
-friction -sigma mu lam_n along the tangent, sigma = +1 forwards: andyc.numerics.dynamics.slip_rows). A flow is
+friction -sigma mu lam_n along the tangent, sigma = +1 forwards: andyc.numerics.slipping.slip_rows). A flow is
 then the contacts' states in mixed radix (2 per contact without friction, 4 with: flow_of, states_of; with no
 friction the bitmask as before), at most MAX_MODES flows. Their jumps: stick -> slip forwards where lam_t reaches
 -mu lam_n (`<contact>_slip_pos`, guard mu lam_n + lam_t, falling), backwards where it reaches +mu lam_n

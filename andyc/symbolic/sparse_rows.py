@@ -18,7 +18,7 @@ The operation counts are those of the kernels, a multiplication, an addition, a 
 counting one, for the flow with the most rows: per evaluation of the right-hand side, the factor of M, the
 whitening of the rows, y, the Gram matrix, its factor and the solves. The sparse solve is chosen when it needs at
 most SPARSE_GAIN of the dense one's operations. It needs the tree of M (formulation.tree_of), rows that each reach
-a speed, and no contact that slips (whose forces take dynamics.slip_rows' dense solve).
+a speed, and no contact that slips (whose forces take slipping.slip_rows' dense solve).
 """
 
 from __future__ import annotations
