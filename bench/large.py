@@ -1,16 +1,17 @@
 """Issue 27: large models. Forward dynamics per call on the planar chain (andyc's compiled function in a
 compiled loop, `pin.aba` and MuJoCo's `mj_forward` from Python), RK4 steps/s against MuJoCo's RK4 C loop
-(`mj_step` with nstep), the URDF robots solo12 and g1, and the IFToMM A02 N-four-bar (us per projection
-step, build time by stage, B0 against the reduced exact motion; bench/large_models.py); and the factor +
-solve kernels alone, dense against the tree's LTDL, which the choice of formulation rests on. Each chain row
-says which formulation the build chose (dense, ltdl or aba: andyc/symbolic/formulation.py); a robot's line
-times M, G + dense, M, G + LTDL and, when chosen, the articulated-body algorithm's leaf, in the same rounds.
+(`mj_step` with nstep), the URDF robots (ur5, panda, solo12; g1 and talos_full with --large), and the IFToMM
+A02 N-four-bar (us per projection step, build time by stage, B0 against the reduced exact motion;
+bench/large_models.py); and the factor + solve kernels alone, dense against the tree's LTDL, which the
+choice of formulation rests on. Each chain row says which formulation the build chose (dense, ltdl or aba:
+andyc/symbolic/formulation.py); a robot's line times M, G + dense, M, G + LTDL and, when chosen, the
+articulated-body algorithm's leaf, in the same rounds.
 
 On a loaded machine absolute times move: every figure comes from `--rounds` alternated rounds (andyc, then
 each peer, then andyc again ...), printed as min .. max, and ratios are taken within a round.
 
-    python bench/large.py                       chain n = 2, 4, 8, 16; solo12; N-four-bar N = 1, 2, 5
-    python bench/large.py --large               also n = 24, 32, g1 and N = 10 (minutes of Numba compile)
+    python bench/large.py                       chain n = 2, 4, 8, 16; ur5, panda, solo12; N-four-bar N = 1, 2, 5
+    python bench/large.py --large               also n = 24, 32, g1, talos_full and N = 10 (minutes of compile)
     python bench/large.py --chain 2 8 --fourbar 1 --robot solo12
     python bench/run.py --only large            as a section of `make bench`
 """
@@ -37,7 +38,13 @@ from run import _rhs_arguments, _rhs_loop, section
 
 CHAINS, CHAINS_LARGE = (2, 4, 8, 16), (24, 32)
 FOURBARS, FOURBARS_LARGE = (1, 2, 5), (10,)
-ROBOTS = {"solo12": "solo_description/robots/solo12.urdf", "g1": "g1_description/urdf/g1_29dof_rev_1_0.urdf"}
+ROBOTS = {    # name: (URDF inside example-robot-data, base)
+    "ur5": ("ur_description/urdf/ur5_robot.urdf", "fixed"),
+    "panda": ("panda_description/urdf/panda.urdf", "fixed"),
+    "solo12": ("solo_description/robots/solo12.urdf", "floating"),
+    "g1": ("g1_description/urdf/g1_29dof_rev_1_0.urdf", "floating"),
+    "talos_full": ("talos_data/robots/talos_full_v2.urdf", "floating"),
+}
 B0_TIMES = (0.5, 1.0, 12.5, 20.0)
 
 
@@ -240,8 +247,8 @@ def formulation_loops(model) -> dict:
 
 
 def robot_section(tmp: Path, names, rounds: int) -> None:
-    """Floating-base URDF robots: andyc against pin.aba (both from the same URDF, free-flyer base)."""
-    section("URDF robots on a floating base: forward dynamics per call against pin.aba (issue 27)")
+    """URDF robots: andyc against pin.aba (both from the same URDF, with the same fixed or free-flyer base)."""
+    section("URDF robots: forward dynamics per call against pin.aba (issue 27)")
     try:
         import pinocchio as pin
         root = robots_dir()
@@ -249,21 +256,23 @@ def robot_section(tmp: Path, names, rounds: int) -> None:
         print(f"skipped: {exc}")
         return
     for name in names:
-        urdf = root / ROBOTS[name]
+        path, base = ROBOTS[name]
+        urdf = root / path
         if not urdf.exists():
             print(f"{name}: skipped, no {urdf}")
             continue
         source = tmp / f"{name}.yaml"
-        source.write_text(f"urdf: {{file: {urdf}, base: floating}}\n")
+        source.write_text(f"urdf: {{file: {urdf}, base: {base}}}\n")
         tic = time.perf_counter()
         model, result = andyc.compile_model(source, tmp / "build", force=True)
         build = time.perf_counter() - tic
-        pmodel = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer())
+        pmodel = (pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer()) if base == "floating"
+                  else pin.buildModelFromUrdf(str(urdf)))
         q, v = pin.neutral(pmodel), np.zeros(pmodel.nv)       # the timing does not depend on the state's values
         timers = {"andyc": AndycForward(model), "pin": pin_forward(pmodel, q, v), **formulation_loops(model)}
         times = compare(timers, rounds, 20000)
         t = result.timings
-        print(f"{name}: nv {pmodel.nv}, build {build:.1f} s (derive {t.get('derive', 0):.1f}, generate "
+        print(f"{name} ({base} base): nv {pmodel.nv}, build {build:.1f} s (derive {t.get('derive', 0):.1f}, generate "
               f"{t.get('generate', 0):.1f}, compile {t.get('compile', 0):.1f}); formulation {model.module.FORMULATION}"
               f" {model.module.FORWARD_OPERATIONS}", flush=True)
         print(f"  andyc rhs {_spread(times['andyc'])} us, pin.aba {_spread(times['pin'])} us, andyc/pin.aba "
@@ -400,11 +409,13 @@ def main(argv=None) -> None:
     large = args.large
     chains = args.chain if args.chain is not None else CHAINS + (CHAINS_LARGE if large else ())
     fourbars = args.fourbar if args.fourbar is not None else FOURBARS + (FOURBARS_LARGE if large else ())
-    robots = args.robot if args.robot is not None else ("solo12", "g1") if large else ("solo12",)
+    robots = (args.robot if args.robot is not None else ("ur5", "panda", "solo12", "g1", "talos_full") if large
+              else ("ur5", "panda", "solo12"))
     run(chains, robots, fourbars, args.rounds, not args.no_kernels)
 
 
-def run(chains=CHAINS, robots=("solo12",), fourbars=FOURBARS, rounds: int = 5, kernels: bool = True) -> None:
+def run(chains=CHAINS, robots=("ur5", "panda", "solo12"), fourbars=FOURBARS, rounds: int = 5,
+        kernels: bool = True) -> None:
     if kernels:
         kernel_section(rounds)
     with tempfile.TemporaryDirectory() as tmpdir:
