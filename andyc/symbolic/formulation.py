@@ -83,7 +83,7 @@ def _depths(parent: list) -> list:
     return out
 
 
-def _chain(parent: list, i: int) -> list:
+def ancestors(parent: list, i: int) -> list:
     """i's ancestors, nearest first."""
     out, j = [], parent[i]
     while j >= 0:
@@ -104,7 +104,7 @@ def tree_of(pattern: list[set]) -> tuple[list, list] | None:
         if before:
             parent[i] = max(before, key=position.get)
     for i in range(n):
-        chain = set(_chain(parent, i))
+        chain = set(ancestors(parent, i))
         if any(position[j] < position[i] and j not in chain for j in pattern[i]):
             return None
     return parent, rank[::-1]
@@ -119,7 +119,7 @@ def dense_operations(n: int) -> int:
 def ltdl_operations(parent: list) -> int:
     """Operations of ltdl + ltdl_solve (linalg.py) along the tree `parent`."""
     depth = _depths(parent)
-    factor = sum(1 + sum(1 + 2 * (depth[i] + 1) for i in _chain(parent, k)) for k in range(len(parent)))
+    factor = sum(1 + sum(1 + 2 * (depth[i] + 1) for i in ancestors(parent, k)) for k in range(len(parent)))
     return factor + 4 * sum(depth) + len(parent)
 
 

@@ -25,6 +25,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from andyc.symbolic.formulation import ancestors
+
 DENSE, SPARSE = "dense", "sparse"
 SPARSE_GAIN = 0.3   # the dense kernels run with sizes as constants up to n = 8 (unrolled), the sparse ones read
                     # index tables. Measured on the N-four-bar (bench/large.py, projection steps, alternated):
@@ -52,14 +54,6 @@ class ConstrainedSolve:
         return f"constrained solve: {what}; operations per evaluation: {ops}"
 
 
-def _chain(parent: list, i: int) -> list:
-    out, j = [], parent[i]
-    while j >= 0:
-        out.append(j)
-        j = parent[j]
-    return out
-
-
 def supports(rows: list[set], parent: list, order: list) -> list[list[int]]:
     """Each row's support in C = A R^-1: its speeds and their ancestors, in `order` (descendants first)."""
     position = {k: i for i, k in enumerate(order)}
@@ -67,7 +61,7 @@ def supports(rows: list[set], parent: list, order: list) -> list[list[int]]:
     for cols in rows:
         closed = set(cols)
         for j in cols:
-            closed.update(_chain(parent, j))
+            closed.update(ancestors(parent, j))
         out.append(sorted(closed, key=position.get))
     return out
 
@@ -95,8 +89,8 @@ def dense_operations(n: int, m: int) -> int:
 def sparse_operations(parent: list, support: list[list[int]], rows: list[int]) -> int:
     """Operations of the sparse solve (sparse_rows.py) over the active `rows`."""
     n = len(parent)
-    depth = [len(_chain(parent, k)) for k in range(n)]
-    tree = sum(1 + sum(1 + 2 * (depth[i] + 1) for i in _chain(parent, k)) for k in range(n)) + n   # ltdl + sqrt
+    depth = [len(ancestors(parent, k)) for k in range(n)]
+    tree = sum(1 + sum(1 + 2 * (depth[i] + 1) for i in ancestors(parent, k)) for k in range(n)) + n   # ltdl + sqrt
     tree += 2 * (2 * sum(depth) + n)                                                                # two solves
     whiten = sum(sum(2 * depth[j] + 1 for j in support[i]) for i in rows)
     first, _ = envelope(rows, support)
