@@ -144,7 +144,7 @@ def test_every_force_element_enters_as_in_the_dense_path(out):
 def test_urdf_robots_aba_equals_dense_and_pinocchio(robot, out):
     """(solo12 on its floating base gets ABA by the counts: tests/test_urdf_pinocchio.py checks it the same way.)"""
     pytest.importorskip("pinocchio")
-    from tests.test_urdf_pinocchio import ROBOTS, PinocchioMap, relative, root_link
+    from tests.support.pinocchio_map import PINOCCHIO_ROBOTS as ROBOTS, PinocchioMap, relative, root_link
 
     import pinocchio as pin
     relpath, base = ROBOTS[robot]

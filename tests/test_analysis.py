@@ -82,7 +82,7 @@ def test_cli_bench_and_stability_write_their_tables_and_diagrams(tmp_path, shipp
     assert "rk4: largest accurate step none; fails from h = 0.03 s (blew up" in result.output
     assert (tmp_path / "stiff_spring_stability_T3.png").exists()
     result = invoke("stability", str(MODELS / "stiff_spring.yaml"), "--methods", "DOP853")
-    assert result.exit_code == 2 and "for fixed-step methods" in result.output
+    assert result.exit_code == 2 and "DOP853: the scan is over steps, for the methods rk4, projection" in result.output
 
 
 def test_a_scan_over_a_parameter_moves_the_bound_with_it(compiled):

@@ -1,6 +1,7 @@
 """What several test modules share, as plain functions and constants (pytest fixtures stay in
 tests/conftest.py): the repository's folders and YAML text here; running the command line in
-support.cli; the loader's diagnostics in support.diagnostics; synthetic runs in support.runs."""
+support.cli; the loader's diagnostics in support.diagnostics; synthetic runs in support.runs; andyc's state
+as Pinocchio's in support.pinocchio_map."""
 
 from pathlib import Path
 
