@@ -9,7 +9,7 @@ never slipping. What changed against the hand-guarded walker (models/passive_wal
   into it (closed form below), so a contact there takes an impact at once;
 - no knee-bend rule (the reference's `ba` is a hand-written jump, and contacts cannot be combined with one yet):
   a knee is a stop that holds the shank dk = 0.12 rad past the thigh's line (hyperextended), so that the ground's
-  force passes in front of the stance knee and pushes it into its stop (at dk = 0 it buckles at once);
+  force passes in front of the stance knee and pushes it into its stop (at dk = 0 it opens at the heel strike);
 - the bodies: Chen's (2007) point-foot kneed walker's mass distribution (thigh as heavy as the hip, shank a tenth,
   thigh COM 0.325 m below the hip, shank COM 0.125 m below the knee; the reference's masses do not clear the
   slope at mid-swing) and her slope 0.0504 rad; the hip keeps the reference's 56 kg;
@@ -20,9 +20,10 @@ Checked here from one 13.5 s run (module fixture), with the foot formula written
 20+ alternating heel strikes, each foot landing ahead of the other; no foot below the slope by more than 1e-9 m
 at any sample or event; one foot always on the slope and sticking, the other open (no flight, no double
 support, no slip); the run's post-strike states repeat (a periodic gait), and a rough start settles onto it
-(a second run, 40 s); every isolated impact is the plastic
-impact map over the rows closed after it; each swing knee strike knocks the stance knee off its stop by < 1e-3
-rad and both knees are shut within 0.03 s.
+(a second run, 40 s); every isolated impact is the plastic impact map over the rows closed after it; each swing
+knee strike knocks the stance knee off its stop by < 1e-3 rad and both knees are shut within 0.03 s.
+Replaced: the earlier model's tests of its 3 strides with flights and of a knee knock at another start (its
+parameters no longer apply); kept: the plastic impact map and the reference gait's trailing foot.
 """
 
 import math
