@@ -83,8 +83,9 @@ def contact_cost(tmp: Path, build: Path, rounds: int = 7) -> None:
 def walker_cost(build: Path, rounds: int) -> None:
     """The knee walker with its feet and knee stops as contacts (64 modes, no hand-written jump) against the
     hand-guarded walker (six flows, six jumps), alternated rounds: the same bodies and the same 3 s at dt = 1e-3
-    (projection), but not the same motion (the contact walker's 3 strides with flights against 5 steps of the
-    reference's gait), so the difference per step is contact handling together with what the gaits' events cost."""
+    (projection), but not the same motion (the contact walker's gait, other masses on a 0.0504 rad slope, about 5
+    steps, against 5 steps of the reference's gait), so the difference per step is contact handling together with
+    what the gaits' events cost."""
     contact = andyc.compile_model(ROOT / "models" / "passive_walker_contact.yaml", build)[0]
     hand = andyc.compile_model(ROOT / "models" / "passive_walker.yaml", build)[0]
     options = {"method": "projection"}
