@@ -29,9 +29,12 @@ triangle; D_i^-1 by its LDL^T factors written out (n_i = 1: one division; a floa
 column of S_i is a unit vector e_k (a joint about or along one of the link's own axes), I^a's row and column k
 are zero exactly (I^a S_i = U_i - U_i D_i^-1 D_i = 0), so they are written as zeros, not computed to rounding.
 
-Applies to an unconstrained tree of links whose relative motion has its own speeds only: each speed
-enters exactly one link's S_i (revolute, prismatic, any holonomic link of its own coordinates, a floating
-link's six quasi-velocities, a link moved along t); `articulated_body` returns None otherwise.
+Applies to an unconstrained tree of links (revolute, prismatic, any holonomic link of its coordinates, a
+floating link's six quasi-velocities, a link moved along t) where every speed moves a link. Links whose S_i
+share speeds (a URDF mimic joint: a finger moved by the other's speed, a gripper's links by one coordinate)
+form a group that takes one step over all of its links (aba_groups.py), provided the group hangs from one
+link through its own links; `articulated_body` returns None otherwise. Links that share no speed with another
+take the step above, so a model without groups gets the same derivation as before groups existed.
 """
 
 from __future__ import annotations
