@@ -1,7 +1,7 @@
 """The articulated-body algorithm's step over a group of links moved by shared speeds (a multi-link joint).
 
 A URDF mimic joint (andyc/spec/urdf.py: by substitution, no coordinate of its own) moves its link by the
-speed of the joint it mimics: panda's second finger moves by the first finger's speed, and each of talos'
+speed of the joint it mimics: panda's second finger moves by the first finger's speed, and each of talos_full's
 grippers is seven links moved by one gripper coordinate. Links whose own columns S_i (aba.py) share any speed,
 transitively, form a group g with speeds v_g (n_g of them); its links must hang from one parent link P (or
 the world) through links of the group only (else `link_groups` returns None and the model keeps M). Being
@@ -17,7 +17,8 @@ and a tree of rigid links, and aba.py's per-link step becomes, in each link's ow
                   I_G = sum_b X_bP^T I^A_b X_bP,   p_G = sum_b X_bP^T (p^A_b + I^A_b C_b)
                   u = tau_g - sum_b S_b^T (p^A_b + I^A_b C_b)
                   I^A_P += I_G - U D^-1 U^T,   p^A_P += p_G + U D^-1 u
-    pass 3 (out)  dv_g/dt = D^-1 (u - U^T a_P),  a_b = X_b a_pb + c_b + S_b_own dv_g/dt  (= X_bP a_P + S_b dv_g/dt + C_b)
+    pass 3 (out)  dv_g/dt = D^-1 (u - U^T a_P)
+                  a_b = X_b a_pb + c_b + S_b_own dv_g/dt      (= X_bP a_P + S_b dv_g/dt + C_b)
 
 Derivation: each link b obeys f_b = I^A_b a_b + p^A_b (RBDA §7.1, the articulated inertias of its children
 outside g folded in as Table 7.1 does); summed over the group in P's axes, the force P exerts on it is
