@@ -3,8 +3,9 @@ its own: its dv/dt (the leaf forward_dynamics, through the runtime's rhs) equals
 the same build's M and G to 1e-12 at random states, and Pinocchio's aba (an independent implementation) to
 1e-10, on a planar chain, a spatial chain with skew axes and full inertias, the double pendulum, a chain
 with every kind of force element, and ur5 (solo12 on a floating base, where the counts choose it: in
-tests/test_urdf_pinocchio.py); and the operation counts it is chosen from grow like the tree on a chain
-while M's assembly does not."""
+tests/test_urdf_pinocchio.py); with links moved by shared speeds (aba_groups.py), a hand-written model with two
+groups against the dense path, and panda's mimic fingers against it and Pinocchio's crba/rnea in andyc's speeds;
+and the operation counts it is chosen from grow like the tree on a chain while M's assembly does not."""
 
 from __future__ import annotations
 
@@ -64,6 +65,50 @@ springs:
   - {name: band, stiffness: k, rest_length: 0.3, between: [a_end, d_tip]}
 potentials:
   - {name: well, energy: 0.5 * q1**2 + 0.1 * sin(q3)}
+"""
+
+
+# Links moved by shared speeds (aba_groups.py): a group {a, b, e} moved by q1 (b by 2 q1 about a skew axis, below a;
+# e by -q1 on a second branch) hanging from the link `base`, with the link c (q2) below b; and a group of two speeds
+# {f, h} (h by q4 + q5) hanging from the world, with k (q6) below it. A torque on b and a damper on q1 enter tau_g.
+GROUPS_YAML = """
+name: aba_groups
+parameters: {g: 9.81, beta: 0.2}
+coordinates:
+  q0: {initial: 0.1, velocity: 0.3}
+  q1: {initial: 0.3, velocity: 0.5}
+  q2: {initial: -0.4, velocity: 0.2}
+  q4: {initial: 0.2, velocity: -0.1}
+  q5: {initial: -0.3, velocity: 0.4}
+  q6: {initial: 0.5}
+gravity: [0, -g, 0]
+frames:
+  - {name: base, parent: world, revolute: q0, axis: z}
+  - {name: base_end, parent: base, translation: [0.4, 0, 0]}
+  - {name: a, parent: base_end, revolute: q1, axis: z}
+  - {name: a_end, parent: a, translation: [0.5, 0, 0]}
+  - {name: b, parent: a_end, revolute: 2*q1, axis: [0, 0.6, 0.8]}
+  - {name: b_end, parent: b, translation: [0.3, 0.1, 0]}
+  - {name: c, parent: b_end, rotation: {rpy: [0.3, 0.1, -0.2]}, revolute: q2, axis: x}
+  - {name: e, parent: base_end, translation: [0, 0.1, 0.2], revolute: -q1, axis: y}
+  - {name: f, parent: world, translation: [1, 0, 0], revolute: q4, axis: x}
+  - {name: f_end, parent: f, translation: [0, 0.4, 0.1]}
+  - {name: h, parent: f_end, revolute: q4 + q5, axis: [0.6, 0, 0.8]}
+  - {name: h_end, parent: h, translation: [0.3, 0, 0]}
+  - {name: k, parent: h_end, prismatic: q6, axis: z}
+bodies:
+  - {name: Base, frame: base, mass: 3.0, com: [0.2, 0, 0], inertia: [0.02, 0.05, 0.05, 0, 0, 0]}
+  - {name: A, frame: a, mass: 2.0, com: [0.25, 0, 0], inertia: [0.01, 0.04, 0.04, 0.001, 0, 0]}
+  - {name: B, frame: b, mass: 1.5, com: [0.2, 0.05, 0], inertia: [0.02, 0.03, 0.025, 0.002, 0.001, 0.0005]}
+  - {name: C, frame: c, mass: 1.0, com: [0, 0.1, 0.02], inertia: [0.01, 0.005, 0.01, 0, 0.0003, 0]}
+  - {name: E, frame: e, mass: 0.7, com: [0.1, 0, 0.05], inertia: [0.003, 0.002, 0.004, 0, 0, 0.0002]}
+  - {name: F, frame: f, mass: 1.2, com: [0, 0.2, 0], inertia: [0.01, 0.01, 0.02, 0, 0, 0]}
+  - {name: H, frame: h, mass: 0.9, com: [0.15, 0, 0.02], inertia: [0.004, 0.006, 0.005, 0.0005, 0, 0]}
+  - {name: K, frame: k, mass: 0.4, com: [0, 0.05, 0], inertia: [0.001, 0.001, 0.001, 0, 0, 0]}
+torques:
+  - {name: drive, frame: b, vector: [0.2, 0, 0.3], in: b}
+dampers:
+  - {name: hinge, coefficient: beta, speed: q1}
 """
 
 
@@ -160,6 +205,54 @@ def test_urdf_robots_aba_equals_dense_and_pinocchio(robot, out):
         x = mapping.random_state(rng)
         _, _, expected = mapping.expected(x, data, mimic_free=True)
         assert relative(module.rhs(0.0, x)[module.NQ:module.NQ + module.NV], expected) <= 1e-10
+
+
+def test_links_moved_by_shared_speeds_equal_dense(out):
+    """Groups of links moved by shared speeds (aba_groups.py): one speed moving three links on two branches, with a
+    link below the group, and two speeds moving two links (D 2 x 2), with a prismatic link below them."""
+    from andyc.symbolic import aba_groups
+    from andyc.symbolic.aba import _links
+
+    path = out / "aba_groups.yaml"
+    path.write_text(GROUPS_YAML)
+    links = _links(load(path))
+    groups = aba_groups.link_groups(links)
+    assert sorted((len(g.members), len(g.speeds), g.parent) for g in groups) == [(2, 2, "world"), (3, 1, "base")]
+    module = _aba_module(path, out / "build")
+    assert _dense_equals_aba(module, 7) <= 1e-12
+
+
+def test_panda_mimic_fingers_equal_dense_and_pinocchio(out):
+    """panda's second finger mimics the first: a group of two links moved by one speed, hanging from the hand. Pinocchio
+    keeps a mimic joint as a joint of its own: as in tests/test_urdf_pinocchio.py, its crba and rnea are projected
+    on andyc's speeds (v_pin = T v) and solved there."""
+    pytest.importorskip("pinocchio")
+    from tests.test_urdf_pinocchio import ROBOTS, PinocchioMap, relative
+
+    import pinocchio as pin
+    urdf = ROBOTS_DIR / ROBOTS["panda"][0]
+    source = out / "panda.yaml"
+    source.write_text(f"urdf: {{file: {urdf}, base: fixed}}\n")
+    model = derive(load(source))
+    assert model.forward.chosen == ABA            # by the counts, now that the fingers are a group
+    module = _aba_module(source, out / "build")
+    assert _dense_equals_aba(module, 8) <= 1e-12
+    pmodel = pin.buildModelFromUrdf(str(urdf))
+    mapping = PinocchioMap(module, pmodel, urdf, None)
+    assert mapping.mimic
+    data, rng = pmodel.createData(), np.random.default_rng(9)
+    for _ in range(10):
+        x = mapping.random_state(rng)
+        _, _, expected = mapping.expected(x, data, mimic_free=False)
+        assert relative(module.rhs(0.0, x)[module.NQ:module.NQ + module.NV], expected) <= 1e-10
+
+
+def test_groups_that_do_not_hang_from_one_link_keep_m(tmp_path):
+    """A speed that moves links on two branches hanging from different links: no group step, no ABA."""
+    path = tmp_path / "split.yaml"
+    path.write_text(GROUPS_YAML.replace("{name: e, parent: base_end,", "{name: e, parent: world,"))
+    model = derive(load(path))
+    assert model.aba is None and model.forward.operations[ABA] is None
 
 
 def test_aba_counts_grow_like_the_chain_and_constrained_models_keep_m(tmp_path):

@@ -29,9 +29,12 @@ triangle; D_i^-1 by its LDL^T factors written out (n_i = 1: one division; a floa
 column of S_i is a unit vector e_k (a joint about or along one of the link's own axes), I^a's row and column k
 are zero exactly (I^a S_i = U_i - U_i D_i^-1 D_i = 0), so they are written as zeros, not computed to rounding.
 
-Applies to an unconstrained tree of links whose relative motion has its own speeds only: each speed
-enters exactly one link's S_i (revolute, prismatic, any holonomic link of its own coordinates, a floating
-link's six quasi-velocities, a link moved along t); `articulated_body` returns None otherwise.
+Applies to an unconstrained tree of links (revolute, prismatic, any holonomic link of its coordinates, a
+floating link's six quasi-velocities, a link moved along t) where every speed moves a link. Links whose S_i
+share speeds (a URDF mimic joint: a finger moved by the other's speed, a gripper's links by one coordinate)
+form a group that takes one step over all of its links (aba_groups.py), provided the group hangs from one
+link through its own links; `articulated_body` returns None otherwise. Links that share no speed with another
+take the step above, so a model without groups gets the same derivation as before groups existed.
 """
 
 from __future__ import annotations
@@ -77,8 +80,8 @@ def _spatial_inertia(m, c: sp.Matrix, Ic: sp.Matrix) -> sp.Matrix:
 
 
 def _links(spec: Spec) -> list | None:
-    """The links (moving frames, parents first) with their joints and inertias, or None when a speed moves two
-    links or none."""
+    """The links (moving frames, parents first) with their joints and inertias, or None when a speed moves no
+    link (a speed that moves several makes them a group: aba_groups.py)."""
     q = [c.q for c in spec.coordinates]
     v = spec.speed_symbols
     n = len(v)
@@ -108,9 +111,7 @@ def _links(spec: Spec) -> list | None:
         S = sp.Matrix.vstack(motion.Jw_own, Rm.T * motion.Jv)
         own = [j for j in range(n) if any(e != 0 for e in S[:, j])]
         for j in own:
-            if j in owner:
-                return None
-            owner[j] = frame.name
+            owner.setdefault(j, frame.name)
         cJ = _vec(motion.al_own, Rm.T * motion.ac - cross(motion.w_own, v_lin))
         links.append(_Link(frame.name, root, E, r, S[:, own], own, _vec(motion.w_own, v_lin), cJ, sp.zeros(6, 6)))
     if len(owner) != n:
@@ -224,6 +225,11 @@ def articulated_body(spec: Spec, terms) -> ArticulatedBody | None:
     links = _links(spec)
     if links is None:
         return None
+    from andyc.symbolic import aba_groups       # (it imports this module's spatial operations)
+    groups = aba_groups.link_groups(links)
+    if groups is None:
+        return None
+    group_of = {i: g for g in groups for i in g.members}
     n = len(spec.speed_symbols)
     tau = sp.zeros(n, 1)
     for e in terms[len(spec.bodies):]:
@@ -242,6 +248,10 @@ def articulated_body(spec: Spec, terms) -> ArticulatedBody | None:
     U, D, u, acc, vdot = {}, {}, {}, {"world": _vec(sp.zeros(3, 1), -spec.gravity)}, [None] * n
     for i in reversed(range(len(links))):
         link, label = links[i], f"aba{i}_"
+        if i in group_of:                           # a group's step, at its first link (aba_groups.py)
+            if i == group_of[i].members[0]:
+                aba_groups.articulate(group_of[i], links, IA, pA, bias, tau, out)
+            continue
         Ik = out.sym(f"{label}IA", IA[link.name])
         pk = out.vec(f"{label}pA", pA[link.name])
         c = bias[link.name]
@@ -268,6 +278,10 @@ def articulated_body(spec: Spec, terms) -> ArticulatedBody | None:
         pA[link.parent] = pA[link.parent] + _force_to_parent(link, pa)
     for i, link in enumerate(links):
         label = f"aba{i}_"
+        if i in group_of:
+            if i == group_of[i].members[0]:
+                aba_groups.accelerate(group_of[i], links, bias, acc, vdot, out)
+            continue
         a1 = out.vec(f"{label}a1", _motion(link, acc[link.parent]) + bias[link.name])
         if link.speeds:
             rhs = out.vec(f"{label}r", u[i] - U[i].T * a1)

@@ -18,8 +18,9 @@ a speed only updates entries between its own ancestors); otherwise the dense pat
 
 The third, Featherstone's articulated-body algorithm (andyc/symbolic/aba.py), gives dv/dt without M: its
 cost grows like the number of links, M's symbolic assembly like n^2 .. n^3 on a chain. It applies to an
-unconstrained tree whose links each have their own speeds (aba.py); flows with constraint rows, and every
-other use of M (projection, impacts, energy, linearization), keep M.
+unconstrained tree of links, those moved by shared speeds (mimic joints) taken as one group each
+(aba.py, aba_groups.py); flows with constraint rows, and every other use of M (projection, impacts, energy,
+linearization), keep M.
 
 The operation counts are those of the numerical kernels (andyc/numerics/linalg.py: cholesky with
 solve_lower and solve_upper, ltdl with ltdl_solve), a multiplication, an addition, a division or a
@@ -59,7 +60,7 @@ class ForwardDynamics:
 
     def describe(self, rows: bool = False) -> str:
         """One line for `andyc check`; `rows`: the model has constraint rows (their flows stay dense)."""
-        why = {LTDL: "n/a (M has no tree pattern)", ABA: "n/a (not a tree of links with their own speeds)"}
+        why = {LTDL: "n/a (M has no tree pattern)", ABA: "n/a (not a tree of links, or links sharing speeds not hanging from one link)"}
         ops = ", ".join(f"{name} {why[name] if n is None else n}" for name, n in self.operations.items())
         what = {LTDL: "sparse LTDL along the tree of M (Featherstone 2005)",
                 ABA: "articulated-body algorithm (Featherstone 2008, Table 7.1), no M",
