@@ -70,7 +70,8 @@ potentials:
 
 # Links moved by shared speeds (aba_groups.py): a group {a, b, e} moved by q1 (b by 2 q1 about a skew axis, below a;
 # e by -q1 on a second branch) hanging from the link `base`, with the link c (q2) below b; and a group of two speeds
-# {f, h} (h by q4 + q5) hanging from the world, with k (q6) below it. A torque on b and a damper on q1 enter tau_g.
+# {f, h} (h by q4 + q5) hanging from `base` too (D 2 x 2: U D^-1 by its LDL^T), with k (q6) below it. A torque on
+# b and a damper on q1 enter tau_g.
 GROUPS_YAML = """
 name: aba_groups
 parameters: {g: 9.81, beta: 0.2}
@@ -91,7 +92,7 @@ frames:
   - {name: b_end, parent: b, translation: [0.3, 0.1, 0]}
   - {name: c, parent: b_end, rotation: {rpy: [0.3, 0.1, -0.2]}, revolute: q2, axis: x}
   - {name: e, parent: base_end, translation: [0, 0.1, 0.2], revolute: -q1, axis: y}
-  - {name: f, parent: world, translation: [1, 0, 0], revolute: q4, axis: x}
+  - {name: f, parent: base_end, translation: [0.2, 0, 0], revolute: q4, axis: x}
   - {name: f_end, parent: f, translation: [0, 0.4, 0.1]}
   - {name: h, parent: f_end, revolute: q4 + q5, axis: [0.6, 0, 0.8]}
   - {name: h_end, parent: h, translation: [0.3, 0, 0]}
@@ -217,7 +218,7 @@ def test_links_moved_by_shared_speeds_equal_dense(out):
     path.write_text(GROUPS_YAML)
     links = _links(load(path))
     groups = aba_groups.link_groups(links)
-    assert sorted((len(g.members), len(g.speeds), g.parent) for g in groups) == [(2, 2, "world"), (3, 1, "base")]
+    assert sorted((len(g.members), len(g.speeds), g.parent) for g in groups) == [(2, 2, "base"), (3, 1, "base")]
     module = _aba_module(path, out / "build")
     assert _dense_equals_aba(module, 7) <= 1e-12
 
@@ -227,7 +228,7 @@ def test_panda_mimic_fingers_equal_dense_and_pinocchio(out):
     keeps a mimic joint as a joint of its own: as in tests/test_urdf_pinocchio.py, its crba and rnea are projected
     on andyc's speeds (v_pin = T v) and solved there."""
     pytest.importorskip("pinocchio")
-    from tests.test_urdf_pinocchio import ROBOTS, PinocchioMap, relative
+    from tests.support.pinocchio_map import PINOCCHIO_ROBOTS as ROBOTS, PinocchioMap, relative
 
     import pinocchio as pin
     urdf = ROBOTS_DIR / ROBOTS["panda"][0]
