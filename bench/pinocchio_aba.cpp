@@ -120,6 +120,7 @@ int main(int argc, char ** argv)
       std::printf("max %s %.6g\n", name, *std::max_element(times[lib].begin(), times[lib].end()));
     }
   }
-  std::fprintf(stderr, "sink %g\n", sink);
+  if (!serve)
+    std::fprintf(stderr, "sink %g\n", sink);   // (uses the results, so that no call is dropped)
   return 0;
 }
