@@ -260,8 +260,9 @@ def build_robot(tmp: Path, urdf: Path, base: str):
     return model, result, build, pmodel
 
 
-def robot_section(tmp: Path, names, rounds: int) -> None:
-    """URDF robots: andyc against pin.aba (both from the same URDF, with the same fixed or free-flyer base)."""
+def robot_section(tmp: Path, names, rounds: int, cpp: bool = False) -> None:
+    """URDF robots: andyc against pin.aba (both from the same URDF, with the same fixed or free-flyer base); with
+    cpp, also against Pinocchio's C++ aba (bench/pinocchio_cpp.py) in the same rounds."""
     section("URDF robots: forward dynamics per call against pin.aba (issue 27)")
     try:
         import pinocchio as pin
@@ -269,6 +270,12 @@ def robot_section(tmp: Path, names, rounds: int) -> None:
     except ImportError as exc:
         print(f"skipped: {exc}")
         return
+    exe = None
+    if cpp:
+        import pinocchio_cpp
+        exe, why = pinocchio_cpp.build()
+        if exe is None:
+            print(f"Pinocchio C++ aba: skipped, {why}")
     for name in names:
         path, base = ROBOTS[name]
         urdf = root / path
@@ -278,7 +285,12 @@ def robot_section(tmp: Path, names, rounds: int) -> None:
         model, result, build, pmodel = build_robot(tmp, urdf, base)
         q, v = pin.neutral(pmodel), np.zeros(pmodel.nv)       # the timing does not depend on the state's values
         timers = {"andyc": AndycForward(model), "pin": pin_forward(pmodel, q, v), **formulation_loops(model)}
-        times = compare(timers, rounds, 20000)
+        peer = pinocchio_cpp.CppAba(exe, urdf, base) if exe else None
+        try:
+            times = compare({**timers, **(pinocchio_cpp.timers(peer) if peer else {})}, rounds, 20000)
+        finally:
+            if peer:
+                peer.close()
         t = result.timings
         print(f"{name} ({base} base): nv {pmodel.nv}, build {build:.1f} s (derive {t.get('derive', 0):.1f}, generate "
               f"{t.get('generate', 0):.1f}, compile {t.get('compile', 0):.1f}); formulation {model.module.FORMULATION}"
@@ -289,6 +301,8 @@ def robot_section(tmp: Path, names, rounds: int) -> None:
                  if "ltdl" in times else "")
               + (f", ABA {_spread(times['aba'])} us, ABA/pin.aba {_spread(_ratios(times, 'aba', 'pin'))}, ABA/dense "
                  f"{_spread(_ratios(times, 'aba', 'dense'))}" if "aba" in times else ""), flush=True)
+        if peer:
+            print("  " + pinocchio_cpp.summary(times, pmodel, peer), flush=True)
 
 
 def _solves(model) -> dict:
@@ -433,12 +447,7 @@ def run(chains=CHAINS, robots=("ur5", "panda", "solo12"), fourbars=FOURBARS, rou
         if chains:
             chain_section(tmp, chains, rounds)
         if robots:
-            robot_section(tmp, robots, rounds)
-        if robots and cpp:
-            import pinocchio_cpp
-
-            section("URDF robots: forward dynamics per call against Pinocchio's C++ aba (issue 27)")
-            pinocchio_cpp.run(robots, rounds)
+            robot_section(tmp, robots, rounds, cpp)
         if fourbars:
             fourbar_section(tmp, fourbars, rounds)
 

@@ -10,7 +10,7 @@ checked against pin.aba's from Python at the same state. Without g++, Eigen or t
 
     python bench/pinocchio_cpp.py                      ur5, panda, solo12, g1
     python bench/pinocchio_cpp.py --robot talos_full   (its andyc build takes minutes)
-    python bench/large.py --cpp                        the same lines after large.py's robot section
+    python bench/large.py --cpp                        the C++ lines within large.py's robot section
 """
 
 from __future__ import annotations
@@ -104,8 +104,17 @@ def same_as_python(pmodel, cpp: CppAba) -> str:
     import pinocchio as pin
     s = cpp.state
     ddq = pin.aba(pmodel, pmodel.createData(), s["q"], s["v"], s["tau"])
-    diff = abs(ddq - s["ddq"]).max()
-    return f"C++ ddq = pin.aba's: max |difference| {diff:.1e} (max |ddq| {abs(ddq).max():.2g})"
+    return f"C++ ddq = pin.aba's to {abs(ddq - s['ddq']).max():.1e} (max |ddq| {abs(ddq).max():.2g})"
+
+
+def timers(cpp: CppAba) -> dict:
+    return {"cpp": cpp.timer("native"), "lib": cpp.timer("lib")}
+
+
+def summary(times: dict, pmodel, cpp: CppAba) -> str:
+    """One line: the C++ figures from `times` (andyc, cpp, lib), the ratio, the check against pin.aba."""
+    return (f"Pinocchio C++ aba {_spread(times['cpp'])} us, andyc/C++ aba {_spread(_ratios(times, 'andyc', 'cpp'))}"
+            f"; the wheel's lib aba from C++ {_spread(times['lib'])} us; {same_as_python(pmodel, cpp)}")
 
 
 def run(names=("ur5", "panda", "solo12", "g1"), rounds: int = 5, calls: int = 50000) -> None:
@@ -124,16 +133,14 @@ def run(names=("ur5", "panda", "solo12", "g1"), rounds: int = 5, calls: int = 50
             model, _, seconds, pmodel = build_robot(Path(tmpdir), urdf, base)
             cpp = CppAba(exe, urdf, base)
             try:
-                timers = {"andyc": AndycForward(model), "cpp": cpp.timer("native"), "lib": cpp.timer("lib"),
-                          "pin": pin_forward(pmodel, cpp.state["q"], cpp.state["v"])}
-                times = compare(timers, rounds, calls)
+                times = compare({"andyc": AndycForward(model), **timers(cpp),
+                                 "pin": pin_forward(pmodel, cpp.state["q"], cpp.state["v"])}, rounds, calls)
             finally:
                 cpp.close()
             print(f"{name} ({base} base, nv {pmodel.nv}, andyc build {seconds:.0f} s, formulation "
-                  f"{model.module.FORMULATION}): andyc {_spread(times['andyc'])} us, C++ aba {_spread(times['cpp'])}"
-                  f" us, andyc/C++ aba {_spread(_ratios(times, 'andyc', 'cpp'))}; lib aba {_spread(times['lib'])} us,"
-                  f" pin.aba from Python {_spread(times['pin'])} us, andyc/pin.aba "
-                  f"{_spread(_ratios(times, 'andyc', 'pin'))}; {same_as_python(pmodel, cpp)}", flush=True)
+                  f"{model.module.FORMULATION}): andyc rhs {_spread(times['andyc'])} us, pin.aba from Python "
+                  f"{_spread(times['pin'])} us, andyc/pin.aba {_spread(_ratios(times, 'andyc', 'pin'))}", flush=True)
+            print("  " + summary(times, pmodel, cpp), flush=True)
 
 
 def main(argv=None) -> None:
