@@ -1,12 +1,13 @@
 """Issue 27 item 1: andyc's forward dynamics per call against Pinocchio's own C++ aba, no Python binding in the way.
 
 Compiles bench/pinocchio_aba.cpp once into build/bench/ (g++ -O3 -march=native against the pin wheel's headers and
-libraries under cmeel.prefix; Eigen from /usr/include/eigen3, Debian's libeigen3-dev, or a cmeel-eigen wheel; the
-URDF headers from the cmeel-urdfdom-headers wheel), then for each robot alternates rounds of andyc's rhs in a
-compiled loop (bench/large.py's AndycForward), the C++ aba (instantiated in that file, -march=native), the wheel's
-libpinocchio_default aba called from C++ ("lib", what pin.aba runs), and pin.aba from Python. us per call, min ..
-max over rounds; ratios within a round. Before timing, the C++ aba's accelerations at its (random) state are
-checked against pin.aba's from Python at the same state. Without g++, Eigen or the headers: one line, no timing.
+libraries under cmeel.prefix; Eigen from Debian's libeigen3-dev, else the cmeel-eigen wheel; the URDF headers from
+the cmeel-urdfdom-headers wheel: both wheels are in the bench extra, which `make bench` installs), then for each
+robot alternates rounds of andyc's rhs in a compiled loop (bench/large.py's AndycForward), the C++ aba
+(instantiated in that file, -march=native), the wheel's libpinocchio_default aba called from C++ ("lib", what
+pin.aba runs), and pin.aba from Python. us per call, min .. max over rounds; ratios within a round. Before timing,
+the C++ aba's accelerations at its (random) state are checked against pin.aba's from Python at the same state.
+Without g++, Eigen or the headers: one line, no timing.
 
     python bench/pinocchio_cpp.py                      ur5, panda, solo12, g1
     python bench/pinocchio_cpp.py --robot talos_full   (its andyc build takes minutes)
@@ -40,8 +41,8 @@ DEFINES = ["NDEBUG", "PINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION", "PINOCCHIO_WITH_
 def compile_command(out: Path):
     """The g++ command line that builds the timing program into `out`, or a one-line reason why it cannot."""
     prefix = Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix"
-    eigen = next((d for d in (prefix / "include" / "eigen3", Path("/usr/include/eigen3"),
-                              Path("/usr/local/include/eigen3")) if (d / "Eigen" / "Core").exists()), None)
+    eigen = next((d for d in (Path("/usr/include/eigen3"), Path("/usr/local/include/eigen3"),
+                              prefix / "include" / "eigen3") if (d / "Eigen" / "Core").exists()), None)
     missing = [what for what, ok in (
         ("g++", shutil.which("g++")), ("Eigen (apt-get install libeigen3-dev, or pip install cmeel-eigen)", eigen),
         ("Pinocchio's C++ headers (pip install pin)", (prefix / "include" / "pinocchio" / "algorithm" / "aba.hpp").exists()),
