@@ -83,7 +83,10 @@ class CppAba:
                                      stdout=subprocess.PIPE, text=True)
         self.state = {}
         while "ddq" not in self.state:
-            name, *values = self.proc.stdout.readline().split()
+            line = self.proc.stdout.readline()
+            if not line:
+                raise RuntimeError(f"{exe} {urdf} {base} ended with code {self.proc.wait()}")
+            name, *values = line.split()
             if name != "nq":                    # (the first line: "nq NQ nv NV")
                 self.state[name] = np.array(values, dtype=float)
 
