@@ -13,6 +13,7 @@ each peer, then andyc again ...), printed as min .. max, and ratios are taken wi
     python bench/large.py                       chain n = 2, 4, 8, 16; ur5, panda, solo12; N-four-bar N = 1, 2, 5
     python bench/large.py --large               also n = 24, 32, g1, talos_full and N = 10 (minutes of compile)
     python bench/large.py --chain 2 8 --fourbar 1 --robot solo12
+    python bench/large.py --cpp                 also the robots against Pinocchio's C++ aba (bench/pinocchio_cpp.py)
     python bench/run.py --only large            as a section of `make bench`
 """
 
@@ -246,8 +247,22 @@ def formulation_loops(model) -> dict:
     return out
 
 
-def robot_section(tmp: Path, names, rounds: int) -> None:
-    """URDF robots: andyc against pin.aba (both from the same URDF, with the same fixed or free-flyer base)."""
+def build_robot(tmp: Path, urdf: Path, base: str):
+    """(andyc model, compile result, build seconds, Pinocchio model) of one URDF with a fixed or free-flyer base."""
+    import pinocchio as pin
+    source = tmp / f"{urdf.stem}.yaml"
+    source.write_text(f"urdf: {{file: {urdf}, base: {base}}}\n")
+    tic = time.perf_counter()
+    model, result = andyc.compile_model(source, tmp / "build", force=True)
+    build = time.perf_counter() - tic
+    pmodel = (pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer()) if base == "floating"
+              else pin.buildModelFromUrdf(str(urdf)))
+    return model, result, build, pmodel
+
+
+def robot_section(tmp: Path, names, rounds: int, cpp: bool = False) -> None:
+    """URDF robots: andyc against pin.aba (both from the same URDF, with the same fixed or free-flyer base); with
+    cpp, also against Pinocchio's C++ aba (bench/pinocchio_cpp.py) in the same rounds."""
     section("URDF robots: forward dynamics per call against pin.aba (issue 27)")
     try:
         import pinocchio as pin
@@ -255,22 +270,27 @@ def robot_section(tmp: Path, names, rounds: int) -> None:
     except ImportError as exc:
         print(f"skipped: {exc}")
         return
+    exe = None
+    if cpp:
+        import pinocchio_cpp
+        exe, why = pinocchio_cpp.build()
+        if exe is None:
+            print(f"Pinocchio C++ aba: skipped, {why}")
     for name in names:
         path, base = ROBOTS[name]
         urdf = root / path
         if not urdf.exists():
             print(f"{name}: skipped, no {urdf}")
             continue
-        source = tmp / f"{name}.yaml"
-        source.write_text(f"urdf: {{file: {urdf}, base: {base}}}\n")
-        tic = time.perf_counter()
-        model, result = andyc.compile_model(source, tmp / "build", force=True)
-        build = time.perf_counter() - tic
-        pmodel = (pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer()) if base == "floating"
-                  else pin.buildModelFromUrdf(str(urdf)))
+        model, result, build, pmodel = build_robot(tmp, urdf, base)
         q, v = pin.neutral(pmodel), np.zeros(pmodel.nv)       # the timing does not depend on the state's values
         timers = {"andyc": AndycForward(model), "pin": pin_forward(pmodel, q, v), **formulation_loops(model)}
-        times = compare(timers, rounds, 20000)
+        peer = pinocchio_cpp.CppAba(exe, urdf, base) if exe else None
+        try:
+            times = compare({**timers, **(pinocchio_cpp.timers(peer) if peer else {})}, rounds, 20000)
+        finally:
+            if peer:
+                peer.close()
         t = result.timings
         print(f"{name} ({base} base): nv {pmodel.nv}, build {build:.1f} s (derive {t.get('derive', 0):.1f}, generate "
               f"{t.get('generate', 0):.1f}, compile {t.get('compile', 0):.1f}); formulation {model.module.FORMULATION}"
@@ -281,6 +301,8 @@ def robot_section(tmp: Path, names, rounds: int) -> None:
                  if "ltdl" in times else "")
               + (f", ABA {_spread(times['aba'])} us, ABA/pin.aba {_spread(_ratios(times, 'aba', 'pin'))}, ABA/dense "
                  f"{_spread(_ratios(times, 'aba', 'dense'))}" if "aba" in times else ""), flush=True)
+        if peer:
+            print("  " + pinocchio_cpp.summary(times, pmodel, peer), flush=True)
 
 
 def _solves(model) -> dict:
@@ -405,17 +427,19 @@ def main(argv=None) -> None:
     parser.add_argument("--robot", choices=tuple(ROBOTS), nargs="*", help="URDF robots (default solo12)")
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--no-kernels", action="store_true", help="skip the factor + solve comparison")
+    parser.add_argument("--cpp", action="store_true", help="also the robots against Pinocchio's C++ aba "
+                        "(bench/pinocchio_cpp.py: compiles bench/pinocchio_aba.cpp once)")
     args = parser.parse_args(argv)
     large = args.large
     chains = args.chain if args.chain is not None else CHAINS + (CHAINS_LARGE if large else ())
     fourbars = args.fourbar if args.fourbar is not None else FOURBARS + (FOURBARS_LARGE if large else ())
     robots = (args.robot if args.robot is not None else ("ur5", "panda", "solo12", "g1", "talos_full") if large
               else ("ur5", "panda", "solo12"))
-    run(chains, robots, fourbars, args.rounds, not args.no_kernels)
+    run(chains, robots, fourbars, args.rounds, not args.no_kernels, args.cpp)
 
 
 def run(chains=CHAINS, robots=("ur5", "panda", "solo12"), fourbars=FOURBARS, rounds: int = 5,
-        kernels: bool = True) -> None:
+        kernels: bool = True, cpp: bool = False) -> None:
     if kernels:
         kernel_section(rounds)
     with tempfile.TemporaryDirectory() as tmpdir:
@@ -423,7 +447,7 @@ def run(chains=CHAINS, robots=("ur5", "panda", "solo12"), fourbars=FOURBARS, rou
         if chains:
             chain_section(tmp, chains, rounds)
         if robots:
-            robot_section(tmp, robots, rounds)
+            robot_section(tmp, robots, rounds, cpp)
         if fourbars:
             fourbar_section(tmp, fourbars, rounds)
 

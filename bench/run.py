@@ -481,7 +481,7 @@ def main(argv=None):
             if "large" in only:             # issue 27; its large sizes: python bench/large.py --large
                 import large
 
-                large.run()
+                large.run(cpp=True)     # with Pinocchio's C++ aba when g++ and Eigen are here (pinocchio_cpp.py)
             accuracy = accuracy_benchmark(tmp) if "accuracy" in only else None
             if kane is not None:
                 chains_benchmark(tmp, args.max_bodies, kane.result())
