@@ -150,6 +150,23 @@ def test_the_gait_is_periodic(run):
     assert abs(run.state[-1, 0] - run.state[0, 0] - 21 * 0.4295) < 0.3
 
 
+@pytest.mark.parametrize("scale", [0.1, 100.0])
+def test_the_walk_does_not_depend_on_the_units_of_mass(walker, run, scale):
+    """Every mass times `scale` is the same motion (M and G scale alike, and the forces with them): the same heel
+    strikes at the same times, the same states. The impact's choice of contacts compares impulses with the
+    impulse that changes a contact's speed by its tolerance, not with a speed: before, at scale 0.1 a knee knock
+    left the stance foot slipping at 1.5e-9 m/s and the run stopped (Painleve) at 3.48 s."""
+    m = dict(zip(walker.parameter_names, walker.parameter_defaults))
+    scaled = andyc.simulate(walker, T_END, dt=1e-3, method="projection", progress=False,
+                            parameters={name: scale * m[name] for name in ("mh", "m1", "m2")})
+    assert scaled.finished
+    a, b = heel_strikes(scaled), heel_strikes(run)
+    assert len(a) == len(b) >= 20
+    assert max(abs(x[0] - y[0]) for x, y in zip(a, b)) < 1e-9              # measured: 2.7e-11 s
+    assert [x[1] for x in a] == [y[1] for y in b]
+    assert np.max(np.abs(scaled.state - run.state)) < 1e-8                 # measured: 3.4e-9
+
+
 def test_a_rough_start_settles_onto_the_gait(walker, run):
     """The gait attracts: started 0.04 rad, 0.07 rad/s and 0.6 rad/s off it (s0 = 0.2, w0 = -1, wo1 = 0.5,
     wo2 = -4), the walker takes its 64 steps in 40 s and its last post-strike state is the fixed point to 1e-8

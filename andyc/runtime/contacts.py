@@ -119,6 +119,11 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool, fired: int = 
     scale = max(1.0, float(np.max(np.abs(c[used])))) if used else 1.0
     tol = 1e-10 * scale
     Minv = np.linalg.inv(M)
+    # Impulses are checked against the impulse that changes a touching contact's speed by tol (tol / W_ii, W =
+    # A M^-1 A^T), not against tol itself: so the choice does not depend on the units of mass (a walker with every
+    # mass scaled by 0.1 moves as before, and takes the same impacts).
+    reach = [float(A[rows[i]] @ Minv @ A[rows[i]]) for i in touching]
+    ptol = tol / max(reach) if reach and max(reach) > 0.0 else tol
     # each touching contact: 0 no impulse, 1 active (sticking, with friction), 2 / 3 sliding forwards / backwards
     # (spatial friction: 0 none, 1 sticking, 2 sliding against the slip before, _slide_direction)
     choices = [range(3) if spatial[i] else range(4) if stick[i] >= 0 else range(2) for i in touching]
@@ -161,12 +166,12 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool, fired: int = 
             r = rows[i]
             if o == 0:
                 ok = after[r] >= -e[i] * c[r] - tol
-            elif impulse[r] < -tol:
+            elif impulse[r] < -ptol:
                 ok = False
             elif o == 1 and spatial[i]:
-                ok = math.hypot(impulse[stick[i]], impulse[stick[i] + 1]) <= mu[i] * impulse[r] + tol
+                ok = math.hypot(impulse[stick[i]], impulse[stick[i] + 1]) <= mu[i] * impulse[r] + ptol
             elif o == 1 and stick[i] >= 0:
-                ok = abs(impulse[stick[i]]) <= mu[i] * impulse[r] + tol
+                ok = abs(impulse[stick[i]]) <= mu[i] * impulse[r] + ptol
             elif spatial[i]:
                 ok = slide[i] @ after[stick[i]:stick[i] + 2] >= -tol
             elif o == SLIP_POS:
