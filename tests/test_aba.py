@@ -186,9 +186,13 @@ def test_every_force_element_enters_as_in_the_dense_path(out):
     assert np.abs(module.rhs(0.0, x, u=u)[module.NQ:module.NQ + module.NV] - dense).max() <= 1e-12 * np.abs(dense).max()
 
 
-@pytest.mark.parametrize("robot", ["ur5"])
+@pytest.mark.parametrize("robot", ["ur5", "panda"])
 def test_urdf_robots_aba_equals_dense_and_pinocchio(robot, out):
-    """(solo12 on its floating base gets ABA by the counts: tests/test_urdf_pinocchio.py checks it the same way.)"""
+    """ABA forced on, against the dense path and Pinocchio. panda's second finger mimics the first: a group of two
+    links moved by one speed (aba_groups.py), hanging from the hand, which makes ABA panda's choice by the counts.
+    Pinocchio keeps a mimic joint as a joint of its own: as in tests/test_urdf_pinocchio.py, its crba and rnea are
+    then projected on andyc's speeds (v_pin = T v) and solved there. (solo12 on its floating base gets ABA by the
+    counts: tests/test_urdf_pinocchio.py checks it the same way.)"""
     pytest.importorskip("pinocchio")
     from tests.support.pinocchio_map import PINOCCHIO_ROBOTS as ROBOTS, PinocchioMap, relative, root_link
 
@@ -197,14 +201,17 @@ def test_urdf_robots_aba_equals_dense_and_pinocchio(robot, out):
     urdf = ROBOTS_DIR / relpath
     source = out / f"{robot}.yaml"
     source.write_text(f"urdf: {{file: {urdf}, base: {base}}}\n")
+    if robot == "panda":
+        assert derive(load(source)).forward.chosen == ABA
     module = _aba_module(source, out / "build")
     assert _dense_equals_aba(module, 5) <= 1e-12
     pmodel = pin.buildModelFromUrdf(str(urdf), *([pin.JointModelFreeFlyer()] if base == "floating" else []))
     mapping = PinocchioMap(module, pmodel, urdf, root_link(urdf) if base == "floating" else None)
+    assert bool(mapping.mimic) == (robot == "panda")
     data, rng = pmodel.createData(), np.random.default_rng(6)
     for _ in range(10):
         x = mapping.random_state(rng)
-        _, _, expected = mapping.expected(x, data, mimic_free=True)
+        _, _, expected = mapping.expected(x, data, mimic_free=not mapping.mimic)
         assert relative(module.rhs(0.0, x)[module.NQ:module.NQ + module.NV], expected) <= 1e-10
 
 
@@ -221,31 +228,6 @@ def test_links_moved_by_shared_speeds_equal_dense(out):
     assert sorted((len(g.members), len(g.speeds), g.parent) for g in groups) == [(2, 2, "base"), (3, 1, "base")]
     module = _aba_module(path, out / "build")
     assert _dense_equals_aba(module, 7) <= 1e-12
-
-
-def test_panda_mimic_fingers_equal_dense_and_pinocchio(out):
-    """panda's second finger mimics the first: a group of two links moved by one speed, hanging from the hand. Pinocchio
-    keeps a mimic joint as a joint of its own: as in tests/test_urdf_pinocchio.py, its crba and rnea are projected
-    on andyc's speeds (v_pin = T v) and solved there."""
-    pytest.importorskip("pinocchio")
-    from tests.support.pinocchio_map import PINOCCHIO_ROBOTS as ROBOTS, PinocchioMap, relative
-
-    import pinocchio as pin
-    urdf = ROBOTS_DIR / ROBOTS["panda"][0]
-    source = out / "panda.yaml"
-    source.write_text(f"urdf: {{file: {urdf}, base: fixed}}\n")
-    model = derive(load(source))
-    assert model.forward.chosen == ABA            # by the counts, now that the fingers are a group
-    module = _aba_module(source, out / "build")
-    assert _dense_equals_aba(module, 8) <= 1e-12
-    pmodel = pin.buildModelFromUrdf(str(urdf))
-    mapping = PinocchioMap(module, pmodel, urdf, None)
-    assert mapping.mimic
-    data, rng = pmodel.createData(), np.random.default_rng(9)
-    for _ in range(10):
-        x = mapping.random_state(rng)
-        _, _, expected = mapping.expected(x, data, mimic_free=False)
-        assert relative(module.rhs(0.0, x)[module.NQ:module.NQ + module.NV], expected) <= 1e-10
 
 
 def test_groups_that_do_not_hang_from_one_link_keep_m(tmp_path):
