@@ -15,8 +15,8 @@ from .linalg import (add_rows_transposed, cholesky, correction, ltdl, ltdl_solve
                      whiten)
 from .model import call
 from .slipping import flow_slips, slip_rows, solve_slipping
-from .sparse_rows import (add_rows_transposed_sparse, rows_times, solve_gram_sparse, tree_factor, tree_lower,
-                          tree_times, tree_upper, whiten_rows)
+from .sparse_rows import (add_rows_transposed_sparse, correction_sparse, rows_times, solve_gram_sparse, tree_factor,
+                          tree_lower, tree_times, tree_upper, whiten_rows)
 from .status import BAUMGARTE, DEPENDENT, HOLD, IDEAL, OK, PAINLEVE, SINGULAR_MASS, SLIP_TINY
 
 
@@ -345,15 +345,10 @@ def correct_rows(model, flow, nr, residual, L, S):
     whiten_flow(model, L, S, flow, nr)
     for r in range(nr):
         S[y0, r] = -S[residual, rows[flow, r]]
-    if not sparse(model):
+    if sparse(model):
+        correction_sparse(model, L, S, rows, flow, nr, model.flow_envelope[flow])
+    else:
         correction(model, L, S, nr)
-        return
-    solve_flow_gram(model, S, flow, nr, True)
-    dv = S[model.s_dv, :model.nv]
-    for i in range(model.nv):
-        dv[i] = 0.0
-    add_flow_rows(model, S, flow, nr, 1.0, dv)
-    upper(model, L, dv)
 
 
 @jit
