@@ -61,11 +61,32 @@ def _per_call(f, n) -> float:
     return 1e6 * (time.perf_counter() - tic) / n
 
 
-class AndycForward:
-    """andyc's right-hand side in a compiled loop (bench/run.py's _rhs_loop): us per evaluation."""
+def generic_state(model, seed: int = 0) -> np.ndarray:
+    """The model's initial state with its coordinates and speeds drawn from [-1, 1] (a floating base's pose, its
+    signals, stays): a pose a robot moves through rather than zero, where sin and cos return at once."""
+    x = model.initial_state(model.parameter_defaults).copy()
+    n = model.nq + model.nv
+    x[:n] = np.random.default_rng(seed).uniform(-1.0, 1.0, n)
+    return x
 
-    def __init__(self, model):
+
+def pin_generic(pmodel, seed: int = 0):
+    """(q, v) for Pinocchio alike: a random configuration within [-1, 1] (a free flyer's quaternion a random unit
+    one) and speeds from [-1, 1]."""
+    import pinocchio as pin
+    pin.seed(seed)
+    q = pin.randomConfiguration(pmodel, -np.ones(pmodel.nq), np.ones(pmodel.nq))
+    return q, np.random.default_rng(seed).uniform(-1.0, 1.0, pmodel.nv)
+
+
+class AndycForward:
+    """andyc's right-hand side in a compiled loop (bench/run.py's _rhs_loop) at `state` (default: the initial
+    state): us per evaluation."""
+
+    def __init__(self, model, state=None):
         self.args, self.work = _rhs_arguments(model)
+        if state is not None:
+            self.args[2][:] = state
         self.loop = _rhs_loop(model)
         self.loop(10, *self.args)
 
@@ -183,11 +204,11 @@ def rk4_ratios(model, mj, rounds: int, t_end: float = 5.0, dt: float = 1e-3) -> 
     return out
 
 
-def formulation_loops(model) -> dict:
+def formulation_loops(model, state=None) -> dict:
     """name -> timer (us per evaluation) of M dv/dt = G solved both ways in the same build: the generated M and G
     (the leaf `dynamics`) then the dense Cholesky, or the tree's LTDL (when M has a tree), or the articulated-body
     algorithm's leaf `forward_dynamics` (when the build chose it: no M): the formulation's gain alone, A/B in one
-    process."""
+    process. At `state` (default: the initial state)."""
     numerics = model.numerics
     call, borrowed, linalg = numerics.model.call, numerics.model.borrowed, numerics.linalg
     cholesky_, lower, upper = linalg.cholesky, linalg.solve_lower, linalg.solve_upper
@@ -230,6 +251,8 @@ def formulation_loops(model) -> dict:
         return acc
 
     (m, w, x, u, p, d, _), keep = _rhs_arguments(model)
+    if state is not None:
+        x[:] = state
 
     def timed(f, *extra):
         def run(n):
@@ -265,7 +288,7 @@ def robot_section(tmp: Path, names, rounds: int, cpp: bool = False) -> None:
     cpp, also against Pinocchio's C++ aba (bench/pinocchio_cpp.py) in the same rounds."""
     section("URDF robots: forward dynamics per call against pin.aba (issue 27)")
     try:
-        import pinocchio as pin
+        import pinocchio  # noqa: F401 (the section compares with it)
         root = robots_dir()
     except ImportError as exc:
         print(f"skipped: {exc}")
@@ -283,8 +306,9 @@ def robot_section(tmp: Path, names, rounds: int, cpp: bool = False) -> None:
             print(f"{name}: skipped, no {urdf}")
             continue
         model, result, build, pmodel = build_robot(tmp, urdf, base)
-        q, v = pin.neutral(pmodel), np.zeros(pmodel.nv)       # the timing does not depend on the state's values
-        timers = {"andyc": AndycForward(model), "pin": pin_forward(pmodel, q, v), **formulation_loops(model)}
+        state = generic_state(model)
+        timers = {"andyc": AndycForward(model, state), "pin": pin_forward(pmodel, *pin_generic(pmodel)),
+                  **formulation_loops(model, state)}
         peer = pinocchio_cpp.CppAba(exe, urdf, base) if exe else None
         try:
             times = compare({**timers, **(pinocchio_cpp.timers(peer) if peer else {})}, rounds, 20000)
