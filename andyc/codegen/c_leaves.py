@@ -17,11 +17,13 @@ andyc.symbolic), and no text of the model file reaches the C source but through 
 
 from __future__ import annotations
 
+import functools
 import os
 import platform
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 from sympy import S, Symbol, cos, default_sort_key, sin
@@ -238,11 +240,25 @@ def library_stem(name: str, key: str) -> str:
     return f"{name}_leaves_{key[:16]}"
 
 
-def _flag_sets() -> list[tuple[tuple, tuple]]:
-    """The (flags, libraries) a build tries in turn: with vector math (on x86-64 Linux) and -march=native, without
-    vector math, then the baseline; the first that compiles makes the library."""
+@functools.cache
+def _vector_math(cc: str) -> bool:
+    """Whether `cc` links a library with VECTOR and libmvec here: x86-64 Linux, and a two-line probe that builds
+    (once per process), so that a machine without libmvec does not compile a large leaf twice to find out."""
+    if not (sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64")):
+        return False
+    with tempfile.TemporaryDirectory() as tmp:
+        source = Path(tmp) / "probe.c"
+        source.write_text("#include <math.h>\ndouble f(double x) { return sin(x); }\n")
+        proc = subprocess.run([cc, *FLAGS, *VECTOR, "-o", str(Path(tmp) / "probe.so"), str(source), *VECTOR_LIBS,
+                               "-lm"], capture_output=True, text=True)
+    return proc.returncode == 0
+
+
+def _flag_sets(cc: str) -> list[tuple[tuple, tuple]]:
+    """The (flags, libraries) a build tries in turn: with vector math (where _vector_math) and -march=native,
+    without vector math, then the baseline; the first that compiles makes the library."""
     sets = [((*FLAGS, *NATIVE), ()), (FLAGS, ())]
-    if sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64"):
+    if _vector_math(cc):
         sets.insert(0, ((*FLAGS, *NATIVE, *VECTOR), VECTOR_LIBS))
     return sets
 
@@ -256,7 +272,7 @@ def compile_library(source: Path, folder: Path, stem: str, cc: str) -> Path:
 
     target = folder / library_file(stem)
     with write_atomic(target) as tmp:
-        for flags, libs in _flag_sets():        # (each but the last for what this machine may lack)
+        for flags, libs in _flag_sets(cc):        # (each but the last for what this machine may lack)
             proc = subprocess.run([cc, *flags, "-o", str(tmp), str(source), *libs, "-lm"],
                                   capture_output=True, text=True)
             if proc.returncode == 0:
