@@ -13,6 +13,7 @@ import andyc
 from andyc.errors import plural, printable
 from andyc.outputs import write_atomic
 from andyc.runtime.status import drift, largest_residual
+from andyc.spec.meshfiles import read_mesh
 from andyc.spec.modes import radices
 
 
@@ -68,14 +69,17 @@ class Run:
                                         # (andyc.runtime.sensitivities)
     meshes: dict = field(default_factory=dict)       # mesh file (as display's shapes name it) -> its bytes, as read
 
+    meshes_on_disk: bool = True     # a run made here reads its shapes' meshes from disk; one read back does not
+
     def mesh_bytes(self, file: str) -> bytes | None:
-        """The bytes of a shape's mesh file: as the run file holds them, else read from the file; None when
-        neither has it (the file was moved since)."""
+        """The bytes of a shape's mesh file: as the run file holds them; for a run made in this process, read
+        from the file the spec accepted (andyc.spec.meshfiles). None when neither has it. A run file read
+        back never reads the disk: its file names are text anyone could have written."""
         if file not in self.meshes:
-            try:
-                self.meshes[file] = Path(file).read_bytes()
-            except OSError:
+            data = read_mesh(file) if self.meshes_on_disk else None
+            if data is None:
                 return None
+            self.meshes[file] = data
         return self.meshes[file]
 
     def __post_init__(self):
@@ -396,7 +400,7 @@ def read_h5(path) -> Run:
                    input_names=[str(s) for s in f["inputs"].attrs["names"]] if "inputs" in f else [],
                    input_values=f["inputs"][()] if "inputs" in f else None,
                    frame_parents=json.loads(a.get("frame_parents", "{}")), display=json.loads(display),
-                   contact_names=contacts["names"], contact_rows=contacts["rows"], meshes=meshes,
+                   contact_names=contacts["names"], contact_rows=contacts["rows"], meshes=meshes, meshes_on_disk=False,
                    work_names=[str(s) for s in f["work"].attrs["names"]] if "work" in f else [],
                    work=f["work"][()] if "work" in f else None, power=f["power"][()] if "power" in f else None,
                    contact_stick_rows=contacts.get("stick_rows", []),

@@ -20,10 +20,10 @@ import re
 from pathlib import Path
 
 from andyc.spec.frames import AXES
+from andyc.spec.meshfiles import MESH_FORMATS, MeshRefused, checked_mesh
 from andyc.spec.scope import Scope
 
 KINDS = ("box", "sphere", "cylinder", "capsule", "mesh")
-MESH_FORMATS = {".stl": "stl", ".obj": "obj", ".dae": "dae"}
 
 
 def build_shapes(data: dict, scope: Scope, model_file) -> list:
@@ -83,17 +83,20 @@ DEFAULT_RGBA = [0.6, 0.62, 0.66, 1.0]      # a primitive's colour unless it says
 
 
 def mesh_file(name: str, where, scope: Scope, folder: Path) -> dict:
-    """{'file': its absolute path, 'format'} of a mesh file named relative to the model file's folder;
-    reported when it does not exist or is not STL, OBJ or DAE."""
-    path = (folder / name).resolve()
-    fmt = MESH_FORMATS.get(path.suffix.lower())
-    if fmt is None:
+    """{'file': its resolved path, 'format'} of a mesh file named relative to the model file's folder, which
+    it must resolve inside (andyc.spec.meshfiles: the rule); reported otherwise."""
+    if MESH_FORMATS.get(Path(name).suffix.lower()) is None:
         scope.report.error(where, f"mesh file '{name}' is not STL, OBJ or DAE (by its suffix)",
                            "give a .stl, .obj or .dae file (convert others, e.g. with meshlab or trimesh)")
-    elif not path.is_file():
-        scope.report.error(where, f"mesh file '{name}' does not exist (looked for {path})",
-                           "give its path relative to the model file's folder")
-    return {"file": str(path), "format": fmt or ""}
+        return {"file": str(folder / name), "format": ""}
+    try:
+        path, fmt = checked_mesh(folder / name, [folder])
+    except MeshRefused as why:
+        scope.report.error(where, f"mesh file '{name}' {why}",
+                           "give a regular mesh file inside the model file's folder (a link may point only "
+                           "inside it too)")
+        return {"file": str(folder / name), "format": ""}
+    return {"file": str(path), "format": fmt}
 
 
 _HEX = re.compile(r"#(?:[0-9a-fA-F]{6}|[0-9a-fA-F]{8})")
@@ -174,10 +177,9 @@ def urdf_shapes(visuals: list) -> list:
             if v["geometry"] != "sphere":
                 shape.update(length=v["length"], axis=[0.0, 0.0, 1.0])
         elif v["geometry"] == "mesh":
-            fmt = MESH_FORMATS.get(Path(v["filename"]).suffix.lower())
-            if fmt is None or not Path(v["filename"]).is_file():
-                continue            # reported by the importer (a missing mesh), or a format the viewer cannot read
-            shape.update(file=str(Path(v["filename"]).resolve()), format=fmt, scale=list(v["scale"]))
+            if not v.get("format"):
+                continue            # refused by the importer (andyc.spec.meshfiles), which said why in a warning
+            shape.update(file=v["filename"], format=v["format"], scale=list(v["scale"]))
         else:
             continue
         shape["xyz"], shape["rpy"] = list(v["origin"]["xyz"]), list(v["origin"]["rpy"])

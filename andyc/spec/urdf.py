@@ -191,8 +191,14 @@ def read(path, options=None, option_error=None, raw: bytes | None = None) -> Urd
         warnings.append(Diagnostic(file, 1, "robot", f"{n} visual mesh file(s) not found (first: "
                                    f"{writer.missing_meshes[0]!r}); kept as written in Spec.visuals",
                                    "give the folders that hold the packages in 'urdf: {package_paths: [...]}'"))
-    unreadable = [v for v in writer.visuals if v["geometry"] == "mesh" and Path(v["filename"]).suffix.lower()
-                  not in (".stl", ".obj", ".dae")]
+    if writer.refused_meshes:
+        n = len(writer.refused_meshes)
+        line, why = writer.refused_meshes[0]
+        warnings.append(Diagnostic(file, line, "robot", f"{n} visual mesh file(s) refused, not drawn (first: {why})",
+                                   "a mesh must resolve to a regular .stl, .obj or .dae file inside its package or "
+                                   "the URDF's package (README: Model files from anyone)"))
+    unreadable = [v for v in writer.visuals if v["geometry"] == "mesh" and not v["format"]
+                  and Path(v["filename"]).suffix.lower() not in (".stl", ".obj", ".dae")]
     if unreadable:
         warnings.append(Diagnostic(file, unreadable[0]["line"], "robot", f"{len(unreadable)} visual mesh file(s) "
                                    f"andyc view cannot draw (first: {unreadable[0]['filename']!r}); not drawn",

@@ -13,10 +13,12 @@ Visual geometry is kept as references (mesh files looked up in the package paths
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
 
+from andyc.spec.meshfiles import MeshRefused, checked_mesh, package_root
 from andyc.spec.urdfjoints import Draft, as_written, identifier
 from andyc.spec.urdfxml import ONE_DOF
 
@@ -57,6 +59,7 @@ class LinkWriter:
         self.frame_of: dict = {}        # link -> its frame's name, claimed when first asked for
         self.visuals: list = []
         self.missing_meshes: list = []
+        self.refused_meshes: list = []  # (line, why) of meshes that break andyc.spec.meshfiles' rule
         self.odd_inertia: list = []     # links whose inertia no rigid body has (kept, as Pinocchio does)
 
     # frames -----------------------------------------------------------------
@@ -261,7 +264,7 @@ class LinkWriter:
                 ref = {"link": link, "frame": self.frame_of.get(link, "world"), "geometry": shape.tag,
                        "origin": {"xyz": xyz, "rpy": rpy}, "line": self.draft.line(element)}
                 if shape.tag == "mesh":
-                    ref["filename"] = self.resolve(shape.get("filename", ""))
+                    ref["filename"], ref["format"] = self.resolve(shape.get("filename", ""), ref["line"])
                     ref["scale"] = _numbers(shape.get("scale", "1 1 1"))
                 else:
                     ref.update({a: _numbers(shape.get(a)) for a in ("radius", "length", "size") if shape.get(a)})
@@ -287,23 +290,30 @@ class LinkWriter:
             return rgba
         return None
 
-    def resolve(self, filename: str) -> str:
-        """package://PKG/REL and relative names -> an existing file (search paths, the URDF's folder and its
-        ancestors), or the name as written (reported once in a warning)."""
-        if filename.startswith("file://"):
-            return filename[len("file://"):]
-        candidates = []
-        if filename.startswith("package://"):
-            pkg, _, rel = filename[len("package://"):].partition("/")
+    def resolve(self, filename: str, line: int) -> tuple[str, str]:
+        """(file, format) of a visual's mesh: package://PKG/REL and relative names looked up in the search
+        paths, the URDF's folder and its ancestors; the first that exists must keep andyc.spec.meshfiles'
+        rule inside its own root (format ''; the name as written, kept in missing_meshes or refused_meshes
+        for one warning, when none does)."""
+        name = filename[len("file://"):] if filename.startswith("file://") else filename
+        own = [package_root(self.folder)] + [Path(p) for p in self.options.package_paths]
+        candidates = []         # (path, the folder it must resolve inside)
+        if name.startswith("package://"):
+            pkg, _, rel = name[len("package://"):].partition("/")
             for d in [Path(p) for p in self.options.package_paths]:
-                candidates += [d / pkg / rel, d / rel]
-            candidates += [a / pkg / rel for a in [self.folder, *self.folder.parents]] + [self.folder / rel]
-        elif not Path(filename).is_absolute():
-            candidates = [self.folder / filename]
+                candidates += [(d / pkg / rel, [d / pkg]), (d / rel, [d])]
+            candidates += [(a / pkg / rel, [a / pkg]) for a in [self.folder, *self.folder.parents]]
+            candidates += [(self.folder / rel, own)]
         else:
-            candidates = [Path(filename)]
-        for c in candidates:
-            if c.is_file():
-                return str(c)
+            candidates = [(self.folder / name, own)]      # an absolute name replaces the folder
+        for path, roots in candidates:
+            if not os.path.lexists(path):
+                continue
+            try:
+                resolved, fmt = checked_mesh(path, roots)
+            except MeshRefused as why:
+                self.refused_meshes.append((line, f"{filename!r} {why}"))
+                return filename, ""
+            return str(resolved), fmt
         self.missing_meshes.append(filename)
-        return filename
+        return filename, ""
