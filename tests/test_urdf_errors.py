@@ -224,7 +224,7 @@ def test_unused_elements_are_listed_once_in_one_warning(tmp_path):
     # The visual mesh is kept as a reference; its package is not found, which a second warning says.
     assert spec.visuals == [{"link": "upper", "frame": "upper", "geometry": "mesh", "line": line_of(text, "<visual>"),
                              "origin": {"xyz": [0.0] * 3, "rpy": [0.0] * 3},
-                             "filename": "package://arm_description/meshes/upper.stl", "scale": [1.0] * 3}]
+                             "filename": "package://arm_description/meshes/upper.stl", "format": "", "scale": [1.0] * 3}]
     assert any("1 visual mesh file(s) not found" in w.message for w in spec.warnings)
     # andyc check prints each warning on one line
     result = check(tmp_path / "arm.urdf")
