@@ -7,6 +7,7 @@
 - a rod falling flat onto two supports: both impacts solved together;
 - a spring-leg hopper: touchdown, stance and liftoff where the normal force vanishes, the stance time against
   the closed form of the spring-mass stance;
+- the ball's contact beside a hand-written automaton of its own phases;
 - the mistakes of a `contacts:` section, one line each.
 """
 
@@ -124,17 +125,18 @@ def test_bouncing_ball_comes_to_rest(compiled, method, tmp_path):
     before, after = run.events["state_before"][:-1, 1], run.events["state_after"][:-1, 1]
     assert np.allclose(after, -E * before, rtol=1e-12, atol=0)  # each bounce keeps e of the speed
     # the last impact, within the Zeno tolerance of the accumulation point, is plastic and closes the contact
-    assert run.events["to_flow"][-1] == 1 and np.all(run.events["to_flow"][:-1] == 0)
+    after = [run.event_modes(k) for k in range(len(times))]
+    assert after[-1] == [1] and all(m == [0] for m in after[:-1])
     assert 0 <= T_INF - times[-1] < 1e-6
     resting = run.time >= T_INF
-    assert np.all(run.flow[resting] == 1)
+    assert np.all(run.contact_modes[resting, 0] == 1)
     assert np.max(np.abs(run.column("y")[resting])) < 1e-12
     assert np.max(np.abs(run.multipliers[resting, 0] - G)) < 1e-10       # m g, m = 1
     assert np.all(run.column("y") > -1e-12)
-    # the run file says which contact is closed and its normal force (0 while open)
-    assert run.contact_names == ["ground"]
-    assert np.array_equal(run.contact_closed[:, 0], run.flow)
-    assert np.all(run.normal_forces[run.flow == 0, 0] == 0.0)
+    # the run file says which contact is closed (from the last impact on) and its normal force (0 while open)
+    assert run.contact_names == ["ground"] and run.discrete_names == ["ground_mode"]
+    assert np.array_equal(run.contact_closed[:, 0] == 1, run.time >= times[-1])
+    assert np.all(run.normal_forces[run.contact_closed[:, 0] == 0, 0] == 0.0)
     run.save(tmp_path / "ball.h5")
     run.save(tmp_path / "ball.csv")
     with h5py.File(tmp_path / "ball.h5") as f:
@@ -149,12 +151,12 @@ def test_bouncing_ball_comes_to_rest(compiled, method, tmp_path):
 def test_a_ball_starting_on_the_ground_stays_there(compiled):
     model = compiled("bouncing_ball_contact")
     run = andyc.simulate(model, 10.0, dt=1e-3, parameters={"h0": 0.0}, progress=False)
-    assert run.finished and len(run.events["time"]) == 0 and np.all(run.flow == 1)
+    assert run.finished and len(run.events["time"]) == 0 and np.all(run.contact_modes[:, 0] == 1)
     assert np.max(np.abs(run.column("y"))) == 0.0
     assert np.max(np.abs(run.normal_forces[:, 0] - G)) < 1e-10
     # held above it, it falls
     run = andyc.simulate(model, 1.0, dt=1e-3, parameters={"h0": 1e-6}, progress=False)
-    assert run.flow[0] == 0 and run.events["time"][0] == pytest.approx(math.sqrt(2e-6 / G), abs=1e-12)
+    assert run.contact_modes[0, 0] == 0 and run.events["time"][0] == pytest.approx(math.sqrt(2e-6 / G), abs=1e-12)
 
 
 # -- simultaneous impacts ------------------------------------------------------------------
@@ -187,11 +189,11 @@ def test_rod_falling_flat_strikes_both_supports_together(compiled, e):
     # taken one after the other, the first impact alone would set it spinning
     assert abs(one_end_impact(e)[1]) > 1.0
     # at the end it rests on both supports, each carrying half its weight
-    assert run.flow[-1] == 3 and run.flow_names[3] == "left+right"
+    assert list(run.contact_modes[-1]) == [1, 1] and run.flow_names == ["default"]
     assert np.allclose(run.normal_forces[-1], [G / 2, G / 2], rtol=0, atol=1e-10)
     assert abs(run.column("y")[-1]) < 1e-12
     if e == 0.0:
-        assert len(run.events["time"]) == 1 and run.events["to_flow"][0] == 3
+        assert len(run.events["time"]) == 1 and run.event_modes(0) == [1, 1]
 
 
 @pytest.mark.parametrize("e", [0.0, 0.5])
@@ -200,7 +202,8 @@ def test_a_tilted_rod_lands_on_one_end_then_the_other_and_no_support_pulls(compi
     x0 = np.array([0.5 + 0.5 * math.sin(0.2), 0.2, 0.0, 0.0])          # tilted 0.2 rad, the left end lower
     run = andyc.simulate(model, 4.0, dt=1e-3, parameters={"e": e}, x0=x0, progress=False)
     assert run.finished
-    assert run.event_names()[:2] == ["left_impact_0", "right_impact_" + ("1" if e == 0 else "0")]
+    assert run.event_names()[:2] == ["left_impact", "right_impact"]
+    assert run.event_modes(0) == [1 if e == 0 else 0, 0]     # plastic: the left end stays; else it bounces
     p = model.parameters({"e": e})
     u, d = model.input_defaults, model.initial_discrete(p)
     for t, before, after in zip(run.events["time"], run.events["state_before"], run.events["state_after"]):
@@ -213,7 +216,7 @@ def test_a_tilted_rod_lands_on_one_end_then_the_other_and_no_support_pulls(compi
         touching = np.abs(phi) < 1e-9
         assert np.all((A @ after[2:])[touching] >= -1e-12)
     # it ends at rest on both, level, each carrying half its weight
-    assert run.flow[-1] == 3 and abs(run.column("th")[-1]) < 1e-9
+    assert list(run.contact_modes[-1]) == [1, 1] and abs(run.column("th")[-1]) < 1e-9
     assert np.allclose(run.normal_forces[-1], [G / 2, G / 2], rtol=0, atol=1e-9)
 
 
@@ -241,8 +244,8 @@ def test_hopper_stance_time_and_liftoff_on_the_normal_force(compiled, method, dt
     t = run.events["time"]
     assert t[0] == pytest.approx(math.sqrt(2 * 0.5 / G), abs=1e-12)     # touchdown, after a free fall
     assert abs((t[1] - t[0]) - stance_time()) < 1e-9
-    assert run.events["to_flow"][0] == 1 and run.events["to_flow"][1] == 0
-    stance = run.flow == 1
+    assert run.event_modes(0) == [1] and run.event_modes(1) == [0]
+    stance = run.contact_modes[:, 0] == 1
     assert np.all(run.normal_forces[stance, 0] > -1e-9)                   # the ground never pulls
     assert np.all(run.column("yf") > -1e-12)
 
@@ -279,15 +282,50 @@ def test_contact_mistakes(tmp_path, entry, path, message, hint):
     assert str(d).startswith(f"{tmp_path / 'model.yaml'}:{d.line}: {path}: {message}; ")
 
 
-def test_a_contact_named_open(tmp_path):
-    text = BALL.replace("{name: ground, gap: ball.y", "{name: open, gap: ball.y")
-    [d] = problems(tmp_path, text)
-    assert (d.line, d.path) == (line_number(text, "{name: open"), "contacts[0].name")
-    assert d.message.startswith("a contact cannot be named 'open'")
+def test_a_contact_whose_mode_state_name_is_taken(tmp_path):
+    """A contact's mode is the discrete state <contact>_mode: a name the model uses already is reported."""
+    text = BALL.replace("coordinates:", "discrete: {ground_mode: 0}\ncoordinates:")
+    found = problems(tmp_path, text)
+    d = next(d for d in found if d.path == "contacts[0].name")
+    assert d.line == line_number(text, "{name: ground, gap:")
+    assert d.message == "contact 'ground' needs the name 'ground_mode' (a discrete state of its own), which is taken"
 
 
-def test_contacts_with_a_hybrid_section(tmp_path):
-    text = BALL + "hybrid:\n  flows:\n    - {name: flight}\n"
+def test_a_flow_cannot_list_a_contacts_row(tmp_path):
+    text = BALL + "hybrid:\n  flows:\n    - {name: flight, constraints: [ground]}\n"
     [d] = problems(tmp_path, text)
-    assert (d.line, d.path) == (line_number(text, "contacts:"), "contacts")
-    assert d.message.startswith("contacts and a hybrid section cannot be combined yet")
+    assert (d.line, d.path) == (line_number(text, "constraints: [ground]"), "hybrid.flows[0].constraints[0]")
+    assert d.message.startswith("'ground' is a contact's row, which the run closes and opens by itself")
+
+
+BALL_WITH_PHASES = BALL + """\
+hybrid:
+  flows:
+    - {name: high}
+    - {name: low}
+  jumps:
+    - {name: down, from: high, to: low, guard: y - 0.5, direction: falling}
+    - {name: up, from: low, to: high, guard: y - 0.5, direction: rising}
+"""
+
+
+def test_contacts_beside_a_hand_written_automaton(compiled, tmp_path_factory):
+    """The ball's contact works in every flow of the user's own automaton (two phases, above and below half the
+    drop height): the impacts come at the closed-form times, the phases switch where the closed-form parabolas
+    cross y = 0.5 (the first bounce's apex, e^2 h0 = 0.64, is above it; the next, 0.41, is not), and the ball comes
+    to rest closed, as without the automaton."""
+    model = compiled(write(tmp_path_factory.mktemp("phases"), BALL_WITH_PHASES, "ball_phases.yaml"))
+    run = andyc.simulate(model, 6.0, dt=1e-3, progress=False)
+    assert run.finished and run.flow_names == ["high", "low"]
+    names = run.event_names()
+    impacts = run.events["time"][[n == "ground_impact" for n in names]]
+    expected = T1 + np.concatenate([[0.0], np.cumsum(2 * E ** np.arange(1, 10) * T1)])
+    assert np.max(np.abs(impacts[:10] - expected)) < 1e-9
+    assert names[:6] == ["down", "ground_impact", "up", "down", "ground_impact", "ground_impact"]
+    v1 = E * math.sqrt(2 * G * H0)                       # up at e times the impact speed
+    rise = (v1 - math.sqrt(v1 ** 2 - 2 * G * 0.5)) / G    # y = v1 s - g s^2 / 2 = 0.5, going up, then down
+    fall = (v1 + math.sqrt(v1 ** 2 - 2 * G * 0.5)) / G
+    crossings = [math.sqrt(2 * (H0 - 0.5) / G), T1 + rise, T1 + fall]
+    assert np.max(np.abs(run.events["time"][[0, 2, 3]] - crossings)) < 1e-9
+    assert list(run.events["from_flow"][:4]) == [0, 1, 1, 0] and list(run.events["to_flow"][:4]) == [1, 1, 0, 1]
+    assert run.flow[-1] == 1 and run.contact_modes[-1, 0] == 1 and abs(run.column("y")[-1]) < 1e-12

@@ -5,7 +5,6 @@ with its constraints, every jump an edge with its guard and direction as written
 automaton has 6 flows and 6 jumps, a cycle. The drawing has a labelled artist per node and edge, and the
 command writes SVG/PNG, refuses other suffixes (exit 2) and reports a bad model (exit 1)."""
 
-import itertools
 import re
 from pathlib import Path
 
@@ -55,15 +54,18 @@ def test_frame_tree_is_the_files_frames_links_and_bodies(path):
 
 @pytest.mark.parametrize("path", YAML_MODELS, ids=lambda p: p.stem)
 def test_automaton_is_the_files_flows_and_jumps(path):
+    """The flows and jumps the file writes; its contacts listed beside them (they open and close in every flow,
+    their jumps are not edges: test_contact_jumps_are_the_files_contacts)."""
     data = raw(path)
     graph = automaton(andyc.load(path))
     hybrid = data.get("hybrid")
-    if data.get("contacts"):
-        assert _contact_modes(graph) == _contact_modes_of_file(data)
-        return
-    if not hybrid:      # one flow, every constraint active, no jump
+    assert graph["contacts"] == [c["name"] for c in data.get("contacts") or []]
+    contact_rows = {c["name"] for c in data.get("contacts") or []} | {
+        c["name"] + "_stick" for c in data.get("contacts") or [] if "slip" in c}
+    if not hybrid:      # one flow, every constraint but the contacts' active, no jump of the user's
         assert [(n["name"], n["constraints"]) for n in graph["nodes"]] == [
-            ("default", [c["name"] for c in data.get("constraints") or []])] or len(graph["nodes"]) == 1
+            ("default", [c["name"] for c in data.get("constraints") or [] if c["name"] not in contact_rows])
+        ] or len(graph["nodes"]) == 1
         assert graph["edges"] == []
         return
     assert [n["name"] for n in graph["nodes"]] == [f["name"] for f in hybrid["flows"]]
@@ -75,60 +77,41 @@ def test_automaton_is_the_files_flows_and_jumps(path):
         (j["name"], j["from"], j["to"], str(j["guard"]), j.get("direction", "either")) for j in hybrid["jumps"]]
 
 
-def _contact_modes(graph) -> tuple:
-    return ({(n["name"], frozenset(n["constraints"]), n["initial"]) for n in graph["nodes"]},
-            {(e["source"], e["target"], e["guard"], e["direction"]) for e in graph["edges"]})
-
-
-def _contact_modes_of_file(data) -> tuple:
-    """The automaton a model's contacts: stand for, read from the file: one flow per combination of the contacts'
-    states (open or closed; with friction open, stick, slip_pos or slip_neg), named by the closed ones ('open' for
-    none; the model's own constraints active in each, and a sticking contact's stick row), and from each flow an
-    impact of every open contact (its gap falling through zero; the impact solver picks the mode after), a liftoff
-    of every closed one (its normal force, the multiplier, falling through zero) to the flow without it, and with
-    friction: from stick a slip each way (mu lam_n +- lam_t falling through zero), from a slip its stop (the slip
-    speed through zero, falling forwards, rising backwards) to stick. Spatial friction (slip: a list of two):
-    open, stick, slip; from stick a slip where mu^2 lam_n^2 - lam_1^2 - lam_2^2 falls through zero, from slip its
-    stop where s . d does (d the slip's direction, two discrete states)."""
-    contacts = data["contacts"]
-    own = {c["name"] for c in data.get("constraints") or []}
-    suffix = ["", "_stick", "_slip_pos", "_slip_neg"]
-    spatial = [isinstance(c.get("slip"), list) for c in contacts]
-    choices = [range(3) if s else range(4) if "friction" in c else range(2) for c, s in zip(contacts, spatial)]
-    nodes, edges = set(), set()
-
-    def name_of(states):
-        return "+".join(c["name"] + (("", "_stick", "_slip")[s] if flat else suffix[s] if "friction" in c else "")
-                        for c, s, flat in zip(contacts, states, spatial) if s) or "open"
-
-    for states in itertools.product(*choices):
-        name = name_of(states)
-        rows = {c["name"] for c, s in zip(contacts, states) if s}
-        rows |= {c["name"] + "_stick" for c, s in zip(contacts, states) if s == 1 and "friction" in c}
-        nodes.add((name, frozenset(own | rows), not any(states)))
-        for k, c in enumerate(contacts):
-            other = lambda state: name_of(states[:k] + (state,) + states[k + 1:])     # noqa: E731
-            normal = c.get("multiplier", f"lambda_{c['name']}")
-            if states[k] == 0:
-                edges.add((name, name, str(c["gap"]), "falling"))
-                continue
-            edges.add((name, other(0), normal, "falling"))
-            if "friction" not in c:
-                continue
-            if spatial[k]:
-                f1, f2 = c.get("friction_multiplier", [f"friction_{c['name']}_{j}" for j in (1, 2)])
-                d1, d2 = f"{c['name']}_slip_dir_1", f"{c['name']}_slip_dir_2"
-                edges.add((name, other(2), f"({c['friction']})**2*{normal}**2 - {f1}**2 - {f2}**2", "falling")
-                          if states[k] == 1 else (name, other(1), f"({c['slip'][0]})*{d1} + ({c['slip'][1]})*{d2}",
-                                                  "falling"))
-                continue
-            friction = c.get("friction_multiplier", f"friction_{c['name']}")
-            if states[k] == 1:
-                edges.add((name, other(2), f"{c['friction']}*{normal} + {friction}", "falling"))
-                edges.add((name, other(3), f"{c['friction']}*{normal} - {friction}", "falling"))
-            else:
-                edges.add((name, other(1), str(c["slip"]), "falling" if states[k] == 2 else "rising"))
-    return nodes, edges
+@pytest.mark.parametrize("path", [p for p in YAML_MODELS if raw(p).get("contacts")], ids=lambda p: p.stem)
+def test_contact_jumps_are_the_files_contacts(path):
+    """Each contact's own jumps, from and to every flow, each considered only in the modes it leaves (its mode a
+    discrete state: 0 open, 1 closed or sticking, 2 (3) slipping forwards (backwards)), read from the file: an
+    impact while open (its gap falling through zero; the impact solver picks the modes after), a liftoff while
+    closed (its normal force, the multiplier, falling through zero); with planar friction, from stick a slip each
+    way (mu lam_n +- lam_t falling through zero) and from either slip its stop (the slip speed times +1 forwards,
+    -1 backwards, falling through zero); spatial friction (slip: a list of two): from stick a slip where
+    mu^2 lam_n^2 - lam_1^2 - lam_2^2 falls through zero, from slipping its stop where s . d does (d the slip's
+    direction, two discrete states)."""
+    data = raw(path)
+    spec = andyc.load(path)
+    found = {(j.name, j.source, j.target, str(j.text["guard"]), j.direction, j.mode)
+             for j in spec.jumps if j.kind}
+    expected = set()
+    for c in data["contacts"]:
+        name, mode = c["name"], f"{c['name']}_mode"
+        normal = c.get("multiplier", f"lambda_{name}")
+        expected.add((f"{name}_impact", "*", "*", str(c["gap"]), -1, (mode, 0b1)))
+        expected.add((f"{name}_liftoff", "*", "*", normal, -1, (mode, 0b1110)))
+        if "friction" not in c:
+            continue
+        if isinstance(c["slip"], list):
+            f1, f2 = c.get("friction_multiplier", [f"friction_{name}_{j}" for j in (1, 2)])
+            d1, d2 = f"{name}_slip_dir_1", f"{name}_slip_dir_2"
+            expected.add((f"{name}_slip", "*", "*", f"({c['friction']})**2*{normal}**2 - {f1}**2 - {f2}**2", -1,
+                          (mode, 0b10)))
+            expected.add((f"{name}_stop", "*", "*", f"({c['slip'][0]})*{d1} + ({c['slip'][1]})*{d2}", -1,
+                          (mode, 0b100)))
+            continue
+        friction = c.get("friction_multiplier", f"friction_{name}")
+        expected.add((f"{name}_slip_pos", "*", "*", f"{c['friction']}*{normal} + {friction}", -1, (mode, 0b10)))
+        expected.add((f"{name}_slip_neg", "*", "*", f"{c['friction']}*{normal} - {friction}", -1, (mode, 0b10)))
+        expected.add((f"{name}_stop", "*", "*", f"(5 - 2*{mode})*({c['slip']})", -1, (mode, 0b1100)))
+    assert found == expected
 
 
 def test_passive_walker_automaton_is_a_cycle_of_six_flows_and_six_jumps():

@@ -51,12 +51,12 @@ def test_the_impact_ratio_is_housners(rocking):
     assert run.finished
     names = run.event_names()
     # the corners strike in turn: right first (the block starts on its left corner)
-    assert names[:4] == ["right_impact_1", "left_impact_4", "right_impact_1", "left_impact_4"]
+    assert names[:4] == ["right_impact", "left_impact", "right_impact", "left_impact"]
     before, after = run.events["state_before"][:-1, 5], run.events["state_after"][:-1, 5]     # th_dot
     assert len(before) > 40
     assert np.max(np.abs(after / before - RATIO)) < 1e-12
-    # each impact moves the pivot: the corner that strikes closes sticking, the other lifts off
-    assert list(run.events["to_flow"][:2]) == [run.flow_names.index("right_stick"), run.flow_names.index("left_stick")]
+    # each impact moves the pivot: the corner that strikes closes sticking, the other lifts off (modes: left, right)
+    assert [run.event_modes(k) for k in range(4)] == [[0, 1], [1, 0], [0, 1], [1, 0]]
 
 
 def test_the_free_rocking_period_matches_the_quadrature(rocking):
@@ -90,7 +90,7 @@ def test_no_corner_pulls_or_sinks_and_the_block_comes_to_rest(rocking):
     t_inf = impact_times(400)[-1]
     assert 0 <= t_inf - run.events["time"][-1] < 1e-6
     resting = run.time > t_inf
-    assert np.all(run.flow[resting] == run.flow_names.index("left_stick+right_stick"))
+    assert np.all(run.contact_modes[resting] == 1)       # both corners closed, sticking
     assert np.max(np.abs(run.column("th")[resting])) < 1e-12
     assert np.allclose(run.normal_forces[resting], M * G / 2, rtol=0, atol=1e-9)
 
@@ -103,4 +103,4 @@ def test_dop853_locates_the_short_rocks_too(rocking):
     assert run.finished
     assert np.max(np.abs(run.events["time"][:16] - impact_times(16))) < 1e-8
     assert 0 <= impact_times(400)[-1] - run.events["time"][-1] < 1e-6
-    assert run.flow_names[run.flow[-1]] == "left_stick+right_stick" and abs(run.column("th")[-1]) < 1e-12
+    assert list(run.contact_modes[-1]) == [1, 1] and abs(run.column("th")[-1]) < 1e-12

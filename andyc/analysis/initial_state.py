@@ -53,7 +53,8 @@ def initial_problems(model: SymbolicModel, init: str = "check", tol: float = 1e-
                 "fix the initial values, or give the model `simulate: {init: project}` to move the state onto "
                 "the manifold (the smallest change in the mass-matrix metric), or `simulate: {init: as-is}` to "
                 "start from it anyway"))
-    jumps = [(j, s) for j, s in zip(model.hybrid.jumps, spec.jumps) if j.source == flow and j.direction != 0]   # (either: no wrong side)
+    jumps = [(j, s) for j, s in zip(model.hybrid.jumps, spec.jumps) if j.direction != 0      # (either: no wrong side)
+             and (j.source == flow or (j.source < 0 and s.kind == "impact"))]      # (a contact starts open)
     if jumps:
         values = values_at(model, [e for j, _ in jumps for e in (j.guard, j.enabled)], x, u, p, d)
         for k, (j, s) in enumerate(jumps):

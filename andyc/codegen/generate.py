@@ -64,32 +64,27 @@ def _hybrid_context(model: SymbolicModel) -> dict:
         "impact_nrows": [len(j.impact_rows) for j in h.jumps],
         "jump_multipliers": [j.uses_multipliers for j in h.jumps],
         "jump_contact": [j.contact for j in h.jumps],
-        "contacts": [c.name for c in model.spec.contacts],
-        "contact_rows": [model.constraints.rows.index(c.constraint) for c in model.spec.contacts],
-        "contact_stick_rows": [model.constraints.rows.index(c.stick) if c.stick else -1 for c in model.spec.contacts],
-        "contact_tangents": [c.tangents for c in model.spec.contacts],
+        "jump_mode_state": [j.mode_state for j in h.jumps], "jump_mode_mask": [j.mode_mask for j in h.jumps],
         "jump_kinds": [[j.kind, j.contact] for j in model.spec.jumps],
-        **_slip_tables(model),
+        **_contact_tables(model),
     }
 
 
-def _slip_tables(model: SymbolicModel) -> dict:
-    """FLOW_SLIP, FLOW_SLIP_MU and FLOW_SLIP_DIR (NF, NC), for each flow's r-th active row: a slipping contact's
-    normal row gets -sigma (t + 1), t its stick row, sigma = +1 slipping forwards (spatial friction: t + 1, t the
-    first of its two stick rows), the index of the jump whose coefficient is its mu, and (spatial) 1 + the index in
-    d of the first of the two discrete states holding its slip's direction (andyc.numerics.slipping.slip_rows);
-    0 elsewhere."""
-    rows, nc, h = model.constraints.rows, model.constraints.nc, model.hybrid
+def _contact_tables(model: SymbolicModel) -> dict:
+    """Per contact (andyc.spec.contacts): its name, gap row, stick row (spatial friction: the first of two; -1
+    without friction), number of tangents, the index in d of its mode, the index of the jump whose coefficient is
+    its mu (its `stop`; -1 without friction) and the index in d of its slip's direction (spatial; -1 else): what
+    andyc_numerics' active.select_rows needs to add a closed contact's rows to the flow's."""
+    rows, contacts = model.constraints.rows, model.spec.contacts
     jump_index = {j.name: k for k, j in enumerate(model.spec.jumps)}
     discrete = [x.name for x in model.spec.discrete]
-    slip, slip_mu, slip_dir = ([[0] * nc for _ in h.flow_rows] for _ in range(3))
-    for k, flow in enumerate(model.spec.flows):
-        for normal, stick, sigma, stop, direction in flow.slip:
-            r = h.flow_rows[k].index(rows.index(normal))
-            slip[k][r] = -sigma * (rows.index(stick) + 1) if sigma else rows.index(stick) + 1
-            slip_mu[k][r] = jump_index[stop]
-            slip_dir[k][r] = discrete.index(direction) + 1 if direction else 0
-    return {"flow_slip": slip, "flow_slip_mu": slip_mu, "flow_slip_dir": slip_dir}
+    return {"contacts": [c.name for c in contacts],
+            "contact_rows": [rows.index(c.constraint) for c in contacts],
+            "contact_stick": [rows.index(c.stick) if c.stick else -1 for c in contacts],
+            "contact_tangents": [c.tangents for c in contacts],
+            "contact_mode": [discrete.index(c.mode) for c in contacts],
+            "contact_mu": [jump_index[c.stop] if c.stop in jump_index else -1 for c in contacts],
+            "contact_dir": [discrete.index(c.direction[0]) if c.direction else -1 for c in contacts]}
 
 
 def _forward_context(model: SymbolicModel) -> dict:
@@ -118,7 +113,8 @@ def constrained_solve(model: SymbolicModel, force: str | None = None) -> sparse_
     A, n = model.constraints.A, model.M.rows
     M_pattern = pattern_of(model.M)
     A_pattern = [{j for j in range(n) if A[i, j] != 0} for i in range(model.constraints.nc)]
-    slips = any(flow.slip for flow in model.spec.flows)
+    # (A contact's rows join the flow's at run time, in any combination: the sparse solve's envelopes are per flow.)
+    slips = bool(model.spec.contacts)
     return sparse_rows.choose(M_pattern, A_pattern, tree_of(M_pattern), model.hybrid.flow_rows, slips, force)
 
 

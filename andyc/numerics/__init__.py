@@ -17,6 +17,7 @@ content (compiler.py), wherever the copy sits.
     stubs.py       leaves that do nothing, for the parts a model has none of
     linalg.py      Cholesky, triangular and Gram solves, unrolled for small sizes
     sparse_rows.py the Gram solves along the tree of M and the rows' supports (banded factor, SVD per block)
+    active.py      the rows active at an instant: the flow's own and the closed contacts' (modes in d)
     dynamics.py    the right-hand side of a flow, the multipliers, projection and the impact map
     slipping.py    a slipping contact's forces: friction in the normal row, the non-symmetric solve
     integrator.py  RK4 with event location, the hybrid step, evaluations over a run's log

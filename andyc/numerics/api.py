@@ -58,13 +58,18 @@ def _signal_rates(model, t, x, u, p, d, xdot):
 
 
 @jit
-def _guard(model, w, k, t, x, u, p, d):
-    return guard_value(model, w, k, t, x, u, p, d)
+def _guard(model, w, k, t, x, u, p, d, flow):
+    return guard_value(model, w, k, t, x, u, p, d, flow)
 
 
 @jit
-def _enabled(model, w, k, t, x, u, p, d):
-    return enabled_value(model, w, k, t, x, u, p, d)
+def _enabled(model, w, k, t, x, u, p, d, flow):
+    return enabled_value(model, w, k, t, x, u, p, d, flow)
+
+
+@jit
+def _jump_source(model, k):
+    return model.jump_source[k], model.jump_mode_state[k], model.jump_mode_mask[k]
 
 
 @jit
@@ -205,16 +210,28 @@ class Functions:
         """Rates of the nonholonomic signals (ANDY eq. 4) into xdot[NQ + NV:]."""
         _signal_rates(self.model, float(t), _vector(x), _vector(u), _vector(p), _vector(d), xdot)
 
-    def guard(self, k, t, x, u=None, p=None, d=None):
+    def guard(self, k, t, x, u=None, p=None, d=None, flow=None):
         """The guard of jump k: it happens where this crosses zero in JUMP_DIRECTION[k] (with the multipliers of
-        its source flow at (t, x), when it reads them)."""
-        p, u, d, _ = self._args(u, p, d, None)
-        return _guard(self.model, self.work.ref, int(k), float(t), _vector(x), u, p, d)
+        `flow` and d at (t, x), when it reads them; default its source flow, the initial flow for a contact's jump,
+        which leaves every flow, and the default d with the contact in the first mode the jump leaves)."""
+        p, u, d, flow = self._jump_args(k, u, p, d, flow)
+        return _guard(self.model, self.work.ref, int(k), float(t), _vector(x), u, p, d, flow)
 
-    def enabled(self, k, t, x, u=None, p=None, d=None):
+    def enabled(self, k, t, x, u=None, p=None, d=None, flow=None):
         """>= 0 where jump k may happen (its enabling conditions)."""
-        p, u, d, _ = self._args(u, p, d, None)
-        return _enabled(self.model, self.work.ref, int(k), float(t), _vector(x), u, p, d)
+        p, u, d, flow = self._jump_args(k, u, p, d, flow)
+        return _enabled(self.model, self.work.ref, int(k), float(t), _vector(x), u, p, d, flow)
+
+    def _jump_args(self, k, u, p, d, flow):
+        """The arguments of jump k's guard: as given, else its source flow (the default for a contact's jump, which
+        leaves every flow), and for a contact's jump the default d with its contact in the first mode it leaves."""
+        source, state, mask = (int(v) for v in _jump_source(self.model, int(k)))
+        given = d is not None
+        p, u, d, flow = self._args(u, p, d, flow if flow is not None else source if source >= 0 else None)
+        if not given and state >= 0:
+            d = d.copy()
+            d[state] = float((mask & -mask).bit_length() - 1)
+        return p, u, d, flow
 
     def restitutions(self, p=None):
         """The coefficient of restitution of each jump's impact (NJ,), at parameters p."""

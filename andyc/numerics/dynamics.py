@@ -13,8 +13,9 @@ import numpy as np
 from .compiler import jit
 from .linalg import (add_rows_transposed, cholesky, correction, ltdl, ltdl_solve, solve_gram, solve_lower, solve_upper,
                      whiten)
+from .active import select_rows
 from .model import call
-from .slipping import flow_slips, slip_rows, solve_slipping
+from .slipping import slip_rows, solve_slipping
 from .sparse_rows import (add_rows_transposed_sparse, correction_sparse, rows_times, solve_gram_sparse, tree_factor,
                           tree_lower, tree_times, tree_upper, whiten_rows)
 from .status import BAUMGARTE, DEPENDENT, HOLD, IDEAL, OK, PAINLEVE, SINGULAR_MASS, SLIP_TINY
@@ -24,15 +25,15 @@ from .status import BAUMGARTE, DEPENDENT, HOLD, IDEAL, OK, PAINLEVE, SINGULAR_MA
 def rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode):
     """xdot = f(t, x) in `flow`: dq/dt = v[:NQ], dv/dt, dsigma/dt (in w's M, G and S). Returns a status (OK = 0).
 
-    dv/dt = a + M^-1 A^T lam with a = M^-1 G and A the flow's active rows; `mode` says how lam is
-    found (see constraint_force).
+    dv/dt = a + M^-1 A^T lam with a = M^-1 G and A the rows active in the flow with the contacts' modes in d
+    (active.select_rows, into w); `mode` says how lam is found (see constraint_force).
     """
     nq, nv = model.nq, model.nv
     M, G, S = w.M, w.G, w.S
-    if model.flow_nrows[flow] > 0:
+    if select_rows(model, w, flow, d) > 0:
         status = whitened_equations(model, t, x, u, p, d, M, G, S)
         if status == OK:
-            status = constraint_force(model, p, d, flow, mode, M, G, S)
+            status = constraint_force(model, w, p, d, mode, M, G, S)
             upper(model, M, G)
     elif model.nb > 0:                  # a by the articulated-body algorithm (Featherstone 2008), no M
         call(model.forward_dynamics, (t, x, u, p, d, M, G))
@@ -97,29 +98,29 @@ def upper(model, M, b):
 
 
 @jit(inline="always")
-def whiten_flow(model, M, S, flow, m):
-    """C = A R^-1 over the first m active rows of `flow`, into S's C block."""
+def whiten_flow(model, w, M, m):
+    """C = A R^-1 over the first m active rows (w.active, active.select_rows), into S's C block."""
     if sparse(model):
-        whiten_rows(model, M, S, model.flow_rows, flow, m)
+        whiten_rows(model, M, w.S, w.active, 0, m)
     else:
-        whiten(model, M, S, model.flow_rows, flow, m)
+        whiten(model, M, w.S, w.active, 0, m)
 
 
 @jit(inline="always")
-def solve_flow_gram(model, S, flow, m, least_norm):
-    """y <- (C C^T)^+ y over the first m active rows of `flow` (linalg.solve_gram; sparse_rows.solve_gram_sparse)."""
+def solve_flow_gram(model, w, m, least_norm):
+    """y <- (C C^T)^+ y over the first m active rows (linalg.solve_gram; sparse_rows.solve_gram_sparse)."""
     if sparse(model):
-        return solve_gram_sparse(model, S, model.flow_rows, flow, m, least_norm, model.flow_envelope[flow])
-    return solve_gram(model, S, m, least_norm)
+        return solve_gram_sparse(model, w.S, w.active, 0, m, least_norm, w.envelope)
+    return solve_gram(model, w.S, m, least_norm)
 
 
 @jit(inline="always")
-def add_flow_rows(model, S, flow, m, scale, out):
-    """out += scale C^T y over the first m active rows of `flow`."""
+def add_flow_rows(model, w, m, scale, out):
+    """out += scale C^T y over the first m active rows."""
     if sparse(model):
-        add_rows_transposed_sparse(model, S, model.flow_rows, flow, m, scale, out)
+        add_rows_transposed_sparse(model, w.S, w.active, 0, m, scale, out)
     else:
-        add_rows_transposed(model, S, m, scale, out)
+        add_rows_transposed(model, w.S, m, scale, out)
 
 
 @jit(inline="always")
@@ -134,19 +135,19 @@ def whitened_equations(model, t, x, u, p, d, M, G, S):
 
 
 @jit(inline="always")
-def constraint_system(model, flow, L, g, S):
-    """C = A L^-T and y = -kappa - C g (= -kappa - A M^-1 G for g = L^-1 G) over the rows of `flow`, into S;
+def constraint_system(model, w, L, g):
+    """C = A L^-T and y = -kappa - C g (= -kappa - A M^-1 G for g = L^-1 G) over the active rows, into S;
     returns their number."""
-    nr, nv, rows = model.flow_nrows[flow], model.nv, model.flow_rows
+    S, nr, nv, rows = w.S, w.nactive[0], model.nv, w.active
     c0, y0, kappa = model.s_c, model.s_y, model.s_kappa
-    whiten_flow(model, L, S, flow, nr)
+    whiten_flow(model, w, L, nr)
     if sparse(model):
-        rows_times(model, S, rows, flow, nr, g, S[y0])
+        rows_times(model, S, rows, 0, nr, g, S[y0])
         for r in range(nr):
-            S[y0, r] = -S[kappa, rows[flow, r]] - S[y0, r]
+            S[y0, r] = -S[kappa, rows[0, r]] - S[y0, r]
         return nr
     for r in range(nr):
-        s = -S[kappa, rows[flow, r]]
+        s = -S[kappa, rows[0, r]]
         for i in range(nv):
             s -= S[c0 + r, i] * g[i]
         S[y0, r] = s
@@ -154,45 +155,46 @@ def constraint_system(model, flow, L, g, S):
 
 
 @jit(inline="always")
-def constraint_force(model, p, d, flow, mode, L, g, S):
-    """g <- g + C^T lam over the rows of `flow`, in whitened speeds: with M = L L^T and g = L^-1 G on entry,
+def constraint_force(model, w, p, d, mode, L, g, S):
+    """g <- g + C^T lam over the active rows (w), in whitened speeds: with M = L L^T and g = L^-1 G on entry,
     dv/dt = L^-T g on return. Needs A, kappa (and for BAUMGARTE phi, c) in S; returns a status.
 
     With C = A L^-T and y = -kappa - C g (= -kappa - A a, a = M^-1 G), so that C C^T = A M^-1 A^T:
       IDEAL      lam = (C C^T)^+ y, the least-norm force of any rank (C^T lam = C^+ y)
       LAGRANGE   lam = (C C^T)^-1 y                           (ANDY eq. 12)
       BAUMGARTE  LAGRANGE's lam - (K_s phi + K_d c)           (ANDY eq. 15)
-    In a flow where a contact slips, its normal force carries Coulomb's friction: the forces are B^T lam with
+    Where a contact slips, its normal force carries Coulomb's friction: the forces are B^T lam with
     B != A (slip_rows: D = B L^-T), lam = (C D^T)^+ y and g <- g + D^T lam (Pfeiffer & Glocker 1996, ch. 5).
     """
-    nr = constraint_system(model, flow, L, g, S)
-    if flow_slips(model, flow, nr):
-        slip_rows(model, p, d, flow, L, S, nr)
-        if not solve_slipping(model, flow, S, nr):
+    nr = constraint_system(model, w, L, g)
+    if w.nactive[2]:
+        slip_rows(model, w, p, d, L, nr)
+        if not solve_slipping(model, w, nr):
             return PAINLEVE
         if mode == BAUMGARTE:
-            baumgarte(model, p, flow, nr, S)
+            baumgarte(model, w, p, nr)
         for i in range(model.nv):       # g += D^T lam: a slipping contact's normal force carries its friction
             s = 0.0
             for r in range(nr):
                 s += S[model.s_w + r, i] * S[model.s_y, r]
             g[i] += s
         return OK
-    if solve_flow_gram(model, S, flow, nr, mode == IDEAL) < 0:
+    if solve_flow_gram(model, w, nr, mode == IDEAL) < 0:
         return DEPENDENT
     if mode == BAUMGARTE:
-        baumgarte(model, p, flow, nr, S)
-    add_flow_rows(model, S, flow, nr, 1.0, g)
+        baumgarte(model, w, p, nr)
+    add_flow_rows(model, w, nr, 1.0, g)
     return OK
 
 
 @jit(inline="always")
-def baumgarte(model, p, flow, nr, S):
-    """lam <- lam - (K_s phi + K_d c) over the flow's rows, lam in S's y row (ANDY eq. 15)."""
+def baumgarte(model, w, p, nr):
+    """lam <- lam - (K_s phi + K_d c) over the active rows, lam in S's y row (ANDY eq. 15)."""
+    S = w.S
     call(model.constraint_gains, (p, S))
     y0, ks, kd = model.s_y, model.s_ks, model.s_kd
     for r in range(nr):
-        i = model.flow_rows[flow, r]
+        i = w.active[0, r]
         S[y0, r] -= S[kd, i] * S[model.s_cv, i]
         if i < model.nh:
             S[y0, r] -= S[ks, i] * S[model.s_phi, i]
@@ -215,13 +217,13 @@ def slip_direction(model, w, t, x, u, p, d, flow, h, mode):
     first order over the few steps before it stops, or after it starts."""
     found = False
     S, nq, nv = w.S, model.nq, model.nv
-    for r in range(model.flow_nrows[flow]):
-        k = model.flow_slip_dir[flow, r] - 1
+    for r in range(select_rows(model, w, flow, d)):
+        k = w.active[3, r] - 1
         if k < 0:
             continue
         found = True
         call(model.constraints_into, (t, x, u, p, d, S))
-        row = model.flow_slip[flow, r] - 1
+        row = w.active[1, r] - 1
         s1, s2 = S[model.s_cv, row], S[model.s_cv, row + 1]
         n = math.sqrt(s1 * s1 + s2 * s2)
         if n > SLIP_TINY:
@@ -249,7 +251,7 @@ def slip_direction(model, w, t, x, u, p, d, flow, h, mode):
             g22 += z2[i] * z2[i]
             a1 += S[model.s_a + row, i] * w.xdot[nq + i]
             a2 += S[model.s_a + row + 1, i] * w.xdot[nq + i]
-        pull = S[model.s_e, model.flow_slip_mu[flow, r]] * S[model.s_y, r]       # mu lam_n
+        pull = S[model.s_e, w.active[2, r]] * S[model.s_y, r]       # mu lam_n
         if h * abs(pull) * (g11 + g22) <= HOLD * n:
             d[k + 2] = 0.0
             continue
@@ -268,38 +270,50 @@ def multipliers(model, w, t, x, u, p, d, flow, lam):
     not active. lam = (C C^T)^+ y (see constraint_force), the least-norm split when rows are redundant.
     Returns a status."""
     M, G, S = w.M, w.G, w.S
+    select_rows(model, w, flow, d)
     status = whitened_equations(model, t, x, u, p, d, M, G, S)
     if status != OK:
         return status
-    nr = constraint_system(model, flow, M, G, S)
-    if flow_slips(model, flow, nr):
-        slip_rows(model, p, d, flow, M, S, nr)
-        solve_slipping(model, flow, S, nr)
+    nr = constraint_system(model, w, M, G)
+    if w.nactive[2]:
+        slip_rows(model, w, p, d, M, nr)
+        solve_slipping(model, w, nr)
     else:
-        solve_flow_gram(model, S, flow, nr, True)
+        solve_flow_gram(model, w, nr, True)
     for r in range(model.nc):
         lam[r] = np.nan
     for r in range(nr):
-        lam[model.flow_rows[flow, r]] = S[model.s_y, r]
+        lam[w.active[0, r]] = S[model.s_y, r]
     return OK
 
 
 @jit(inline="always")
-def guard_value(model, w, k, t, x, u, p, d):
-    """The guard of jump k at (t, x). A guard that reads multipliers (JUMP_MULTIPLIERS[k]: a normal force reaching
-    zero) gets them in w.lam, the ideal multipliers of its source flow at (t, x) (see `multipliers`; this uses
-    w's M, G and S); the others pay one table look-up."""
+def guard_value(model, w, k, t, x, u, p, d, flow):
+    """The guard of jump k at (t, x) in `flow`. A guard that reads multipliers (JUMP_MULTIPLIERS[k]: a normal force
+    reaching zero) gets them in w.lam, the ideal multipliers of the flow with the contacts' modes in d at (t, x)
+    (see `multipliers`; this uses w's M, G and S); the others pay one table look-up."""
     if k < model.nj and model.jump_multipliers[k]:     # (a model without jumps is called with k = 0: a stub)
-        multipliers(model, w, t, x, u, p, d, model.jump_source[k], w.lam)
+        multipliers(model, w, t, x, u, p, d, flow, w.lam)
     return call(model.guard, (k, t, x, u, p, d, w.lam))
 
 
 @jit(inline="always")
-def enabled_value(model, w, k, t, x, u, p, d):
+def enabled_value(model, w, k, t, x, u, p, d, flow):
     """The enabling condition of jump k at (t, x) (>= 0: it may happen), with the multipliers as in guard_value."""
     if k < model.nj and model.jump_multipliers[k]:
-        multipliers(model, w, t, x, u, p, d, model.jump_source[k], w.lam)
+        multipliers(model, w, t, x, u, p, d, flow, w.lam)
     return call(model.enabled, (k, t, x, u, p, d, w.lam))
+
+
+@jit(inline="always")
+def in_mode(model, k, flow, d):
+    """Whether jump k leaves `flow` with the contacts' modes in d: its source is the flow (or every flow: -1, a
+    contact's jump), and a contact's jump only in the modes it leaves (JUMP_MODE_STATE, JUMP_MODE_MASK)."""
+    source = model.jump_source[k]
+    if source >= 0 and source != flow:
+        return False
+    state = model.jump_mode_state[k]
+    return state < 0 or (model.jump_mode_mask[k] >> int(d[state])) & 1 == 1
 
 
 @jit
@@ -338,15 +352,15 @@ def move(model, t, x, u, p, d, dq):
 
 
 @jit(inline="always")
-def correct_rows(model, flow, nr, residual, L, S):
-    """S's dv row <- the least M-norm change with A dv = -r over the first nr rows of `flow`, r the values of
-    S's `residual` row (phi or cv) at those rows; L from `factor`."""
-    rows, y0 = model.flow_rows, model.s_y
-    whiten_flow(model, L, S, flow, nr)
+def correct_rows(model, w, nr, residual, L):
+    """S's dv row <- the least M-norm change with A dv = -r over the first nr active rows, r the values of S's
+    `residual` row (phi or cv) at those rows; L from `factor`."""
+    S, rows, y0 = w.S, w.active, model.s_y
+    whiten_flow(model, w, L, nr)
     for r in range(nr):
-        S[y0, r] = -S[residual, rows[flow, r]]
+        S[y0, r] = -S[residual, rows[0, r]]
     if sparse(model):
-        correction_sparse(model, L, S, rows, flow, nr, model.flow_envelope[flow])
+        correction_sparse(model, L, S, rows, 0, nr, w.envelope)
     else:
         correction(model, L, S, nr)
 
@@ -373,17 +387,17 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
     call(model.dynamics, (t, x, u, p, d, M, G))
     if not factor(model, M):
         return SINGULAR_MASS
-    nr = model.flow_nrows[flow]
+    nr = select_rows(model, w, flow, d)
     constrain = constrain and nr > 0
     dv = S[model.s_dv, :nv]
     if constrain:
-        nhr = model.flow_nhrows[flow]
+        nhr = w.nactive[1]
         if nhr > 0:
             call(model.constraints_into, (t, x, u, p, d, S))
-            correct_rows(model, flow, nhr, model.s_phi, M, S)
+            correct_rows(model, w, nhr, model.s_phi, M)
             move(model, t, x, u, p, d, dv)
         call(model.constraints_into, (t, x, u, p, d, S))
-        correct_rows(model, flow, nr, model.s_cv, M, S)
+        correct_rows(model, w, nr, model.s_cv, M)
         for i in range(nv):
             x[nq + i] += dv[i]
     if energy_tol >= 0.0:
@@ -404,15 +418,15 @@ def project(model, w, t, x, u, p, d, flow, constrain, e0, energy_tol):
         if constrain:
             c0, y0 = model.s_c, model.s_y
             if sparse(model):          # y <- C r, for r <- r - C^+ C r
-                rows_times(model, S, model.flow_rows, flow, nr, r, S[y0])
+                rows_times(model, S, w.active, 0, nr, r, S[y0])
             else:
                 for j in range(nr):
                     s = 0.0
                     for i in range(nv):
                         s += S[c0 + j, i] * r[i]
                     S[y0, j] = s
-            solve_flow_gram(model, S, flow, nr, True)
-            add_flow_rows(model, S, flow, nr, -1.0, r)
+            solve_flow_gram(model, w, nr, True)
+            add_flow_rows(model, w, nr, -1.0, r)
         rr = 0.0
         for i in range(nv):
             rr += r[i] * r[i]

@@ -28,7 +28,8 @@ import math
 from collections import namedtuple
 
 from .compiler import jit
-from .dynamics import enabled_value, guard_value, jump, multipliers, project, rhs_mode_into, slip_direction
+from .active import select_rows
+from .dynamics import enabled_value, guard_value, in_mode, jump, multipliers, project, rhs_mode_into, slip_direction
 from .model import borrowed, call
 from .status import (BAUMGARTE, DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, ON_ZERO,
                      OPEN_SIDE, REST_SPEED, RISING, SLIP_STOP)
@@ -75,8 +76,8 @@ def stage_powers(model, w, t, x, u, p, d, flow, xdot, mode):
     for i in range(model.nw):           # (the leaf writes the elements' slots only: the others stay 0 in G)
         xdot[nx + i] = G[nv + i]
     call(model.drive_power, (t, x, u, p, d, xdot))      # (reads dv/dt in xdot: after rhs_mode_into)
-    for r in range(model.flow_nrows[flow]):
-        row = model.flow_rows[flow, r]
+    for r in range(w.nactive[0]):          # (the rows rhs_mode_into selected)
+        row = w.active[0, r]
         slot = model.row_work[row]
         if slot == -1 or (slot < -1 and mode != BAUMGARTE):
             continue
@@ -199,7 +200,7 @@ def locate(model, w, opts, inputs, data, jump_index, tol, t, h, x, u, p, d, flow
             status = update_inputs(inputs, t + c, xc, p, d, flow, u, data)
         if status != OK:
             return c, status
-        gc = guard_value(model, w, jump_index, t + c, xc, u, p, d)
+        gc = guard_value(model, w, jump_index, t + c, xc, u, p, d, flow)
         a, ga, b, gb, side = illinois_bracket(s, a, ga, b, gb, side, c, gc)
         if side == -1:
             xb[:] = xc
@@ -219,7 +220,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
     holds the state just before it), or -1.
     """
     u, g0, x1, xb, x_event, counts = w.u, w.g0, w.x1, w.xb, w.x_event, w.counts
-    source, direction, priority = model.jump_source, model.jump_direction, model.jump_priority
+    direction, priority = model.jump_direction, model.jump_priority
     x, p, d = borrowed(x), borrowed(p), borrowed(d)     # held by the caller: no reference counts below
     if data is not None:
         data = borrowed(data)
@@ -231,8 +232,8 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
         return i, row, INPUT_FAILED, t, flow, -1
     have_rate = False
     for n in range(model.nj):
-        if source[n] == flow:
-            g0[n] = guard_value(model, w, n, t, x, u, p, d)
+        if in_mode(model, n, flow, d):
+            g0[n] = guard_value(model, w, n, t, x, u, p, d, flow)
             # A contact leaving an impact (a bounce, or a rocking block's pivot corner lifted when the other
             # strikes) starts with its gap a rounding from zero, either side. A rounding below zero, moving up,
             # would hide its coming down again within the step (a block's late, short rocks), and one above would
@@ -249,19 +250,19 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
             counts[0] += 1
             if slip_direction(model, w, t, x, u, p, d, flow, h, opts.mode):  # a spatial slip's direction, held?
                 for n in range(model.nj):
-                    if source[n] == flow and model.jump_contact[n] == SLIP_STOP:
-                        g0[n] = guard_value(model, w, n, t, x, u, p, d)
+                    if model.jump_contact[n] == SLIP_STOP and in_mode(model, n, flow, d):
+                        g0[n] = guard_value(model, w, n, t, x, u, p, d, flow)
             status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale)
             if status != OK:
                 return i, row, status, t, flow, -1
             best, best_tau = -1, h
             tol = opts.event_tol * max(1.0, abs(t))
             for n in range(model.nj):
-                if source[n] != flow:
+                if not in_mode(model, n, flow, d):
                     continue
                 if update_inputs(inputs, t_next, x1, p, d, flow, u, data) != OK:
                     return i, row, INPUT_FAILED, t, flow, -1
-                g1 = guard_value(model, w, n, t_next, x1, u, p, d)
+                g1 = guard_value(model, w, n, t_next, x1, u, p, d, flow)
                 if crosses(direction[n], g0[n], g1):
                     tau, status = locate(model, w, opts, inputs, data, n, tol, t, h, x, u, p, d, flow, g0[n], g1, scale)
                     if status == OK:
@@ -270,7 +271,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
                         return i, row, status, t, flow, -1
                     earlier = tau < best_tau - tol or (best >= 0 and tau <= best_tau + tol
                                                         and priority[n] < priority[best])
-                    if (best < 0 or earlier) and enabled_value(model, w, n, t + tau, xb, u, p, d) >= 0.0:
+                    if (best < 0 or earlier) and enabled_value(model, w, n, t + tau, xb, u, p, d, flow) >= 0.0:
                         best, best_tau = n, tau
                         x_event[:] = xb
                 g0[n] = g1
@@ -280,7 +281,8 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
                 if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
                     return i, row, INPUT_FAILED, t, flow, -1
                 status = jump(model, w, best, t, x, u, p, d)
-                return i, row, status, t, model.jump_target[best], best
+                target = model.jump_target[best]
+                return i, row, status, t, flow if target < 0 else target, best
             x[:] = x1
             for j in range(model.nx):
                 scale = max(scale, abs(x[j]))
@@ -319,10 +321,10 @@ def instant(model, w, mode, inputs, data, t, x, p, d, flow):
     have_rate = False
     for n in range(model.nj):
         k = model.jump_order[n]
-        if model.jump_source[k] != flow:
+        if not in_mode(model, k, flow, d):
             continue
         direction = model.jump_direction[k]
-        g = guard_value(model, w, k, t, x, u, p, d)
+        g = guard_value(model, w, k, t, x, u, p, d, flow)
         if g != 0.0 and (direction == EITHER or (g > 0.0) != (direction == RISING)):
             continue
         if not have_rate:
@@ -341,7 +343,7 @@ def instant(model, w, mode, inputs, data, t, x, p, d, flow):
             moving = rate > 0.0 or (g > 0.0 and rate == 0.0)
         if model.jump_contact[k] == SLIP_STOP:  # a slip just begun at the cone's edge: its rate is a rounding
             moving = rate * direction > REST_SPEED
-        if moving and enabled_value(model, w, k, t, x, u, p, d) >= 0.0:
+        if moving and enabled_value(model, w, k, t, x, u, p, d, flow) >= 0.0:
             return k
     return -1
 
@@ -372,8 +374,8 @@ def evaluate_constraints(model, w, log, p, phi, c, lam):
         call(model.constraints_into, (log.t[r], x, u, p, d, S))
         phi[r, :] = math.nan
         c[r, :] = math.nan
-        for n in range(model.flow_nrows[flow]):
-            i = model.flow_rows[flow, n]
+        for n in range(select_rows(model, w, flow, d)):
+            i = w.active[0, n]
             c[r, i] = S[model.s_cv, i]
             if i < model.nh:
                 phi[r, i] = S[model.s_phi, i]

@@ -61,11 +61,13 @@ SIZES = ("nq", "nv", "ns", "nx", "nu", "nh", "nc", "nd", "nf", "nj", "nw", "nt",
                                                                                        # (or 0), nb: under ABA
 ROWS = ("s_a", "s_c", "s_w") + tuple(f"s_{name}" for name in VECTORS)  # the first row of each part of S
 TABLES = ("quaternions",                            # index in x of each quaternion signal's w
-          "flow_rows", "flow_nrows", "flow_nhrows",  # active rows of each flow (holonomic first), then -1
-          "flow_slip", "flow_slip_mu", "flow_slip_dir",  # per flow and row: a slipping contact's friction (slip_rows)
+          "flow_rows", "flow_nrows", "flow_nhrows",  # each flow's own rows (holonomic first), then -1
+          "contact_rows", "contact_stick", "contact_tangents",   # per contact: its rows (active.select_rows adds
+          "contact_mode", "contact_mu", "contact_dir",           # them while d[contact_mode] says it is closed)
           "impact_rows", "impact_nrows",             # rows taking each jump's impact
           "jump_source", "jump_target", "jump_direction", "jump_priority", "jump_order", "jump_multipliers",
           "jump_contact",                            # the contact whose impact jump k is, or -1
+          "jump_mode_state", "jump_mode_mask",       # a contact's jump: its mode in d, the modes it leaves
           "row_work",                                # the work slot of each row's constraint power, or -1
           "mass_parent", "mass_order",               # the tree of M: parent of each speed; children first
           "row_ptr", "row_cols", "flow_envelope")    # the rows' sparsity (sparse_rows.py; row_ptr empty: dense)
@@ -76,6 +78,9 @@ WORK = {    # the arrays of Work: name -> shape, from the sizes and the scratch 
     "M": ("nv", "nv"), "G": ("ng",), "S": ("rows", "width"),
     "k": (4, "na"), "xt": ("na",), "x1": ("na",), "xb": ("na",), "xc": ("na",), "x_event": ("na",),
     "xdot": ("nx",), "g0": ("nj",), "u": ("nu",), "lam": ("nc",),
+}
+INDICES = {  # the integer arrays of Work: counts (steps, event trial steps, rows logged: integrator.advance), and the
+    "counts": (3,), "active": (4, "nc"), "nactive": (3,), "envelope": (2, "nc"),   # active rows (active.py)
 }
 
 if NUMBA:
@@ -208,7 +213,7 @@ if NUMBA:
     # Each holds its arrays borrowed (see borrowed) and, in `owner`, a tuple of the same arrays with their
     # counts, which keeps them alive as long as it lives.
     structref.define_proxy(Model, ModelType, SIZES + ROWS + TABLES + LEAF_NAMES + ("owner",))
-    structref.define_proxy(WorkRef, WorkType, tuple(WORK) + ("counts", "owner"))
+    structref.define_proxy(WorkRef, WorkType, tuple(WORK) + tuple(INDICES) + ("owner",))
 else:
     LEAVES, INPUTS_SIGNATURE = {name: None for name in LEAF_NAMES}, None
 
@@ -244,15 +249,16 @@ else:
 
     class WorkRef:
         def __init__(self, *values):
-            for name, value in zip(tuple(WORK) + ("counts", "owner"), values):
+            for name, value in zip(tuple(WORK) + tuple(INDICES) + ("owner",), values):
                 setattr(self, name, value)
 
 
 @jit
-def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, flow_slip_dir,
-           impact_rows,
+def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, contact_rows, contact_stick,
+           contact_tangents, contact_mode, contact_mu, contact_dir, impact_rows,
            impact_nrows, jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers,
-           jump_contact, row_work, mass_parent, mass_order, row_ptr, row_cols, flow_envelope, leaves):
+           jump_contact, jump_mode_state, jump_mode_mask, row_work, mass_parent, mass_order, row_ptr, row_cols,
+           flow_envelope, leaves):
     (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
      constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form, energy_law,
      drive_power, forward_dynamics) = leaves
@@ -261,18 +267,21 @@ def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, flow_sl
                  rows[0], rows[1], rows[2], rows[3], rows[4], rows[5], rows[6], rows[7], rows[8], rows[9], rows[10],
                  rows[11], rows[12],
                  borrowed(quaternions), borrowed(flow_rows), borrowed(flow_nrows), borrowed(flow_nhrows),
-                 borrowed(flow_slip), borrowed(flow_slip_mu), borrowed(flow_slip_dir),
+                 borrowed(contact_rows), borrowed(contact_stick), borrowed(contact_tangents), borrowed(contact_mode),
+                 borrowed(contact_mu), borrowed(contact_dir),
                  borrowed(impact_rows), borrowed(impact_nrows), borrowed(jump_source), borrowed(jump_target),
                  borrowed(jump_direction), borrowed(jump_priority), borrowed(jump_order), borrowed(jump_multipliers),
-                 borrowed(jump_contact), borrowed(row_work), borrowed(mass_parent), borrowed(mass_order),
+                 borrowed(jump_contact), borrowed(jump_mode_state), borrowed(jump_mode_mask),
+                 borrowed(row_work), borrowed(mass_parent), borrowed(mass_order),
                  borrowed(row_ptr), borrowed(row_cols), borrowed(flow_envelope),
                  dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
                  constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form,
                  energy_law, drive_power, forward_dynamics,
-                 (quaternions, flow_rows, flow_nrows, flow_nhrows, flow_slip, flow_slip_mu, flow_slip_dir, impact_rows,
-                  impact_nrows,
+                 (quaternions, flow_rows, flow_nrows, flow_nhrows, contact_rows, contact_stick, contact_tangents,
+                  contact_mode, contact_mu, contact_dir, impact_rows, impact_nrows,
                   jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact,
-                  row_work, mass_parent, mass_order, row_ptr, row_cols, flow_envelope))
+                  jump_mode_state, jump_mode_mask, row_work, mass_parent, mass_order, row_ptr, row_cols,
+                  flow_envelope))
 
 
 def c_leaves(path: str, names) -> dict:
@@ -309,20 +318,19 @@ def new_model(equations, stubs, constrained=None) -> Model:
 
 
 @jit
-def _work(M, G, S, k, xt, x1, xb, xc, x_event, xdot, g0, u, lam, counts):
+def _work(M, G, S, k, xt, x1, xb, xc, x_event, xdot, g0, u, lam, counts, active, nactive, envelope):
     return WorkRef(borrowed(M), borrowed(G), borrowed(S), borrowed(k), borrowed(xt), borrowed(x1), borrowed(xb),
                    borrowed(xc), borrowed(x_event), borrowed(xdot), borrowed(g0), borrowed(u), borrowed(lam),
-                   borrowed(counts), (M, G, S, k, xt, x1, xb, xc, x_event, xdot, g0, u, lam, counts))
+                   borrowed(counts), borrowed(active), borrowed(nactive), borrowed(envelope),
+                   (M, G, S, k, xt, x1, xb, xc, x_event, xdot, g0, u, lam, counts, active, nactive, envelope))
 
 
 class Work:
-    """The scratch arrays of one model (WORK), zeroed, and `ref`, the same arrays as the algorithms take them.
-
-    counts (int64, 3): steps taken, trial steps of event location, rows logged (see integrator.advance).
-    """
+    """The scratch arrays of one model (WORK, then the integer INDICES), zeroed, and `ref`, the same arrays as
+    the algorithms take them."""
 
     def __init__(self, sizes: dict):
-        for name, shape in WORK.items():
-            setattr(self, name, np.zeros(tuple(sizes[s] if isinstance(s, str) else s for s in shape)))
-        self.counts = np.zeros(3, dtype=np.int64)
-        self.ref = _work(*(getattr(self, name) for name in WORK), self.counts)
+        for table, dtype in ((WORK, np.float64), (INDICES, np.int64)):
+            for name, shape in table.items():
+                setattr(self, name, np.zeros(tuple(sizes[s] if isinstance(s, str) else s for s in shape), dtype))
+        self.ref = _work(*(getattr(self, name) for name in (*WORK, *INDICES)))

@@ -12,25 +12,17 @@ from .status import RANK_TOL, SLIP_TINY
 
 
 @jit(inline="always")
-def flow_slips(model, flow, nr):
-    """Whether a contact slips in `flow` (a row with friction in FLOW_SLIP): its rows then take slip_rows' solve."""
-    for r in range(nr):
-        if model.flow_slip[flow, r] != 0:
-            return True
-    return False
-
-
-@jit(inline="always")
-def slip_unit(model, d, flow, r, S):
-    """(u1, u2) the unit slip direction of the contact with spatial friction whose normal row is the flow's r-th
-    (its stick rows t, t + 1: FLOW_SLIP[flow, r] = t + 1; its slip s = (c_t, c_t+1) in S's cv row; in d from
-    FLOW_SLIP_DIR[flow, r] - 1 = k: d_ref = (d[k], d[k + 1]), the direction at the step's start, and d[k + 2],
+def slip_unit(model, w, d, r):
+    """(u1, u2) the unit slip direction of the contact with spatial friction whose normal row is the r-th active
+    row (its stick rows t, t + 1: w.active[1, r] = t + 1; its slip s = (c_t, c_t+1) in S's cv row; in d from
+    w.active[3, r] - 1 = k: d_ref = (d[k], d[k + 1]), the direction at the step's start, and d[k + 2],
     1 while the step holds it; both set by slip_direction): sigma s / |s|, sigma = sign(s . d_ref), so that within
     a step the friction keeps its direction through a slip that ends there (as a planar slip's sigma is fixed in
     its flow) and the stop's guard s . d_ref crosses zero; d_ref itself when the step holds it, or when
     |s| <= SLIP_TINY (a slip starting from rest, its direction set by the runtime)."""
-    t = model.flow_slip[flow, r] - 1
-    k = model.flow_slip_dir[flow, r] - 1
+    S = w.S
+    t = w.active[1, r] - 1
+    k = w.active[3, r] - 1
     s1, s2 = S[model.s_cv, t], S[model.s_cv, t + 1]
     n = math.sqrt(s1 * s1 + s2 * s2)
     if n <= SLIP_TINY or d[k + 2] != 0.0:
@@ -41,27 +33,27 @@ def slip_unit(model, d, flow, r, S):
 
 
 @jit
-def slip_rows(model, p, d, flow, L, S, nr):
-    """D = B L^-T into S's W block (its first nr rows; the symmetric solve's Gram matrix, unused in a flow that
-    slips), the force directions of the flow's rows, whitened (C = A L^-T in S): B = A but for the normal row of a
+def slip_rows(model, w, p, d, L, nr):
+    """D = B L^-T into S's W block (its first nr rows; the symmetric solve's Gram matrix, unused where a contact
+    slips), the force directions of the active rows, whitened (C = A L^-T in S): B = A but for the normal row of a
     slipping contact, whose force is its normal force plus Coulomb's friction, -sigma mu lam_n along its tangent
     (sigma = +1 slipping forwards, -1 backwards): B_r = A_r - sigma mu J_t, J_t the contact's stick row
-    (FLOW_SLIP[flow, r] = -sigma (t + 1), t that row; mu the coefficient of jump FLOW_SLIP_MU[flow, r], the
-    slip's end, in S's e row). Spatial friction (FLOW_SLIP_DIR[flow, r] > 0; stick rows t, t + 1): the friction
-    -mu lam_n u along the slip's direction u (slip_unit), B_r = A_r - mu (u1 J_t + u2 J_t+1). Only for a flow that
-    slips (flow_slips): the others keep the symmetric solve."""
-    nv, w0, c0 = model.nv, model.s_w, model.s_c
+    (w.active[1, r] = -sigma (t + 1), t that row; mu the coefficient of jump w.active[2, r], the slip's end, in
+    S's e row; active.select_rows). Spatial friction (w.active[3, r] > 0; stick rows t, t + 1): the friction
+    -mu lam_n u along the slip's direction u (slip_unit), B_r = A_r - mu (u1 J_t + u2 J_t+1). Only where a contact
+    slips (w.nactive[2]): otherwise the symmetric solve."""
+    S, nv, w0, c0 = w.S, model.nv, model.s_w, model.s_c
     call(model.restitution, (p, S))
     for r in range(nr):
-        code = model.flow_slip[flow, r]
+        code = w.active[1, r]
         if code == 0:
             for i in range(nv):
                 S[w0 + r, i] = S[c0 + r, i]
             continue
         row = model.s_a + abs(code) - 1
         u1, u2 = 1.0, 0.0
-        if model.flow_slip_dir[flow, r] > 0:
-            u1, u2 = slip_unit(model, d, flow, r, S)
+        if w.active[3, r] > 0:
+            u1, u2 = slip_unit(model, w, d, r)
         for i in range(nv):             # J_t L^-T (spatial: (u1 J_t + u2 J_t+1) L^-T), as linalg.whiten
             s = u1 * S[row, i]
             if u2 != 0.0:
@@ -69,19 +61,19 @@ def slip_rows(model, p, d, flow, L, S, nr):
             for j in range(i):
                 s -= L[i, j] * S[w0 + r, j]
             S[w0 + r, i] = s * L[i, i]
-        spatial = model.flow_slip_dir[flow, r] > 0
-        scale = S[model.s_e, model.flow_slip_mu[flow, r]] * (1.0 if code > 0 and not spatial else -1.0)
+        spatial = w.active[3, r] > 0
+        scale = S[model.s_e, w.active[2, r]] * (1.0 if code > 0 and not spatial else -1.0)
         for i in range(nv):
             S[w0 + r, i] = S[c0 + r, i] + scale * S[w0 + r, i]
 
 
 @jit
-def solve_slipping(model, flow, S, nr):
+def solve_slipping(model, w, nr):
     """y <- (C D^T)^+ y over the first nr rows (C D^T = A M^-1 B^T, not symmetric: D from slip_rows in S's W
     block), least squares (one row: a division). False when a slipping contact's own entry A_n M^-1 B_n^T is not
     positive: its normal force would pull it open (Painleve's paradox: no consistent force; Pfeiffer & Glocker
     1996, ch. 5)."""
-    nv, w0, c0, y0 = model.nv, model.s_w, model.s_c, model.s_y
+    S, nv, w0, c0, y0 = w.S, model.nv, model.s_w, model.s_c, model.s_y
     if nr == 1:
         k = 0.0
         for i in range(nv):
@@ -103,6 +95,6 @@ def solve_slipping(model, flow, S, nr):
     for r in range(nr):
         S[y0, r] = lam[r]
     for r in range(nr):
-        if model.flow_slip[flow, r] != 0 and not K[r, r] > 0.0:
+        if w.active[1, r] != 0 and not K[r, r] > 0.0:
             return False
     return True

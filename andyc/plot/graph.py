@@ -138,6 +138,7 @@ def _draw_automaton(ax, graph: dict) -> None:
     for n in graph["nodes"]:
         lines = (textwrap.wrap("constraints: " + ", ".join(n["constraints"]), 24) if n["constraints"]
                  else ["no constraints"])
+        lines += textwrap.wrap("contacts: " + ", ".join(graph.get("contacts", [])), 24) if graph.get("contacts") else []
         colour = "#fff2cc" if n["initial"] else "#f4f4f4"
         boxes[n["name"]] = _node(ax, pos[n["name"]], n["name"] + (" (initial)" if n["initial"] else ""), lines,
                                  f"flow:{n['name']}", colour)

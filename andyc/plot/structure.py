@@ -62,7 +62,7 @@ def frame_tree(spec) -> dict:
     nodes = [{"name": "world", "parent": None, "attached": attached["world"]}]
     nodes += [{"name": f.name, "parent": f.parent, "attached": attached[f.name]} for f in frames]
     edges = [{"parent": owner(f.parent), "child": f.name, **_link(f, coordinates, names)} for f in frames]
-    return {"nodes": nodes, "edges": edges}
+    return {"nodes": nodes, "edges": edges, "contacts": [c.name for c in spec.contacts]}
 
 
 def _names(spec) -> dict:
@@ -126,18 +126,21 @@ def _plain(expr) -> str:
 
 def automaton(spec) -> dict:
     """{'nodes': [{'name', 'constraints', 'initial'}], 'edges': [{'name', 'source', 'target', 'guard',
-    'direction', 'enabled', 'reset', 'impact'}]}: the flows in the model's order, the jumps in the
-    order of the model file; texts as the model file writes them (Jump.text)."""
+    'direction', 'enabled', 'reset', 'impact'}], 'contacts': [name]}: the flows in the model's order, the jumps in
+    the order of the model file (texts as the model file writes them, Jump.text), and the contacts, which open and
+    close within every flow (their own jumps are not edges: andyc.spec.contacts)."""
     nodes = [{"name": f.name, "constraints": list(f.constraints), "initial": k == spec.initial_flow}
              for k, f in enumerate(spec.flows)]
     edges = []
     for j in spec.jumps:
+        if j.kind:
+            continue
         text = j.text or {}
         edges.append({"name": j.name, "source": j.source, "target": j.target,
                       "guard": str(text.get("guard", _plain(j.guard))), "direction": DIRECTIONS[j.direction],
                       "enabled": _listed(text.get("enabled")), "reset": text.get("reset") or {},
                       "impact": _impact(text.get("impact", j.impact))})
-    return {"nodes": nodes, "edges": edges}
+    return {"nodes": nodes, "edges": edges, "contacts": [c.name for c in spec.contacts]}
 
 
 def _listed(value) -> list:

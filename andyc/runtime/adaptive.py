@@ -86,8 +86,8 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
         while message is None and t < t_end:
             current[0] = flow
             solver = scipy_method(method)(fun, t, x, t_end, rtol=rtol, atol=atol)
-            watched = [m for m in range(model.nj) if module.JUMP_SOURCE[m] == flow]
-            g0 = {m: module.guard(m, t, x, inputs(t, x), p, d) for m in watched}
+            watched = [m for m in range(model.nj) if model.in_mode(m, flow, d)]
+            g0 = {m: module.guard(m, t, x, inputs(t, x), p, d, flow) for m in watched}
             open_side(model, t, x[:nx], inputs(t, x), p, d, g0)     # a gap leaving an impact: on its open side
             while solver.status == "running":
                 message = interrupts.reason()
@@ -104,7 +104,7 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
                     message = nonfinite(solver.t)
                     break
                 dense = solver.dense_output()
-                hit = first_crossing(model, dense, watched, g0, t_old, solver.t, inputs, p, d, jumps.event_tol)
+                hit = first_crossing(model, dense, watched, g0, t_old, solver.t, inputs, p, d, flow, jumps.event_tol)
                 t_stop = solver.t if hit is None else hit[1]
                 while row < grid.shape[0] and grid[row] <= t_stop:
                     out_t.append(grid[row]), out_x.append(dense(grid[row])), out_f.append(flow)
@@ -114,14 +114,14 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
                 if hit is None:
                     t, x = solver.t, solver.y.copy()
                     if slip_direction(model.ref, w.ref, t, x, inputs(t, x), p, d, flow, 0.0, IDEAL):    # a spatial slip
-                        g0.update({m: module.guard(m, t, x, inputs(t, x), p, d) for m in watched
+                        g0.update({m: module.guard(m, t, x, inputs(t, x), p, d, flow) for m in watched
                                    if module.JUMP_CONTACT[m] == SLIP_STOP})
                     continue
                 k, t, x_before = hit
                 x = x_before.copy()
                 u_before = inputs(t, x_before).copy()
                 balance = JumpWork(model, x_before, u_before, p, d, t)
-                flow, message = apply_jump(model, k, t, x[:nx], u_before, p, d, w, jumps)
+                flow, message = apply_jump(model, k, t, x[:nx], u_before, p, d, w, flow, jumps)
                 if message is None:
                     flow, message = follow_instant_jumps(model, t, x[:nx], source, p, d, flow, jumps, w, IDEAL)
                 current[0] = flow
@@ -147,8 +147,8 @@ def _log(model, out_t, out_x, out_u, out_f, out_d):
             np.array(out_f, dtype=np.int64), np.array(out_d).reshape(n, model.nd))
 
 
-def first_crossing(model, dense, watched, g0, t0, t1, inputs, p, d, event_tol):
-    """(jump, time, state) of the earliest enabled guard crossing on [t0, t1] along `dense`, or None.
+def first_crossing(model, dense, watched, g0, t0, t1, inputs, p, d, flow, event_tol):
+    """(jump, time, state) of the earliest enabled guard crossing on [t0, t1] along `dense` in `flow`, or None.
 
     inputs(t, x) gives the inputs there; g0 (jump -> guard value at t0) is updated to the values at t1.
     """
@@ -158,7 +158,7 @@ def first_crossing(model, dense, watched, g0, t0, t1, inputs, p, d, event_tol):
     tol = event_tol * max(1.0, abs(t0))
 
     def guard(m, s, y):
-        return module.guard(m, s, y, inputs(s, y), p, d)
+        return module.guard(m, s, y, inputs(s, y), p, d, flow)
 
     for m in watched:
         g1 = guard(m, t1, x1)
@@ -167,7 +167,7 @@ def first_crossing(model, dense, watched, g0, t0, t1, inputs, p, d, event_tol):
             x_near = dense(tau)
             earlier = best is None or tau < best[1] - tol or (
                 tau <= best[1] + tol and module.JUMP_PRIORITY[m] < module.JUMP_PRIORITY[best[0]])
-            if earlier and module.enabled(m, tau, x_near, inputs(tau, x_near), p, d) >= 0.0:
+            if earlier and module.enabled(m, tau, x_near, inputs(tau, x_near), p, d, flow) >= 0.0:
                 best = (m, tau, x_near)
         g0[m] = g1
     return best

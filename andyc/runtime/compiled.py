@@ -21,8 +21,7 @@ import numpy as np
 
 from andyc.errors import SimulationError
 from andyc.numerics.status import IDEAL
-from andyc.runtime.methods import ADAPTIVE, FIXED_STEP
-from andyc.spec.modes import flow_of, radices, states_of
+from andyc.runtime.methods import ADAPTIVE, FIXED_STEP, TIME_STEPPING
 
 @dataclass(frozen=True)
 class CompiledModel:
@@ -65,34 +64,42 @@ class CompiledModel:
     closed_form_where: tuple = ()  # (line, document path) of each state's closed form in the model file
     simulate: dict = field(default_factory=dict)  # andyc sim's options the model gives (its simulate: section)
     display: dict = field(default_factory=dict)  # state units, the ground, shapes (andyc.spec.display): for pictures
-    contact_names: tuple = ()   # unilateral contacts (andyc.spec.contacts); flow index = their states (contact_states)
+    contact_names: tuple = ()   # unilateral contacts (andyc.spec.contacts); their modes are in d (contact_states)
     contact_rows: tuple = ()    # the constraint row of each contact's gap
+    contact_modes: tuple = ()   # the index in d of each contact's mode: 0 open, 1 closed or sticking, 2 (3) slipping
     jump_contact: tuple = ()    # per jump: the contact whose impact it is (andyc.runtime.contacts resolves it), or
     #                             SLIP_STOP (a slip's end, andyc.numerics.status), or -1
     contact_stick_rows: tuple = ()  # the stick row of each contact with friction (spatial: the first of two), or -1
     contact_tangents: tuple = ()  # per contact: 0 frictionless, 1 planar, 2 spatial friction (stick rows t, t + 1)
     jump_kinds: tuple = ()      # per jump: (kind, contact) of a contact's jump (andyc.spec.contacts), ("", -1) else
+    jump_modes: tuple = ()      # per jump: (index in d of its contact's mode, mask of the modes it leaves); (-1, 0)
 
     @property
-    def contact_radix(self) -> list:
-        """The number of states of each contact: 2 (open, closed), 4 with planar friction (open, stick, slip +,
-        slip -), 3 with spatial friction (open, stick, slip)."""
-        return radices(self.tangents)
+    def stepping(self) -> ModuleType:
+        """The build's time-stepping module (andyc_numerics' timestepping.py), imported when first asked for: a run
+        of another method does not load it."""
+        return importlib.import_module(f"{self.numerics.__name__}.timestepping")
 
     @property
     def tangents(self) -> list:
         """Per contact: 0 frictionless, 1 planar, 2 spatial friction."""
-        return (list(self.contact_tangents) or [int(r >= 0) for r in self.contact_stick_rows]
-                or [0] * len(self.contact_names))
+        return list(self.contact_tangents)
 
-    def contact_states(self, flow: int) -> list:
-        """Each contact's state in `flow` (andyc.spec.contacts: 0 open, 1 closed or sticking, 2 / 3 slipping; spatial
-        friction: 2 slipping)."""
-        return states_of(int(flow), self.contact_radix)
+    def contact_states(self, d) -> list:
+        """Each contact's mode in the discrete states d (andyc.spec.contacts: 0 open, 1 closed or sticking, 2 / 3
+        slipping forwards / backwards; spatial friction: 2 slipping)."""
+        return [int(d[k]) for k in self.contact_modes]
 
-    def contact_flow(self, states: list) -> int:
-        return flow_of(states, self.contact_radix)
+    def set_contact_states(self, d, states) -> None:
+        """Write each contact's mode into d, in place."""
+        for k, s in zip(self.contact_modes, states):
+            d[k] = float(s)
 
+    def in_mode(self, k: int, flow: int, d) -> bool:
+        """Whether jump k leaves `flow` with the contacts' modes in d (as andyc_numerics' dynamics.in_mode)."""
+        source = int(self.module.JUMP_SOURCE[k])
+        state, mask = self.jump_modes[k] if self.jump_modes else (-1, 0)
+        return (source < 0 or source == flow) and (state < 0 or bool((mask >> int(d[state])) & 1))
     @property
     def nw(self) -> int:
         return len(self.work_names)
@@ -124,9 +131,13 @@ class CompiledModel:
     def inputs(self, overrides: dict | None = None) -> np.ndarray:
         return _with_overrides(self.input_names, self.input_defaults, overrides, "input")
 
-    def active_rows(self, flow: int) -> list:
-        """The constraint rows active in `flow` (indices into the nc rows; holonomic ones first)."""
-        return [int(r) for r in self.module.FLOW_ROWS[flow, :self.module.FLOW_NROWS[flow]]]
+    def active_rows(self, flow: int, d=None) -> list:
+        """The constraint rows active in `flow` with the contacts' modes in d (None: every contact open): indices into
+        the nc rows, holonomic ones first, as andyc_numerics' active.select_rows orders them."""
+        w = work(self)
+        n = self.numerics.active.select_rows(self.ref, w.ref, int(flow),
+                                             np.zeros(self.nd) if d is None else np.asarray(d, dtype=np.float64))
+        return [int(r) for r in w.active[0, :n]]
 
     def initial_state(self, p: np.ndarray) -> np.ndarray:
         return self.module.initial_state(p)
@@ -198,8 +209,9 @@ def leaf_compilations(equations: ModuleType) -> int:
 def numerics_compilations(numerics: ModuleType) -> int:
     """How many functions of a numerics package (a build's andyc_numerics) Numba has compiled in this process."""
     total = 0
-    for name in ("model", "stubs", "linalg", "dynamics", "integrator", "inputs", "api"):
-        for value in vars(getattr(numerics, name)).values():
+    for name in ("model", "stubs", "linalg", "active", "dynamics", "integrator", "inputs", "api", "contact_solver",
+                 "timestepping"):
+        for value in vars(getattr(numerics, name, None) or ModuleType(name)).values():
             misses = getattr(getattr(value, "stats", None), "cache_misses", None)
             if misses is not None:
                 total += sum(misses.values())
@@ -241,6 +253,12 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
         opts = integrator.options(IDEAL, False, False, 0.0, -1.0, 1e-12)
         integrator.advance(m, w.ref, opts, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1,
                            log, 1)
+    if (every or method in TIME_STEPPING) and model.contact_names:
+        stepping = model.stepping
+        s = stepping.new_scratch(model.nq, model.nv, model.nx, model.nw, model.nc, model.nd, len(model.contact_names))
+        stepping.coefficients(m, w.ref, s, p)
+        stepping.advance(m, w.ref, s, 0.5, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1,
+                         log, np.zeros((1, model.nc)), 1)
     if model.nj or every:
         integrator.instant(m, w.ref, IDEAL, function, data, 0.0, x.copy(), p, d.copy(), flow)
     integrator.update_inputs(function, 0.0, x, p, d, flow, u, data)

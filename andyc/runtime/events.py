@@ -49,16 +49,16 @@ class EventLog:
         self.instant = 0
         self.finished = False           # stopped by stop_after, not by a failure
 
-    def record(self, t, k, x_before, x_after, d_after, target: int | None = None) -> str | None:
-        """Log jump k at t (into flow `target`, default its JUMP_TARGET); why the run must stop, or None. A
-        contact's impact never stops it as Zeno: its contacts closed instead (finish_jump)."""
+    def record(self, t, k, x_before, x_after, d_after, source: int, target: int) -> str | None:
+        """Log jump k at t from flow `source` into flow `target`; why the run must stop, or None. A contact's
+        impact never stops it as Zeno: its contacts closed instead (finish_jump)."""
         jumps = self.model.jump_names
         same = bool(self.times) and t - self.times[-1] <= self.event_tol * max(1.0, abs(t))
         self.instant = self.instant + 1 if same else 1
         self.times.append(float(t))
         self.jumps.append(int(k))
-        self.sources.append(int(self.model.module.JUMP_SOURCE[k]))
-        self.targets.append(int(self.model.module.JUMP_TARGET[k] if target is None else target))
+        self.sources.append(int(source))
+        self.targets.append(int(target))
         self.before.append(np.array(x_before))
         self.after.append(np.array(x_after))
         self.discrete.append(np.array(d_after))
@@ -126,36 +126,40 @@ def user_jump(model, k, t, x, u, p, d) -> str | None:
     return None
 
 
-def finish_jump(model, k, t, x_before, x, u, p, d, flow: int, jumps: EventLog) -> tuple[int, str | None]:
-    """After jump k's resets and impact map (compiled) at t, into `flow` (x, d in place; u the inputs just before
-    it): a contact's impact (andyc.runtime.contacts, plastic once the impact times accumulate), the user's
-    function, the record. Returns (the flow it lands in, a stop message or None)."""
-    if model.jump_contact and model.jump_contact[k] >= 0:
+def finish_jump(model, k, t, x_before, x, u, p, d, source: int, flow: int,
+                jumps: EventLog) -> tuple[int, str | None]:
+    """After jump k's resets and impact map (compiled) at t, from flow `source` into `flow` (x, d in place; u the
+    inputs just before it): a contact's impact (andyc.runtime.contacts, plastic once the impact times accumulate),
+    a slip's end or start, the user's function, the record. Returns (the flow it lands in, a stop message or
+    None)."""
+    kind = model.jump_kinds[k][0] if model.jump_kinds else ""
+    if kind == "impact":
         try:
-            flow = resolve_impact(model, t, x, u, p, d, flow, jumps.zeno(t) is not None or jumps.impact_again(t),
-                                  model.jump_contact[k])
+            resolve_impact(model, t, x, u, p, d, flow, jumps.zeno(t) is not None or jumps.impact_again(t),
+                           model.jump_contact[k])
         except (FloatingPointError, np.linalg.LinAlgError, SimulationError) as exc:
             return flow, f"stopped: contact impact in jump '{model.jump_names[k]}': {exc}" + at(t)
-    elif model.jump_kinds and model.jump_kinds[k][0] == "stop":        # a slip ends: stick, or slip back
+    elif kind == "stop":        # a slip ends: stick, or slip back
         try:
-            flow = resolve_stop(model, t, x, u, p, d, k, flow)
+            resolve_stop(model, t, x, u, p, d, k, flow)
         except (FloatingPointError, np.linalg.LinAlgError) as exc:
             return flow, f"stopped: contact stick in jump '{model.jump_names[k]}': {exc}" + at(t)
-    elif model.jump_kinds and model.jump_kinds[k][0] == "slip" and model.tangents[model.jump_kinds[k][1]] == 2:
-        start_slip(model, t, x, u, p, d, k)     # spatial friction: the slip starts against the sticking force
-    message = user_jump(model, k, t, x, u, p, d) or jumps.record(t, k, x_before, x, d, flow)
+    elif kind == "slip" and model.tangents[model.jump_kinds[k][1]] == 2:
+        start_slip(model, t, x, u, p, d, k, flow)   # spatial friction: the slip starts against the sticking force
+    message = user_jump(model, k, t, x, u, p, d) or jumps.record(t, k, x_before, x, d, source, flow)
     return flow, message
 
 
-def apply_jump(model, k, t, x, u, p, d, w, jumps: EventLog) -> tuple[int, str | None]:
-    """Jump k at t (x, d in place; u the inputs just before it): resets and impact, then finish_jump. Returns (the
-    flow it lands in, a stop message or None)."""
+def apply_jump(model, k, t, x, u, p, d, w, flow: int, jumps: EventLog) -> tuple[int, str | None]:
+    """Jump k at t out of `flow` (x, d in place; u the inputs just before it): resets and impact, then
+    finish_jump. Returns (the flow it lands in, a stop message or None)."""
     before = x.copy()
     target = int(model.module.JUMP_TARGET[k])
+    target = flow if target < 0 else target
     status = model.numerics.dynamics.jump(model.ref, w.ref, k, t, x, u, p, d)
     if status != OK:
         return target, in_jump(model, status, k, t)
-    return finish_jump(model, k, t, before, x, u, p, d, target, jumps)
+    return finish_jump(model, k, t, before, x, u, p, d, flow, target, jumps)
 
 
 def follow_instant_jumps(model, t, x, source: InputSource, p, d, flow, jumps: EventLog, w, mode):
@@ -168,7 +172,7 @@ def follow_instant_jumps(model, t, x, source: InputSource, p, d, flow, jumps: Ev
             return flow, f"stopped: {source.failure(model, d, p)}"
         if k < 0:
             break
-        flow, stop = apply_jump(model, k, t, x, w.u, p, d, w, jumps)
+        flow, stop = apply_jump(model, k, t, x, w.u, p, d, w, flow, jumps)
         if stop is not None:
             return flow, stop
     return flow, None

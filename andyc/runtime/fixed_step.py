@@ -86,7 +86,7 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
                 break
             balance = JumpWork(model, w.x_event, w.u, p, d_before, t)
             n_jumps = len(jumps.times)
-            flow, message = finish_jump(model, k, t, w.x_event[:nx], state, w.u, p, d, flow, jumps)
+            flow, message = finish_jump(model, k, t, w.x_event[:nx], state, w.u, p, d, flow0, flow, jumps)
             if message is None:
                 flow, message = follow_instant_jumps(model, t, state, source, p, d, flow, jumps, w, mode)
             _no_instant_jump(tangent, jumps, n_jumps + 1)

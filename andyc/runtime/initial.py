@@ -45,7 +45,7 @@ def constraint_residuals(model: CompiledModel, t: float, x, u, p, d=None, flow=N
     flow = model.initial_flow if flow is None else flow
     phi, c = np.empty(model.nh), np.empty(model.nc)
     model.module.constraints(t, x, u, p, d, phi, c, np.empty((model.nc, model.nv)), np.empty(model.nc))
-    rows = model.active_rows(flow)
+    rows = model.active_rows(flow, d)
     return phi[[r for r in rows if r < model.nh]], c[rows]
 
 
@@ -63,7 +63,7 @@ def consistent_initial_state(model: CompiledModel, x, u, p, d, flow, init: Init)
     if init.mode == "as-is" or worst <= (init.tol if init.mode == "check" else 0.0):
         return out
     if init.mode == "check":
-        rows = model.active_rows(flow)
+        rows = model.active_rows(flow, d)
         values = np.concatenate([np.abs(phi), np.abs(c)])
         k = int(np.argmax(values))
         row = rows[k] if k < phi.shape[0] else rows[k - phi.shape[0]]
@@ -93,7 +93,7 @@ def require_independent_rows(model: CompiledModel, method: str, x, u, p, d, flow
     """Multipliers (ANDY eq. 12) need independent rows; name the first row that is not."""
     A = np.zeros((model.nc, model.nv))
     model.module.constraints(0.0, x, u, p, d, np.empty(model.nh), np.empty(model.nc), A, np.empty(model.nc))
-    rows = model.active_rows(flow)
+    rows = model.active_rows(flow, d)
     A = A[rows]
     tol = 1e-8 * max(np.linalg.norm(A, 2) if A.size else 0.0, 1e-300)
     for k in range(len(rows)):

@@ -137,13 +137,22 @@ class Run:
 
     @property
     def contact_modes(self) -> np.ndarray:
-        """(N, contacts) each contact's state: 0 open, 1 closed (sticking, with friction), 2 slipping forwards
-        (slip speed > 0), 3 backwards (spatial friction: 2 slipping); the flow index is these in mixed radix
-        (andyc.spec.contacts)."""
+        """(N, contacts) each contact's mode: 0 open, 1 closed (sticking, with friction), 2 slipping forwards
+        (slip speed > 0), 3 backwards (spatial friction: 2 slipping): its discrete state `<contact>_mode`
+        (andyc.spec.contacts). (Older run files coded them in the flow index: read from it there.)"""
+        names = [f"{c}_mode" for c in self.contact_names]
+        if all(n in self.discrete_names for n in names):
+            columns = [self.discrete_names.index(n) for n in names]
+            return self.discrete[:, columns].astype(np.int8).reshape(len(self.time), len(names))
         radix = radices(self.contact_tangents)
         place = np.cumprod([1] + radix[:-1]).astype(np.int64)
         return ((self.flow[:, None] // place[None, :]) % np.array(radix, dtype=np.int64)).astype(np.int8).reshape(
             len(self.time), len(self.contact_names))
+
+    def event_modes(self, k: int) -> list:
+        """Each contact's mode right after the run's k-th event (its discrete states then)."""
+        names = [f"{c}_mode" for c in self.contact_names]
+        return [int(self.events["discrete_after"][k, self.discrete_names.index(n)]) for n in names]
 
     @property
     def contact_closed(self) -> np.ndarray:

@@ -74,7 +74,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     table (a path ending in .csv); controller: a Python file defining control(t, x, d, p), which drives
     every input (see andyc.runtime.inputs). rtol, atol: the adaptive methods' tolerances.
     x0, d0 and flow0 (a name or index): the initial state, discrete states and flow (default the model's; with
-    contacts, the mode of those touching at rest, andyc.runtime.contacts.initial_mode).
+    contacts and no d0, each contact's mode in d is that of a run starting there: closed where it touches at
+    rest, andyc.runtime.contact_modes.initial_mode).
     progress: print t / t_end to stderr (default: when it is a terminal).
     interrupts: what may stop the run from outside (andyc.runtime.interrupts; default: SIGINT and
     SIGTERM, which then end the run with the status "interrupted: ..." instead of raising).
@@ -113,8 +114,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     compile_integrator(model, method=method, frames=bool(frame_names))
     compile_integrator(model, *source.function_data, method=method)
     u = inputs_at(model, source, 0.0, x, p, d, flow)
-    if flow0 is None and model.contact_names:      # contacts touching at rest start closed
-        flow = initial_mode(model, 0.0, x, u, p, d)
+    if d0 is None and model.contact_names:      # contacts touching at rest start closed
+        initial_mode(model, 0.0, x, u, p, d, flow)
     initial = consistent_initial_state(model, x, u, p, d, flow, init) if model.nc else {}
     if method in ("lagrange", "baumgarte") and model.nc:
         require_independent_rows(model, method, x, u, p, d, flow)

@@ -111,7 +111,7 @@ def diverging_constraints(model, t, x, u, p, d, flow) -> str:
     """Why a state may have diverged from (t, x), the last sound state, as a clause for the message: the
     flow's constraint rows nearly dependent there (a singular pose, where the constraint forces that keep
     the rows grow without bound), or nothing."""
-    rows = model.active_rows(flow)
+    rows = model.active_rows(flow, d)
     if not rows:
         return ""
     A = np.zeros((model.nc, model.nv))

@@ -26,12 +26,13 @@ from andyc.spec.suggest import did_you_mean
 JUMP_FILE_NAMES = frozenset(dir(builtins)) | {"math", "np", "JUMPS"}
 
 
-def build_hybrid(h: dict | None, constraints: list, scope: Scope,
-                 quantities: FrameQuantities) -> tuple[list, list, int]:
-    """Flows, jumps and the initial flow's index; without a hybrid section, one flow with every constraint.
+def build_hybrid(h: dict | None, constraints: list, scope: Scope, quantities: FrameQuantities,
+                 contact_rows: frozenset = frozenset()) -> tuple[list, list, int]:
+    """Flows, jumps and the initial flow's index; without a hybrid section, one flow with every constraint but
+    the contacts' rows (`contact_rows`: the runtime switches them in every flow, andyc.spec.contacts).
 
     A constraint active in no flow and taking no impact is warned about."""
-    names = [c.name for c in constraints]
+    names = [c.name for c in constraints if c.name not in contact_rows]
     if h is None:
         return [Flow("default", tuple(names), {}, ())], [], 0
     flows, impacted = [], set()
@@ -44,6 +45,10 @@ def build_hybrid(h: dict | None, constraints: list, scope: Scope,
                                "give each flow its own name")
         active = f.get("constraints", [])
         for j, name in enumerate(active):
+            if name in contact_rows:
+                scope.report.error(where + ("constraints", j), f"'{name}' is a contact's row, which the run closes "
+                                   "and opens by itself in every flow", "remove it from the flow's 'constraints'")
+                continue
             scope.known(name, names, where + ("constraints", j), "constraint")
             if name in active[:j]:
                 scope.report.error(where + ("constraints", j), f"constraint '{name}' is listed twice",
@@ -64,13 +69,13 @@ def build_hybrid(h: dict | None, constraints: list, scope: Scope,
     jumps = []
     written = h.get("jumps") or []
     for i, j in enumerate(written):
-        jump = _jump(i, j, written, flows, constraints, scope, quantities)
+        jump = _jump(i, j, written, flows, constraints, scope, quantities, contact_rows)
         if jump is not None:
             jumps.append(jump)
             impacted |= set(jump.impact_constraints)
     used = {n for f in flows for n in f.constraints} | impacted
     for c in constraints:
-        if c.name not in used:
+        if c.name not in used and c.name not in contact_rows:
             scope.report.warn(c.where, f"constraint '{c.name}' is active in no flow and takes no impact",
                               "list it in a flow's 'constraints', or remove it")
     return flows, jumps, initial_index
@@ -101,7 +106,7 @@ def check_nonlinear_impacts(constraints: list, jumps: list, contacts: list, scop
 
 
 def _jump(i: int, j: dict, written: list, flows: list, constraints: list, scope: Scope,
-          quantities: FrameQuantities) -> Jump | None:
+          quantities: FrameQuantities, contact_rows: frozenset = frozenset()) -> Jump | None:
     """One jump, or None when its source or target flow does not exist (reported)."""
     where = ("hybrid", "jumps", i)
     constraint_names = [c.name for c in constraints]
@@ -129,7 +134,7 @@ def _jump(i: int, j: dict, written: list, flows: list, constraints: list, scope:
                "multipliers of the source flow's constraints")
     # The multipliers of the source flow's rows; others only where written (reported then by _used_multipliers).
     lams = multiplier_symbols(constraints)
-    source = next((f.constraints for f in flows if f.name == j["from"]), ())
+    source = next((f.constraints for f in flows if f.name == j["from"]), ()) + tuple(contact_rows)
     texts = j.get("enabled", [])
     written_names = set(re.findall(r"[A-Za-z_]\w*", " ".join(map(str, [j["guard"]] + (texts if isinstance(texts, list)
                                                                                        else [texts])))))
@@ -169,7 +174,7 @@ def _jump(i: int, j: dict, written: list, flows: list, constraints: list, scope:
     impact, restitution, impact_constraints = _impact(j, where, flows, constraint_names, scope)
     if not ok:
         return None
-    used = _used_multipliers(j, where, [guard, *enabled], lams, flows, scope)
+    used = _used_multipliers(j, where, [guard, *enabled], lams, flows, scope, contact_rows)
     direction = {"falling": FALLING, "rising": RISING, "either": EITHER}[j["direction"]]
     return Jump(j["name"], j["from"], j["to"], guard, direction, tuple(enabled), impact, restitution,
                 impact_constraints, tuple(resets), int(j.get("priority", i)), found, where, _texts(j), used)
@@ -199,9 +204,11 @@ def multiplier_symbols(constraints: list) -> dict:
     return {name: (sp.Symbol(f"lam_{name}", real=True), c.name) for c in constraints for name in c.multipliers}
 
 
-def _used_multipliers(j: dict, where, exprs: list, lams: dict, flows: list, scope: Scope) -> dict:
+def _used_multipliers(j: dict, where, exprs: list, lams: dict, flows: list, scope: Scope,
+                      contact_rows: frozenset = frozenset()) -> dict:
     """{symbol: name} of the multipliers a jump's guard and conditions use; each must be of a constraint active
-    in the jump's source flow (elsewhere it has no value)."""
+    in the jump's source flow (elsewhere it has no value), or a contact's (NaN while it is open: a guard or a
+    condition that reads it is then false)."""
     source = next((f for f in flows if f.name == j["from"]), None)
     free = set().union(*(e.free_symbols for e in exprs))
     used = {}
@@ -209,7 +216,7 @@ def _used_multipliers(j: dict, where, exprs: list, lams: dict, flows: list, scop
         if symbol not in free:
             continue
         used[symbol] = name
-        if source is not None and constraint not in source.constraints:
+        if source is not None and constraint not in source.constraints and constraint not in contact_rows:
             key = "guard" if symbol in exprs[0].free_symbols else "enabled"
             scope.report.error(where + (key,), f"multiplier '{name}' of constraint '{constraint}' has no value in "
                                f"flow '{source.name}', the jump's source: the constraint is not active there",

@@ -12,6 +12,7 @@ hands the next what it needs, the name scope first of all.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 from pathlib import Path
 
@@ -105,11 +106,14 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
     # Frame quantities (F.x, F.vy, ...) are named once for the constraints and the jumps together.
     quantities = FrameQuantities(scope, data.get("bodies") or [])
     constraints = build_constraints(data.get("constraints") or [], scope, quantities, data.get("contacts") or [])
-    # Contacts: their modes are the flows and their impacts and liftoffs the jumps (andyc.spec.contacts).
-    contacts, flows, jumps = build_contacts(data.get("contacts") or [], constraints, "hybrid" in data, scope)
-    initial_flow = 0
-    if not contacts:
-        flows, jumps, initial_flow = build_hybrid(data.get("hybrid"), constraints, scope, quantities)
+    # The user's flows and jumps; then the contacts': each contact's mode is a discrete state that its jumps
+    # (impact, liftoff, slip, stop; from and to every flow) change (andyc.spec.contacts).
+    written_contacts = data.get("contacts") or []
+    contact_rows = frozenset(c["name"] for c in written_contacts) | frozenset(
+        f"{c['name']}_stick" for c in written_contacts if "slip" in c)
+    flows, jumps, initial_flow = build_hybrid(data.get("hybrid"), constraints, scope, quantities, contact_rows)
+    contacts, contact_jumps = build_contacts(written_contacts, constraints, scope)
+    jumps = jumps + [dataclasses.replace(j, priority=len(jumps) + k) for k, j in enumerate(contact_jumps)]
     check_nonlinear_impacts(constraints, jumps, contacts, scope)
     closed_form = build_closed_form(data.get("closed_form"), jumps, scope, input_expressions)
     simulate = build_simulate(data.get("simulate"), scope, jumps)

@@ -23,6 +23,8 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from andyc.numerics.status import EITHER, FALLING, RISING  # noqa: F401  (the one table of guard directions)
+
+ANY = "*"           # a contact's jump goes from and to every flow (andyc.spec.contacts)
 from andyc.spec.yamlpos import SourceMap
 
 
@@ -189,8 +191,6 @@ class Flow:
     constraints: tuple          # names, in the order of Spec.constraints
     inputs: dict                # input name -> expression of parameters
     where: tuple
-    slip: tuple = ()            # of (normal row, stick row, sigma +1/-1, the jump whose coefficient is mu): contacts
-    #                             slipping in this flow, forwards or backwards along their tangent (andyc.spec.contacts)
 
 
 @dataclass(frozen=True)
@@ -219,8 +219,9 @@ class Jump:
     where: tuple
     text: dict = field(default_factory=dict)        # guard, enabled, reset, impact as the model file writes them
     multipliers: dict = field(default_factory=dict)  # multiplier symbol -> its name, used by guard or enabled
-    contact: int = -1           # the contact whose impact (CONTACT_IMPACT) or liftoff this is (andyc.spec.contacts)
+    contact: int = -1           # the contact whose jump this is (andyc.spec.contacts), -1 for the user's
     kind: str = ""              # "impact" | "liftoff" | "slip" | "stop" for a contact's jump, "" for the user's
+    mode: tuple = ()            # a contact's jump: (its mode's discrete state, the mask of the modes it leaves)
 
 
 @dataclass
@@ -248,7 +249,7 @@ class Spec:
     flows: list = field(default_factory=list)          # of Flow; one "default" flow without a hybrid section
     jumps: list = field(default_factory=list)          # of Jump, in document order
     initial_flow: int = 0
-    contacts: list = field(default_factory=list)       # of andyc.spec.contacts.Contact; their modes are the flows
+    contacts: list = field(default_factory=list)       # of andyc.spec.contacts.Contact (their jumps end `jumps`)
     warnings: list = field(default_factory=list)   # of Diagnostic
     visuals: list = field(default_factory=list)    # URDF visual geometry, as read (andyc.spec.urdf)
     shapes: list = field(default_factory=list)     # the YAML's shape: keys, for andyc view (andyc.spec.shapes)

@@ -250,6 +250,6 @@ def warn_unused(scope: Scope):
             scope.report.warn(("parameters", name), f"parameter '{name}' is not used",
                               "remove it or use it in an expression")
     for x in scope.discrete:
-        if x.symbol not in scope.report.used:
+        if x.symbol not in scope.report.used and x.where[0] == "discrete":     # (not a contact's own states)
             scope.report.warn(x.where, f"discrete state '{x.name}' is not used",
                               "remove it, or use it in a constraint, guard or reset")

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from andyc.numerics.status import SLIP_STOP
-from andyc.spec.model import Spec
+from andyc.spec.model import ANY, Spec
 from andyc.symbolic.constraints import ConstraintTerms, FrameQuantities
 
 
@@ -39,6 +39,8 @@ class JumpTerms:
     restitution: sp.Expr        # e, of parameters
     uses_multipliers: bool = False  # guard or enabled read the source flow's multipliers (HybridTerms.multipliers)
     contact: int = -1           # the contact whose impact this is (the runtime resolves it), SLIP_STOP, or -1
+    mode_state: int = -1        # a contact's jump: the index in d of its contact's mode, -1 for the user's jumps
+    mode_mask: int = 0          # ... and the modes it leaves (bit s: mode s): it is considered only in them
 
 
 @dataclass
@@ -53,7 +55,8 @@ class HybridTerms:
 
 
 def hybrid_terms(spec: Spec, quantities: FrameQuantities, constraints: ConstraintTerms) -> HybridTerms:
-    flow_index = {f.name: i for i, f in enumerate(spec.flows)}
+    flow_index = {f.name: i for i, f in enumerate(spec.flows)} | {ANY: -1}     # -1: every flow (a contact's jump)
+    discrete = [x.name for x in spec.discrete]
     inputs = list(spec.inputs)
     vdot = [sp.Symbol(f"vdot_{i}", real=True) for i in range(quantities.n)]
     jumps = []
@@ -66,7 +69,8 @@ def hybrid_terms(spec: Spec, quantities: FrameQuantities, constraints: Constrain
             j.name, flow_index[j.source], flow_index[j.target], j.direction, j.priority, j.guard, rate, enabled,
             list(j.resets), [r for r, name in enumerate(constraints.rows) if name in j.impact_constraints],
             j.restitution, bool(j.multipliers),
-            j.contact if j.kind == "impact" else SLIP_STOP if j.kind == "stop" else -1))
+            j.contact if j.kind == "impact" else SLIP_STOP if j.kind == "stop" else -1,
+            discrete.index(j.mode[0]) if j.mode else -1, j.mode[1] if j.mode else 0))
     return HybridTerms(
         flows=[f.name for f in spec.flows], initial=spec.initial_flow,
         flow_rows=[[r for r, name in enumerate(constraints.rows) if name in f.constraints] for f in spec.flows],

@@ -1,0 +1,353 @@
+"""Moreau-Jean time-stepping, compiled: contacts resolved by impulses in every step, no event location.
+
+Moreau's theta-scheme as Jean 1999 (The non-smooth contact dynamics method, CMAME 177, 235-257, sec. 4) and
+Acary & Brogliato 2008 (Numerical Methods for Nonsmooth Dynamical Systems, sec. 10.1) write it, at a fixed step h,
+theta in [1/2, 1]:
+
+    q_{k+theta} = q_k + theta h v_k                                    (signals: sigma + theta h dsigma/dt)
+    index set   I = {contact i : g_i(q_k + h v_k / 2) <= TOUCHING}    (the gap predicted half a step on)
+    M (v_{k+1} - v_k) = h G(t_{k+theta}, q_{k+theta}, v_k) + A^T P     (M, G, A at the mid point)
+    each contact in I:  0 <= u_n,k+1 + e min(u_n,k, 0)  _|_  P_n >= 0  (Newton's law at velocity level)
+                        Coulomb on P_t: |P_t| <= mu P_n, the slip u_t,k+1 = 0 inside the cone,
+                        P_t = -mu P_n u_t,k+1 / |u_t,k+1| on its edge (planar, or spatial: the disk)
+    the flow's own (bilateral) rows:  A v_{k+1} + b = 0
+    q_{k+1} = q_k + h ((1 - theta) v_k + theta v_{k+1})               (signals at the mid point's rates, with
+                                                                       v_{k+theta}; quaternions renormalized)
+
+with G everything but the inertia term (M dv/dt = G), A the rows' Jacobian and u = A v + b their velocity
+residuals. Newton's law restores e of an approaching speed only (min(u_n,k, 0)): a contact that enters the index
+set already separating (a corner lifted, a ball rising out of its push-out) must not be allowed to sink at e times
+that speed. The step's contact problem, W = A M^-1 A^T over the rows, is contact_solver.solve's (nonlinear
+Gauss-Seidel, then the active set it finds solved exactly); each contact's state in the last step is its warm
+start. Then two position corrections, since the scheme holds its rows at velocity level only: the bilateral rows
+are put back on their manifold (dynamics.project over the flow's own rows: positions, then speeds), and a contact
+that landed in the step (open at its start, closed at its end) with its gap below -PENETRATION is pushed out to
+zero by the least M-norm change of the positions (the position correction of Braun & Goldfarb, over those gaps and
+the flow's holonomic rows; no speed changes: its normal speed is the scheme's). A closing contact enters the index
+set from half a step ahead, so it sinks by up to h |u_n| / 2 in its impact step; a contact left open (a bounce)
+rises out by itself, and one that stays closed keeps its gap to O(h^2) a step (held at velocity level), so only a
+landing is corrected. The push-out's potential energy is the scheme's error: E - E0 - W shows it. A contact in the index set whose normal speed after the step
+exceeds REST_SPEED is open (a bounce); the others keep the solver's state (stick, slip either way): the modes go
+into d at each step, so the log shows them.
+
+The work slots: the elements' at the step's forces, h times their power at (t_{k+theta}, q_{k+theta}, v_k) (first
+order, the scheme's own evaluation); the contact and bilateral impulses' in the `jumps` slot, P . (A v_{k+1/2} + b)
+with v_{k+1/2} = (v_k + v_{k+1}) / 2: exactly the energy the impulses change (with friction, what it takes away),
+so that E - E0 - W measures the scheme's own energy error.
+"""
+
+from collections import namedtuple
+
+import math
+
+import numpy as np
+
+from .active import select_rows
+from .compiler import jit
+from .contact_solver import BILATERAL, NORMAL, OPEN, PLANAR, SPATIAL, solve, work_shape
+from .dynamics import correct_rows, factor, move, normalize, project
+from .integrator import update_inputs
+from .linalg import cholesky, solve_lower, solve_upper
+from .model import borrowed, call
+from .status import DIVERGED, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, REST_SPEED, SINGULAR_MASS
+
+TOUCHING = 1e-12        # m: a contact whose predicted gap is at most this is in the step's index set
+PENETRATION = 1e-9      # m: a gap below minus this after a step is pushed out to zero
+
+Scratch = namedtuple("Scratch", "W w0 X rows owner kind first mu state direction P work v a col xm x0 xdot "
+                                "d_open e cmu total seen guess guess_dir landed stats")
+Scratch.__doc__ = """The arrays of a time-stepping run (new_scratch). The step's problem over at most nc rows: W (nc * nc),
+w0, P (nc,), X (nv * nc) M^-1 A^T, rows (nc,) its constraint rows; per block: owner (its contact, -1 bilateral),
+kind, first, mu, state, direction (2 each) as contact_solver takes them; work the solver's. v, a, col (nv,),
+xm, x0, xdot (nx + nw,) buffers; d_open (nd,) d with every contact open; e, cmu (contacts,) each contact's
+restitution and mu; total (nc,) each row's impulse since the last sample, seen (nc,) 1 where it took part; guess
+(contacts,) each contact's block state in the last step (-1: not in it), guess_dir (contacts, 2); landed
+(contacts,) 1 where a contact open at the step's start is closed at its end; stats (4,):
+steps, Gauss-Seidel sweeps, steps whose answer did not verify, push-outs."""
+
+
+def new_scratch(nq, nv, nx, nw, nc, nd, contacts) -> Scratch:
+    """The zeroed arrays of a run's steps (Scratch)."""
+    m = max(nc, 1)
+    z, i = np.zeros, np.int64
+    return Scratch(z(m * m), z(m), z(nv * m), z(m, i), z(m, i), z(m, i), z(m, i), z(m), z(m, i), z(2 * m), z(m),
+                   z(work_shape(m)), z(nv), z(nv), z(nv), z(nx + nw), z(nx + nw), z(nx + nw), z(nd), z(contacts),
+                   z(contacts), z(m), z(m), np.full(contacts, -1, i), z((contacts, 2)), z(contacts, i), z(4, i))
+
+
+@jit
+def coefficients(model, w, s, p):
+    """Each contact's restitution (its impact jump's coefficient) and mu (its stop's; 0 without friction), into s."""
+    call(model.restitution, (p, w.S))
+    for k in range(model.nj):
+        i = model.jump_contact[k]
+        if i >= 0:
+            s.e[i] = w.S[model.s_e, k]
+    for i in range(model.contact_rows.shape[0]):
+        s.cmu[i] = w.S[model.s_e, model.contact_mu[i]] if model.contact_mu[i] >= 0 else 0.0
+
+
+@jit(inline="always")
+def _block(s, m, nb, kind, owner, mu, guess, gx, gy):
+    """Append a block of `kind` (its rows already in s.rows from m) as block nb; returns the next free row."""
+    s.kind[nb] = kind
+    s.first[nb] = m
+    s.owner[nb] = owner
+    s.mu[nb] = mu
+    s.state[nb] = guess
+    s.direction[2 * nb] = gx
+    s.direction[2 * nb + 1] = gy
+    return m + max(kind, 1)
+
+
+@jit
+def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
+    """x (the state, then the work) from t to t + h, in place, the contacts' modes of the step into d, and each
+    row's impulse into s.total (s.seen 1 where it took part). Returns a status (module docstring)."""
+    nq, nv, nx, nc = model.nq, model.nv, model.nx, model.contact_rows.shape[0]
+    S, M, G = w.S, w.M, w.G
+    v, a, xm, xdot = s.v, s.a, s.xm, s.xdot
+    for j in range(nv):
+        v[j] = x[nq + j]
+    for j in range(x.shape[0]):
+        xm[j] = x[j]
+    for j in range(nq):
+        xm[j] += theta * h * v[j]
+    tm = t + theta * h
+    if model.ns > 0:                                    # (the signals' rates at the step's start)
+        call(model.signal_rates, (t, x, u, p, d, xdot))
+        for j in range(nq + nv, nx):
+            xm[j] += theta * h * xdot[j]
+    if update_inputs(inputs, tm, xm, p, d, flow, u, data) != OK:
+        return INPUT_FAILED
+    if theta != 0.5:                                    # the index set from the gap half a step on
+        for j in range(x.shape[0]):
+            s.x0[j] = x[j]
+        for j in range(nq):
+            s.x0[j] += 0.5 * h * v[j]
+        call(model.constraints_into, (t + 0.5 * h, s.x0, u, p, d, S))
+        for i in range(nc):
+            if S[model.s_phi, model.contact_rows[i]] > TOUCHING:
+                s.guess[i] = -2                          # (out of the index set)
+    call(model.constraints_into, (tm, xm, u, p, d, S))
+    call(model.dynamics, (tm, xm, u, p, d, M, G))
+    if not cholesky(M, nv, 0.0):
+        return SINGULAR_MASS
+    for j in range(nv):                                 # a = v_free = v + h M^-1 G
+        a[j] = G[j]
+    solve_lower(M, a, nv)
+    solve_upper(M, a, nv)
+    for j in range(nv):
+        a[j] = v[j] + h * a[j]
+    for j in range(model.nw):                           # the elements' work at the step's forces (first order)
+        x[nx + j] += h * G[nv + j]
+    # The step's problem: the flow's own rows, then each touching contact's block (normal row first).
+    m, nb = 0, 0
+    for r in range(model.flow_nrows[flow]):
+        s.rows[m] = model.flow_rows[flow, r]
+        m = _block(s, m, nb, BILATERAL, -1, 0.0, 1, 0.0, 0.0)
+        nb += 1
+    for i in range(nc):
+        n = model.contact_rows[i]
+        out = s.guess[i] == -2 if theta != 0.5 else S[model.s_phi, n] > TOUCHING
+        if out:
+            s.guess[i] = -1
+            continue
+        t1, kind = model.contact_stick[i], NORMAL
+        if t1 >= 0:
+            kind = SPATIAL if model.contact_tangents[i] == 2 else PLANAR
+        s.rows[m] = n
+        if t1 >= 0:
+            s.rows[m + 1] = t1
+            if kind == SPATIAL:
+                s.rows[m + 2] = t1 + 1
+        guess = s.guess[i] if s.guess[i] >= 0 else 1
+        if kind == SPATIAL and guess == 2 and s.guess_dir[i, 0] == 0.0 and s.guess_dir[i, 1] == 0.0:
+            guess = 1                                   # (a slide with no direction yet: try sticking first)
+        m = _block(s, m, nb, kind, i, s.cmu[i], guess, s.guess_dir[i, 0], s.guess_dir[i, 1])
+        nb += 1
+    if m > 0:
+        impulse_work = _impulses(model, w, s, m, nb, v, a)
+        if model.nj > 0:
+            x[nx + model.nw - 1] += impulse_work
+    # q_{k+1}, the signals, v_{k+1} (in a)
+    for j in range(nq):
+        x[j] += h * ((1.0 - theta) * v[j] + theta * a[j])
+    if model.ns > 0:
+        for j in range(nv):
+            xm[nq + j] = (1.0 - theta) * v[j] + theta * a[j]
+        call(model.signal_rates, (tm, xm, u, p, d, xdot))
+        for j in range(nq + nv, nx):
+            x[j] += h * xdot[j]
+        normalize(model, x)
+    for j in range(nv):
+        x[nq + j] = a[j]
+    _modes(model, s, nb, d)
+    return _corrections(model, w, s, t + h, x, u, p, d, flow)
+
+
+@jit
+def _impulses(model, w, s, m, nb, v, vel):
+    """Solve the step's problem over s.rows' first m rows (nb blocks); vel: the free velocity in, v_{k+1} out;
+    v: v_k. Each row's impulse into s.total (and s.seen), its normal speed after into s.w0, the blocks' states into
+    s.state (and s.direction); returns the impulses' work P . (A v_{k+1/2} + b)."""
+    S, M, nv = w.S, w.M, model.nv
+    X = s.X[:nv * m].reshape((nv, m))
+    W = s.W[:m * m].reshape((m, m))
+    w0, col = s.w0[:m], s.col
+    for c in range(m):                                  # X = M^-1 A^T, column by column
+        row = s.rows[c]
+        for j in range(nv):
+            col[j] = S[model.s_a + row, j]
+        solve_lower(M, col, nv)
+        solve_upper(M, col, nv)
+        for j in range(nv):
+            X[j, c] = col[j]
+    for r in range(m):                                  # W = A X; w0 = A v_free + b (b = c - A v_k)
+        row = s.rows[r]
+        av, af = 0.0, 0.0
+        for j in range(nv):
+            av += S[model.s_a + row, j] * v[j]
+            af += S[model.s_a + row, j] * vel[j]
+        w0[r] = af + S[model.s_cv, row] - av
+        for c in range(m):
+            total = 0.0
+            for j in range(nv):
+                total += S[model.s_a + row, j] * X[j, c]
+            W[r, c] = total
+    for k in range(nb):                                 # Newton's law: u_n,k+1 + e min(u_n,k, 0) >= 0
+        if s.owner[k] >= 0:
+            w0[s.first[k]] += s.e[s.owner[k]] * min(S[model.s_cv, s.rows[s.first[k]]], 0.0)
+    sweeps, verified = solve(W, w0, s.kind[:nb], s.first[:nb], s.mu[:nb], s.state[:nb],
+                             s.direction[:2 * nb].reshape((nb, 2)), s.P[:m], s.work)
+    s.stats[1] += sweeps
+    if not verified:
+        s.stats[2] += 1
+    for j in range(nv):                                 # v_{k+1} = v_free + X P
+        total = 0.0
+        for c in range(m):
+            total += X[j, c] * s.P[c]
+        vel[j] += total
+    work = 0.0
+    for r in range(m):
+        row = s.rows[r]
+        after, half = 0.0, 0.0
+        for j in range(nv):
+            after += S[model.s_a + row, j] * vel[j]
+            half += S[model.s_a + row, j] * 0.5 * (v[j] + vel[j])
+        b = S[model.s_cv, row]
+        for j in range(nv):
+            b -= S[model.s_a + row, j] * v[j]
+        w0[r] = after + b
+        work += s.P[r] * (half + b)
+        s.total[row] += s.P[r]
+        s.seen[row] = 1.0
+    return work
+
+
+@jit(inline="always")
+def _modes(model, s, nb, d):
+    """Each contact's mode of the step into d (and its warm start): open out of the index set or leaving it (its
+    normal speed after the step above REST_SPEED: a bounce), else the solver's state."""
+    for i in range(model.contact_rows.shape[0]):
+        s.landed[i] = 1 if d[model.contact_mode[i]] == 0.0 else 0
+        if s.guess[i] < 0:
+            d[model.contact_mode[i]] = 0.0
+            s.landed[i] = 0
+    for k in range(nb):
+        i = s.owner[k]
+        if i < 0:
+            continue
+        state = s.state[k]
+        s.guess[i] = state
+        s.guess_dir[i, 0] = s.direction[2 * k]
+        s.guess_dir[i, 1] = s.direction[2 * k + 1]
+        if s.w0[s.first[k]] > REST_SPEED:
+            state = OPEN
+            s.landed[i] = 0
+        d[model.contact_mode[i]] = float(state)
+
+
+@jit
+def _corrections(model, w, s, t, x, u, p, d, flow):
+    """After the step: the flow's own rows back on their manifold (positions and speeds: dynamics.project with every
+    contact open), then each contact that landed in the step with its gap below -PENETRATION pushed out to zero
+    (positions only, with the flow's holonomic rows held). Returns a status."""
+    nc = model.contact_rows.shape[0]
+    d_open = s.d_open
+    for k in range(d.shape[0]):
+        d_open[k] = d[k]
+    for i in range(nc):
+        d_open[model.contact_mode[i]] = 0.0
+    if model.flow_nrows[flow] > 0:
+        status = project(model, w, t, x, u, p, d_open, flow, True, 0.0, -1.0)
+        if status != OK:
+            return status
+    if nc == 0:
+        return OK
+    S = w.S
+    call(model.constraints_into, (t, x, u, p, d, S))
+    deep = False
+    for i in range(nc):
+        if s.landed[i] == 1 and S[model.s_phi, model.contact_rows[i]] < -PENETRATION:
+            d_open[model.contact_mode[i]] = 1.0
+            deep = True
+    if not deep:
+        return OK
+    s.stats[3] += 1
+    nr = select_rows(model, w, flow, d_open)
+    call(model.dynamics, (t, x, u, p, d, w.M, w.G))
+    if not factor(model, w.M):
+        return SINGULAR_MASS
+    if nr > 0 and w.nactive[1] > 0:
+        correct_rows(model, w, w.nactive[1], model.s_phi, w.M)
+        move(model, t, x, u, p, d, S[model.s_dv, :model.nv])
+    return OK
+
+
+@jit(nogil=True)
+def advance(model, w, s, theta, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, every, log, forces, row):
+    """Step from time t (on the grid point i: t = t0 + i dt) to the grid point i_end, or to a failure. x, d, the
+    log and `forces` (N, NC: each row's mean force, its impulses over the `every` steps since the last sample
+    divided by their time, NaN where it took no part) are updated in place; every `every`-th grid point is logged at log[row]; w.counts[0] += steps taken,
+    w.counts[2] = the rows logged so far (for the watchdog: andyc.runtime.interrupts). Returns (i, row, status, t)."""
+    u, counts = w.u, w.counts
+    x, p, d = borrowed(x), borrowed(p), borrowed(d)
+    if data is not None:
+        data = borrowed(data)
+    counts[2] = row
+    scale = 1.0
+    for j in range(model.nx):
+        scale = max(scale, abs(x[j]))
+    while i < i_end:
+        status = step(model, w, s, theta, inputs, data, t, dt, x, u, p, d, flow)
+        if status != OK:
+            return i, row, status, t
+        total, grown = 0.0, 0.0
+        for j in range(model.nx):
+            total += x[j]
+            grown = max(grown, abs(x[j]))
+        if not math.isfinite(total):
+            return i, row, NONFINITE, t
+        if grown > GROWTH_LIMIT * scale:
+            return i, row, DIVERGED, t
+        scale = max(scale, grown)
+        i += 1
+        t = t0 + i * dt
+        counts[0] += 1
+        s.stats[0] += 1
+        if i % every == 0:
+            if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
+                return i, row, INPUT_FAILED, t
+            log.t[row] = t
+            log.x[row] = x
+            log.u[row] = u
+            log.flow[row] = flow
+            log.d[row] = d
+            for r in range(model.nc):           # (a sample every `every` steps: their mean force)
+                forces[row, r] = s.total[r] / (dt * every) if s.seen[r] > 0.0 else np.nan
+                s.total[r] = 0.0
+                s.seen[r] = 0.0
+            row += 1
+            counts[2] = row
+    return i, row, OK, t
