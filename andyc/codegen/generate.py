@@ -74,11 +74,17 @@ def _contact_tables(model: SymbolicModel) -> dict:
     """Per contact (andyc.spec.contacts): its name, gap row, stick row (spatial friction: the first of two; -1
     without friction), number of tangents, the index in d of its mode, the index of the jump whose coefficient is
     its mu (its `stop`; -1 without friction) and the index in d of its slip's direction (spatial; -1 else): what
-    andyc_numerics' active.select_rows needs to add a closed contact's rows to the flow's."""
+    andyc_numerics' active.select_rows needs to add a closed contact's rows to the flow's; and per row, the work
+    slot of its sliding friction's power (ROW_FRICTION: the `friction` slot on a gap row with friction, else -1)."""
     rows, contacts = model.constraints.rows, model.spec.contacts
     jump_index = {j.name: k for k, j in enumerate(model.spec.jumps)}
     discrete = [x.name for x in model.spec.discrete]
-    return {"contacts": [c.name for c in contacts],
+    friction = model.work_names.index("friction") if "friction" in model.work_names else -1
+    row_friction = [-1] * model.constraints.nc
+    for c in contacts:
+        if c.friction is not None:
+            row_friction[rows.index(c.constraint)] = friction
+    return {"contacts": [c.name for c in contacts], "row_friction": row_friction,
             "contact_rows": [rows.index(c.constraint) for c in contacts],
             "contact_stick": [rows.index(c.stick) if c.stick else -1 for c in contacts],
             "contact_tangents": [c.tangents for c in contacts],

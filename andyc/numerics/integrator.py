@@ -31,6 +31,7 @@ from .compiler import jit
 from .active import select_rows
 from .dynamics import enabled_value, guard_value, in_mode, jump, multipliers, project, rhs_mode_into, slip_direction
 from .model import borrowed, call
+from .slipping import slip_unit
 from .status import (BAUMGARTE, DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, ON_ZERO,
                      OPEN_SIDE, REST_SPEED, RISING, SLIP_STOP)
 
@@ -64,7 +65,8 @@ def stage_powers(model, w, t, x, u, p, d, flow, xdot, mode):
     """xdot[NX:NX + NW] = the power of each work slot at (t, x) (andyc/symbolic/work.py), right after
     rhs_mode_into in `flow` with `mode`: the elements' from the dynamics leaf (it wrote them after G), each working
     constraint row's -lam (c - A v) from the multipliers the flow's constraint solve left in S's y row and the
-    row's A and c in S. So the work W is integrated with the motion.
+    row's A and c in S, and each slipping contact's friction power into the slot `friction` (ROW_FRICTION). So the
+    work W is integrated with the motion.
 
     In the BAUMGARTE mode the rows' forces A^T lam (lam with the soft terms, ANDY eq. 15) also act off the
     constraint manifold, where c != 0: each row's whole power lam A v is counted, a working row's in its
@@ -92,6 +94,22 @@ def stage_powers(model, w, t, x, u, p, d, flow, xdot, mode):
                 xdot[nx + slot] += lam * c
         else:
             xdot[nx - 2 - slot] += lam * av
+    if w.nactive[2]:                    # a slipping contact's friction: -sigma mu lam_n J_t v (spatial: along u)
+        for r in range(w.nactive[0]):
+            code, slot = w.active[1, r], model.row_friction[w.active[0, r]]
+            if code == 0 or slot < 0:
+                continue
+            t_row = abs(code) - 1
+            js = 0.0
+            if w.active[3, r] > 0:
+                u1, u2 = slip_unit(model, w, d, r)
+                for j in range(nv):
+                    js += (u1 * S[model.s_a + t_row, j] + u2 * S[model.s_a + t_row + 1, j]) * x[nq + j]
+            else:
+                sigma = 1.0 if code < 0 else -1.0           # (code = -sigma (t + 1))
+                for j in range(nv):
+                    js += sigma * S[model.s_a + t_row, j] * x[nq + j]
+            xdot[nx + slot] -= S[model.s_e, w.active[2, r]] * S[model.s_y, r] * js
 
 
 @jit

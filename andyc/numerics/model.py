@@ -69,6 +69,7 @@ TABLES = ("quaternions",                            # index in x of each quatern
           "jump_contact",                            # the contact whose impact jump k is, or -1
           "jump_mode_state", "jump_mode_mask",       # a contact's jump: its mode in d, the modes it leaves
           "row_work",                                # the work slot of each row's constraint power, or -1
+          "row_friction",                            # ... of a gap row's sliding friction (its contact's), or -1
           "mass_parent", "mass_order",               # the tree of M: parent of each speed; children first
           "row_ptr", "row_cols", "flow_envelope")    # the rows' sparsity (sparse_rows.py; row_ptr empty: dense)
 LEAF_NAMES = ("dynamics", "dynamics_constraints", "constraints_into", "signal_rates", "energy", "power",
@@ -257,8 +258,8 @@ else:
 def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, contact_rows, contact_stick,
            contact_tangents, contact_mode, contact_mu, contact_dir, impact_rows,
            impact_nrows, jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers,
-           jump_contact, jump_mode_state, jump_mode_mask, row_work, mass_parent, mass_order, row_ptr, row_cols,
-           flow_envelope, leaves):
+           jump_contact, jump_mode_state, jump_mode_mask, row_work, row_friction, mass_parent, mass_order, row_ptr,
+           row_cols, flow_envelope, leaves):
     (dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
      constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form, energy_law,
      drive_power, forward_dynamics) = leaves
@@ -272,7 +273,7 @@ def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, contact
                  borrowed(impact_rows), borrowed(impact_nrows), borrowed(jump_source), borrowed(jump_target),
                  borrowed(jump_direction), borrowed(jump_priority), borrowed(jump_order), borrowed(jump_multipliers),
                  borrowed(jump_contact), borrowed(jump_mode_state), borrowed(jump_mode_mask),
-                 borrowed(row_work), borrowed(mass_parent), borrowed(mass_order),
+                 borrowed(row_work), borrowed(row_friction), borrowed(mass_parent), borrowed(mass_order),
                  borrowed(row_ptr), borrowed(row_cols), borrowed(flow_envelope),
                  dynamics, dynamics_constraints, constraints_into, signal_rates, energy, power, frame_poses,
                  constraint_gains, restitution, guard, guard_rate, enabled, reset, flow_inputs, closed_form,
@@ -280,7 +281,7 @@ def _model(sizes, rows, quaternions, flow_rows, flow_nrows, flow_nhrows, contact
                  (quaternions, flow_rows, flow_nrows, flow_nhrows, contact_rows, contact_stick, contact_tangents,
                   contact_mode, contact_mu, contact_dir, impact_rows, impact_nrows,
                   jump_source, jump_target, jump_direction, jump_priority, jump_order, jump_multipliers, jump_contact,
-                  jump_mode_state, jump_mode_mask, row_work, mass_parent, mass_order, row_ptr, row_cols,
+                  jump_mode_state, jump_mode_mask, row_work, row_friction, mass_parent, mass_order, row_ptr, row_cols,
                   flow_envelope))
 
 

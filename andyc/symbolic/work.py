@@ -35,6 +35,10 @@ reaction along it (Kane's method with t as one more coordinate):
 with a = Jv dv/dt + ac: P = a_t . dv/dt + b_t, which the numerics evaluate after each solve (the leaf
 drive_power). So dE/dt = sum of the powers, with the forces' own powers f . (J v + V_t).
 
+A slipping contact's friction, -sigma mu lam_n along its tangent J_t (spatial: -mu lam_n along the slip's direction
+u), has power -sigma mu lam_n J_t v (-mu lam_n (u_1 J_1 + u_2 J_2) v): the numerics add it to the slot `friction`
+from the multipliers of the step's solve (ROW_FRICTION: the slot of each contact's gap row).
+
 Not here: the energy a jump changes (the integrator adds E+ - E- to the work `jumps`).
 """
 
@@ -47,6 +51,7 @@ from andyc.spec.expressions import TIME
 from andyc.spec.model import Spec
 
 JUMPS = "jumps"     # the work slot of the energy the jumps change (resets, impacts): E+ - E- at each
+FRICTION = "friction"   # the work slot of the slipping contacts' Coulomb friction (andyc.spec.contacts)
 PRESCRIBED = "prescribed_motion"  # the work slot of the links that depend on t (the power that drives them)
 BAUMGARTE = "baumgarte"  # the work slot of the baumgarte method's constraint forces off the manifold
 
@@ -55,7 +60,8 @@ def work_slots(spec: Spec, terms: list, constraints) -> tuple[list, list, list, 
     """The work slots of the model: (names, powers, row_slot). names: every element that does work, in the
     model's order (forces and torques, dampers, springs and potentials that depend on t: `terms`, the
     ElementTerms), then each constraint with a working row, then 'baumgarte' when a constraint has gains (the
-    baumgarte method's forces off the manifold), then 'jumps' when the model has jumps. powers: the
+    baumgarte method's forces off the manifold), then 'friction' when a contact has friction (the power of its
+    sliding force, which the numerics compute: integrator.stage_powers), then 'jumps' when the model has jumps. powers: the
     power of each element slot (the first len(powers) names), which the dynamics leaf writes after G. row_slot:
     for each velocity-level row of `constraints`, the slot its power -lam (c - A v) goes to, or -1 (the
     numerics compute it from the step's multipliers, A and c), or -2 - the slot `baumgarte` (a row that does
@@ -91,6 +97,8 @@ def work_slots(spec: Spec, terms: list, constraints) -> tuple[list, list, list, 
         # add it in that method only, integrator.stage_powers).
         row_slot = [-2 - len(names) if slot < 0 else slot for slot in row_slot]
         names.append(BAUMGARTE)
+    if any(c.friction is not None for c in spec.contacts):
+        names.append(FRICTION)
     if spec.jumps:
         names.append(JUMPS)
     return names, powers, row_slot, prescribed
