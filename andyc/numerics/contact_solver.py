@@ -1,0 +1,525 @@
+"""The contact problem of one time step, or of a multi-contact impact, compiled: the impulses P over m rows.
+
+The same problem and answers as andyc.runtime.contact_problem (its pure-Python twin), in flat arrays so that a
+compiled time-stepping loop can call it. With W = A M^-1 A^T over the rows and w0 their velocities without the
+impulses (plus e u_n on each normal row: Newton's law; Acary & Brogliato 2008, Numerical Methods for Nonsmooth
+Dynamical Systems, sec. 10.1):
+
+    w = w0 + W P
+    bilateral row:           w_b = 0                           (P_b free)
+    frictionless contact:    0 <= w_n  _|_  P_n >= 0
+    Coulomb contact:         0 <= w_n  _|_  P_n >= 0,  |P_t| <= mu P_n,
+                             w_t = 0 where |P_t| < mu P_n,  P_t = -mu P_n w_t / |w_t| where w_t != 0
+                             (planar: one tangent row, P_t a number; spatial: two, P_t in the disk)
+
+Blocks: block k is of kind[k] (BILATERAL, NORMAL, PLANAR, SPATIAL: 1, 1, 2, 3 rows, the normal row first), its
+rows first[k] .. first[k] + size - 1. As Jean 1999 (The non-smooth contact dynamics method, CMAME 177, sec. 5)
+does, nonlinear Gauss-Seidel over the blocks, each block's local problem solved exactly (open, sticking, sliding
+either way; a spatial slide's direction by the secant method, else a scan of the circle and bisection), then a
+polish: the states found (open, stick, slip +/-, a spatial slide with its direction) fix an active set whose
+linear equations are solved in the least-norm least-squares sense (redundant rows allowed: a box flat on four
+corners has 12 rows on 6 speeds) and checked against every condition; a checked answer is exact to rounding,
+one that fails leaves the Gauss-Seidel answer (verified False). The states passed in are tried first (the warm
+start: a resting or sliding contact keeps its state, and the step costs one polish, no sweep).
+
+The polish's least squares: Householder QR with column pivoting (Businger & Golub 1965), the rank where a pivot
+falls below RANK_EPS of the first, then the complete orthogonal decomposition (R11 R12 -> T 0 by reflectors from
+the right, as LAPACK's xTZRZF) for the least-norm solution: np.linalg.lstsq's answer, written out so that no
+call allocates (np.linalg's do, in Numba). The only memory is the caller's `work` (work_size(m) float64s).
+"""
+
+import math
+
+import numpy as np
+
+from .compiler import jit
+
+BILATERAL, NORMAL, PLANAR, SPATIAL = 0, 1, 2, 3     # a block's kind (its size: max(kind, 1) rows)
+OPEN, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3        # a block's state (bilateral blocks: STICK)
+SLIDE = 2                                           # a spatial contact's one sliding state
+NONE = -1                                           # no guess (in `state`): no warm start
+SCAN = 36           # spatial sliding: the slip directions tried around the circle before bisecting
+SWEEPS = 500        # Gauss-Seidel sweeps at most (the polish makes the answer exact when it verifies)
+SWEEP_TOL = 1e-15   # ... until no impulse changes by more than this, relative to the largest
+VECTORS = 12        # work's rows before the reduced system's
+RANK_EPS = 1e-12    # least squares: a pivot below this times the first is rounding (a dependent column)
+TOL3Z = math.sqrt(np.finfo(np.float64).eps)     # pivoting: a column norm updated past this cancellation is recomputed
+
+
+@jit
+def work_shape(m):
+    """The shape of `work` for problems of up to m rows: twelve vectors, then the polish's reduced system."""
+    return m + VECTORS, m
+
+
+@jit
+def solve(W, w0, kind, first, mu, state, direction, P, work):
+    """P (m,) <- the impulses of the problem (the module's docstring); returns (sweeps, verified): the Gauss-Seidel
+    sweeps taken (0: the warm start verified), and whether every condition holds to rounding (1e-10 of max(1,
+    |w0|) on the velocities, 1e-12 of |P| on the impulses).
+
+    W (m, m), w0 (m,), mu (nb,), direction (nb, 2), P (m,), work (at least work_shape(m)): float64; kind, first,
+    state (nb,): int64; all C-contiguous. state and direction in: a guess, tried first (every state >= 0; a sliding
+    spatial contact's unit slip direction after the step), or any state NONE: none. P in: with a guess, the
+    impulses it came with (the last step's: of a redundant active set's solutions, the one closest to them is
+    tried where the least-norm one fails), else anything. Out: the states found (the guess, when it verified),
+    the sliding spatial contacts' directions -P_t / |P_t| (the others' (0, 0)), the impulses."""
+    m, nb = w0.shape[0], kind.shape[0]
+    top = 0.0
+    for i in range(m):
+        top = max(top, abs(w0[i]))
+    tol_v = 1e-10 * max(1.0, top)
+    warm = m > 0
+    for k in range(nb):
+        warm = warm and state[k] >= 0
+    if warm and _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
+        for i in range(m):                      # (the polish's answer: work's first m)
+            P[i] = work[0, i]
+        return 0, True
+    for i in range(m):
+        P[i] = 0.0
+    sweeps = 0
+    while sweeps < SWEEPS:
+        sweeps += 1
+        change = _sweep(W, w0, kind, first, mu, P)
+        top = 1e-300
+        for i in range(m):
+            top = max(top, abs(P[i]))
+        if change <= SWEEP_TOL * top:
+            break
+    _states(P, kind, first, mu, state, direction)
+    if _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
+        for i in range(m):
+            P[i] = work[0, i]
+        return sweeps, True
+    return sweeps, False
+
+
+@jit
+def _sweep(W, w0, kind, first, mu, P):
+    """One Gauss-Seidel sweep over the blocks, in order, each solved with the others' impulses held; returns the
+    largest change of an impulse."""
+    m = P.shape[0]
+    change = 0.0
+    for k in range(kind.shape[0]):
+        f, s = first[k], max(kind[k], 1)
+        u1 = u2 = u3 = 0.0
+        for r in range(f, f + s):   # the block's velocities without its own impulses (no cancellation with them)
+            v = w0[r]
+            for j in range(f):
+                v += W[r, j] * P[j]
+            for j in range(f + s, m):
+                v += W[r, j] * P[j]
+            if r == f:
+                u1 = v
+            elif r == f + 1:
+                u2 = v
+            else:
+                u3 = v
+        o1, o2, o3 = P[f], P[f + 1] if s > 1 else 0.0, P[f + 2] if s > 2 else 0.0
+        _local(W, f, kind[k], mu[k], u1, u2, u3, P)
+        change = max(change, abs(P[f] - o1))
+        if s > 1:
+            change = max(change, abs(P[f + 1] - o2))
+        if s > 2:
+            change = max(change, abs(P[f + 2] - o3))
+    return change
+
+
+@jit
+def _local(W, f, kind, mu, u1, u2, u3, P):
+    """P[f:f + size] <- block f's impulses with the others held (u: its velocities without its own impulses),
+    exact: a bilateral row's, a normal row's projected on P_n >= 0; with friction open, sticking, else sliding."""
+    a = W[f, f]
+    if kind == BILATERAL or kind == NORMAL:
+        p = -u1 / a if a > 0.0 else 0.0
+        P[f] = max(0.0, p) if kind == NORMAL else p
+        return
+    spatial = kind == SPATIAL
+    P[f] = P[f + 1] = 0.0
+    if spatial:
+        P[f + 2] = 0.0
+    if u1 >= 0.0:                           # open
+        return
+    ok, x1, x2, x3 = _stick(W, f, spatial, -u1, -u2, -u3)
+    if ok and x1 >= 0.0 and math.hypot(x2, x3) <= mu * x1:
+        P[f], P[f + 1] = x1, x2
+        if spatial:
+            P[f + 2] = x3
+        return
+    if spatial:
+        if _slide_spatial(W, f, mu, u1, u2, u3, P):
+            return
+    else:
+        for sigma in (1.0, -1.0):           # sliding forwards (w_t > 0, P_t = -mu P_n) or backwards
+            k = a - sigma * mu * W[f, f + 1]
+            if k > 0.0:
+                pn = -u1 / k
+                if sigma * (u2 + (W[f + 1, f] - sigma * mu * W[f + 1, f + 1]) * pn) >= 0.0:
+                    P[f], P[f + 1] = pn, -sigma * mu * pn
+                    return
+    _closest(W, f, spatial, mu, u1, u2, u3, P)
+
+
+@jit
+def _stick(W, f, spatial, b1, b2, b3):
+    """(solvable, x) with W_ff x = b, W_ff block f's 3 x 3 (a planar block's 2 x 2, bordered by the identity),
+    by its adjugate; not solvable where the determinant is 0 (np.linalg.solve's LinAlgError)."""
+    a00, a01, a10, a11 = W[f, f], W[f, f + 1], W[f + 1, f], W[f + 1, f + 1]
+    a02 = a12 = a20 = a21 = 0.0
+    a22 = 1.0
+    if spatial:
+        a02, a12, a20, a21, a22 = W[f, f + 2], W[f + 1, f + 2], W[f + 2, f], W[f + 2, f + 1], W[f + 2, f + 2]
+    c00, c01, c02 = a11 * a22 - a12 * a21, a12 * a20 - a10 * a22, a10 * a21 - a11 * a20
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    if det == 0.0:
+        return False, 0.0, 0.0, 0.0
+    c10, c11, c12 = a02 * a21 - a01 * a22, a00 * a22 - a02 * a20, a01 * a20 - a00 * a21
+    c20, c21, c22 = a01 * a12 - a02 * a11, a02 * a10 - a00 * a12, a00 * a11 - a01 * a10
+    return (True, (c00 * b1 + c10 * b2 + c20 * b3) / det, (c01 * b1 + c11 * b2 + c21 * b3) / det,
+            (c02 * b1 + c12 * b2 + c22 * b3) / det)
+
+
+@jit
+def _closest(W, f, spatial, mu, u1, u2, u3, P):
+    """No local solution (W's tangential coupling reverses the slip, Painleve-like): the closest admissible one,
+    each row's own impulse scaled into the cone."""
+    pn = max(0.0, -u1 / W[f, f])
+    t1 = -u2 / W[f + 1, f + 1] if W[f + 1, f + 1] > 0.0 else 0.0
+    t2 = 0.0
+    if spatial and W[f + 2, f + 2] > 0.0:
+        t2 = -u3 / W[f + 2, f + 2]
+    size = math.hypot(t1, t2)
+    scale = min(1.0, mu * pn / size) if size > 0.0 else 1.0
+    P[f], P[f + 1] = pn, t1 * scale
+    if spatial:
+        P[f + 2] = t2 * scale
+
+
+@jit
+def _at(W, f, mu, u1, u2, u3, angle):
+    """A spatial slide along d = (cos, sin)(angle): (admissible, d x s, d . s, P_n, d) with P_n from the normal
+    row and s the slip after; not admissible where the normal row's coefficient a - mu b.d is not positive."""
+    d1, d2 = math.cos(angle), math.sin(angle)
+    den = W[f, f] - mu * (W[f, f + 1] * d1 + W[f, f + 2] * d2)
+    if den <= 0.0:
+        return False, 0.0, 0.0, 0.0, d1, d2
+    pn = -u1 / den
+    s1 = u2 + (W[f + 1, f] - mu * (W[f + 1, f + 1] * d1 + W[f + 1, f + 2] * d2)) * pn
+    s2 = u3 + (W[f + 2, f] - mu * (W[f + 2, f + 1] * d1 + W[f + 2, f + 2] * d2)) * pn
+    return True, d1 * s2 - d2 * s1, d1 * s1 + d2 * s2, pn, d1, d2
+
+
+@jit
+def _slide_spatial(W, f, mu, u1, u2, u3, P):
+    """A spatial contact sliding: P = P_n (1, -mu d), d the unit slip after. For each d the normal row gives P_n;
+    the slip's turn away from d, d x s, is found zero by the secant method from the slip's direction without
+    friction (exact at once for an isotropic, uncoupled tangential inverse inertia: a point mass), or else by
+    scanning SCAN directions round the circle, then bisecting the first sign change with d . s > 0 to the last
+    bit. Returns whether it found one (P[f:f + 3] then set)."""
+    x0 = math.atan2(u3, u2)
+    x1 = x0 + 1e-6
+    ok0, c0, _, _, _, _ = _at(W, f, mu, u1, u2, u3, x0)
+    size = math.hypot(u2, u3)
+    for _ in range(20):
+        ok1, c1, dot1, pn, d1, d2 = _at(W, f, mu, u1, u2, u3, x1)
+        if not (ok0 and ok1):
+            break
+        if dot1 > 0.0 and abs(c1) <= 1e-15 * size:
+            P[f], P[f + 1], P[f + 2] = pn, -mu * pn * d1, -mu * pn * d2
+            return True
+        if c1 == c0:
+            break
+        x0, x1, c0 = x1, x1 - c1 * (x1 - x0) / (c1 - c0), c1
+    step = 2.0 * math.pi / SCAN
+    xl = 0.0
+    okl, cl, dl, _, _, _ = _at(W, f, mu, u1, u2, u3, xl)
+    for k in range(SCAN):
+        xh = 2.0 * math.pi if k + 1 == SCAN else (k + 1) * step
+        okh, ch, dh, _, _, _ = _at(W, f, mu, u1, u2, u3, xh)
+        if okl and okh and not cl * ch > 0.0 and max(dl, dh) > 0.0:
+            x0, x1, c0 = xl, xh, cl
+            for _ in range(60):
+                xm = 0.5 * (x0 + x1)
+                okm, cm, _, _, _, _ = _at(W, f, mu, u1, u2, u3, xm)
+                if not okm or xm == x0 or xm == x1:
+                    break
+                if (cm > 0.0) == (c0 > 0.0):
+                    x0, c0 = xm, cm
+                else:
+                    x1 = xm
+            ok, _, dot, pn, d1, d2 = _at(W, f, mu, u1, u2, u3, 0.5 * (x0 + x1))
+            if ok and dot >= 0.0:
+                P[f], P[f + 1], P[f + 2] = pn, -mu * pn * d1, -mu * pn * d2
+                return True
+        xl, okl, cl, dl = xh, okh, ch, dh
+    return False
+
+
+@jit
+def _states(P, kind, first, mu, state, direction):
+    """Each block's state as the impulses P say: open without a normal impulse, sticking inside the cone, else
+    sliding against the tangential impulse; a sliding spatial contact's slip direction -P_t / |P_t|."""
+    top = 1e-300
+    for i in range(P.shape[0]):
+        top = max(top, abs(P[i]))
+    for k in range(kind.shape[0]):
+        f = first[k]
+        direction[k, 0] = direction[k, 1] = 0.0
+        if kind[k] == BILATERAL:
+            state[k] = STICK
+            continue
+        pn = P[f]
+        t1 = P[f + 1] if kind[k] >= PLANAR else 0.0
+        t2 = P[f + 2] if kind[k] == SPATIAL else 0.0
+        size = math.hypot(t1, t2)
+        if pn <= 1e-12 * top:
+            state[k] = OPEN
+        elif kind[k] == NORMAL or size < mu[k] * pn * (1.0 - 1e-9):
+            state[k] = STICK
+        elif kind[k] == SPATIAL:
+            state[k] = SLIDE
+            direction[k, 0], direction[k, 1] = -t1 / size, -t2 / size
+        else:
+            state[k] = SLIP_POS if t1 < 0.0 else SLIP_NEG
+
+
+@jit
+def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
+    """work[0, :m] <- the impulses the active set `state` (and the sliding spatial contacts' `direction`) fixes;
+    returns whether they satisfy every condition. Its equations' least-norm least-squares solution first (the
+    Python twin's); where they are dependent (redundant rows) and that fails, the solution closest to P (the
+    Gauss-Seidel answer, or a warm start's last impulses): the least-norm choice can pull a contact or leave the
+    cone where the other solutions include valid ones, as the Gauss-Seidel answer shows.
+
+    Column j of the active set is e_r + c1 e_(r+1) + c2 e_(r+2), r = rows[j]: a bilateral or sticking row's own
+    impulse (c = 0), or a sliding contact's, its friction riding on its normal impulse (planar: c1 = -+mu;
+    spatial: c = -mu d); its equation is w_r = 0."""
+    m = w0.shape[0]
+    cand, w, b, y, z, vn1, vn2, tau = work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7]
+    c1, c2, rows, perm = work[8], work[9], work[10], work[11]   # (rows, perm: integers, as floats)
+    C = work[VECTORS:]                  # the reduced system K = C^T, by columns: C[j, :n] = K[:, j]
+    n = np.int64(0)     # (not the literal 0: Numba would compile the calls below once more for it)
+    for k in range(kind.shape[0]):
+        f, s = first[k], state[k]
+        if kind[k] == BILATERAL or (kind[k] != NORMAL and s == STICK):
+            for r in range(f, f + max(kind[k], 1)):
+                rows[n], c1[n], c2[n] = r, 0.0, 0.0
+                n += 1
+        elif s != OPEN:
+            rows[n], c1[n], c2[n] = f, 0.0, 0.0
+            if kind[k] == PLANAR:
+                c1[n] = -mu[k] if s == SLIP_POS else mu[k]
+            elif kind[k] == SPATIAL:
+                c1[n], c2[n] = -mu[k] * direction[k, 0], -mu[k] * direction[k, 1]
+            n += 1
+    for i in range(n):
+        q = int(rows[i])
+        b[i] = -w0[q]
+        for j in range(n):
+            r = int(rows[j])
+            v = W[q, r]
+            if c1[j] != 0.0:
+                v += c1[j] * W[q, r + 1]
+            if c2[j] != 0.0:
+                v += c2[j] * W[q, r + 2]
+            C[j, i] = v
+    rank = _factor(C, b, n, vn1, vn2, tau, perm)
+    for closest in (False, True):
+        if closest and rank == n:           # (a unique solution: nothing else to try)
+            break
+        for j in range(n):                  # (P's coefficients: column j is P's only one with a 1 at rows[j])
+            vn1[j] = P[int(rows[j])]
+        _solution(C, b, y, n, rank, tau, perm, vn1, closest, z)
+        for i in range(m):
+            cand[i] = 0.0
+        for j in range(n):
+            r = int(rows[j])
+            cand[r] += y[j]
+            if c1[j] != 0.0:
+                cand[r + 1] += c1[j] * y[j]
+            if c2[j] != 0.0:
+                cand[r + 2] += c2[j] * y[j]
+        for i in range(m):
+            v = w0[i]
+            for j in range(m):
+                v += W[i, j] * cand[j]
+            w[i] = v
+        if _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v):
+            return True
+    return False
+
+
+@jit
+def _holds(kind, first, mu, state, direction, P, w, rows, n, tol_v):
+    """Whether the impulses P and the velocities w after satisfy every condition of the states (to tol_v on the
+    velocities, 1e-12 of the largest impulse on the impulses; NaN fails): w = 0 on the active set's n rows, and
+    each block's inequalities."""
+    top = 1e-300
+    for i in range(P.shape[0]):
+        top = max(top, abs(P[i]))
+    tol_p = 1e-12 * top
+    for j in range(n):
+        if not abs(w[int(rows[j])]) <= tol_v:            # inconsistent equations (dependent rows, no solution)
+            return False
+    for k in range(kind.shape[0]):
+        f, s = first[k], state[k]
+        if kind[k] == BILATERAL:
+            continue
+        if s == OPEN:
+            ok = w[f] >= -tol_v
+        elif not P[f] >= -tol_p:
+            ok = False
+        elif kind[k] == NORMAL:
+            ok = True
+        elif s == STICK:
+            ok = math.hypot(P[f + 1], P[f + 2] if kind[k] == SPATIAL else 0.0) <= mu[k] * P[f] + tol_p
+        elif kind[k] == SPATIAL:                    # the slip along d: no turn away from it, not reversed
+            d1, d2 = direction[k, 0], direction[k, 1]
+            ok = abs(d1 * w[f + 2] - d2 * w[f + 1]) <= tol_v and d1 * w[f + 1] + d2 * w[f + 2] >= -tol_v
+        else:
+            ok = (1.0 if s == SLIP_POS else -1.0) * w[f + 1] >= -tol_v
+        if not ok:
+            return False
+    return True
+
+
+@jit
+def _reflector(x, lo, hi, at):
+    """The Householder reflector H = I - tau v v^T with H x = (beta, 0, ..) over the entries `at`, lo .. hi - 1 of
+    the row x (LAPACK's xLARFG): v's tail is left in x[lo:hi] (its head is 1), beta in x[at]; returns tau."""
+    alpha = x[at]
+    tail = 0.0
+    for i in range(lo, hi):
+        tail += x[i] * x[i]
+    if tail == 0.0:
+        return 0.0
+    beta = -math.copysign(math.sqrt(alpha * alpha + tail), alpha)
+    scale = 1.0 / (alpha - beta)
+    for i in range(lo, hi):
+        x[i] *= scale
+    x[at] = beta
+    return (beta - alpha) / beta
+
+
+@jit
+def _reflect(v, x, lo, hi, at, tau):
+    """x <- H x for the reflector _reflector left in v (its head at `at`, tail lo .. hi - 1)."""
+    s = x[at]
+    for i in range(lo, hi):
+        s += v[i] * x[i]
+    s *= tau
+    x[at] -= s
+    for i in range(lo, hi):
+        x[i] -= s * v[i]
+
+
+@jit
+def _factor(C, b, n, vn1, vn2, tau, perm):
+    """The complete orthogonal decomposition K Pi = Q [T 0; 0 0] Z of K = C^T (n x n, C[j] its column j), in
+    place; b[:r] <- T^-1 (Q^T b)[:r]; returns the rank r. Householder QR with column pivoting, stopped where the
+    largest column left is below RANK_EPS |R_00| (the rest of R is rounding: dependent columns), then [R11 R12]
+    = [T 0] Z by r reflectors from the right, each on coordinates l and r .. n - 1 (their tails left in
+    C[r:, l], their tau in tau[l]). R[i, j] is at C[j, i]."""
+    for j in range(n):
+        perm[j] = j
+        s = 0.0
+        for i in range(n):
+            s += C[j, i] * C[j, i]
+        vn1[j] = vn2[j] = math.sqrt(s)
+    r, top = n, 0.0
+    for k in range(n):
+        p = k
+        for j in range(k + 1, n):
+            if vn1[j] > vn1[p]:
+                p = j
+        if p != k:
+            for i in range(n):
+                C[k, i], C[p, i] = C[p, i], C[k, i]
+            perm[k], perm[p] = perm[p], perm[k]
+            vn1[k], vn1[p], vn2[k], vn2[p] = vn1[p], vn1[k], vn2[p], vn2[k]
+        pivot = 0.0
+        for i in range(k, n):               # (the pivot's norm afresh: the updated one may have lost digits)
+            pivot += C[k, i] * C[k, i]
+        pivot = math.sqrt(pivot)
+        top = pivot if k == 0 else top
+        if not pivot > RANK_EPS * top:
+            r = k
+            break
+        t = _reflector(C[k], k + 1, n, k)
+        if t != 0.0:
+            for j in range(k + 1, n):
+                _reflect(C[k], C[j], k + 1, n, k, t)
+            _reflect(C[k], b, k + 1, n, k, t)
+        for j in range(k + 1, n):           # the columns' norms below row k, updated (LAPACK's xLAQP2)
+            if vn1[j] != 0.0:
+                q = abs(C[j, k]) / vn1[j]
+                q = max(0.0, (1.0 - q) * (1.0 + q))
+                if q * (vn1[j] / vn2[j]) ** 2 <= TOL3Z:
+                    s = 0.0
+                    for i in range(k + 1, n):
+                        s += C[j, i] * C[j, i]
+                    vn1[j] = vn2[j] = math.sqrt(s)
+                else:
+                    vn1[j] *= math.sqrt(q)
+    for l in range(r - 1, -1, -1):          # [R11 R12] -> [T 0], bottom row first (LAPACK's xLATRZ)
+        if r == n:
+            break
+        alpha, tail = C[l, l], 0.0
+        for i in range(r, n):
+            tail += C[i, l] * C[i, l]
+        tau[l] = 0.0
+        if tail == 0.0:
+            continue
+        beta = -math.copysign(math.sqrt(alpha * alpha + tail), alpha)
+        scale = 1.0 / (alpha - beta)
+        for i in range(r, n):
+            C[i, l] *= scale
+        C[l, l] = beta
+        t = tau[l] = (beta - alpha) / beta
+        for p in range(l):                  # the rows above, from the right: R[p, l] = C[l, p], R[p, r:] = C[r:, p]
+            s = C[l, p]
+            for i in range(r, n):
+                s += C[i, l] * C[i, p]
+            s *= t
+            C[l, p] -= s
+            for i in range(r, n):
+                C[i, p] -= s * C[i, l]
+    for l in range(r - 1, -1, -1):          # T^-1 (Q^T b)[:r], T[l, i] = C[i, l]
+        s = b[l]
+        for i in range(l + 1, r):
+            s -= C[i, l] * b[i]
+        b[l] = s / C[l, l]
+    return r
+
+
+@jit
+def _solution(C, q, y, n, r, tau, perm, ref, closest, z):
+    """y[:n] <- Pi Z^T (q[:r], f) of _factor's K Pi = Q [T 0; 0 0] Z, q[:r] = T^-1 (Q^T b)[:r]: a least-squares
+    solution of K y = b: the least-norm one (f = 0), or with `closest`, the one closest to ref (f = (Z Pi^T ref)[r:],
+    its part along K's null space). z: scratch."""
+    for j in range(n):
+        z[j] = ref[int(perm[j])] if closest else 0.0
+    if closest:
+        for l in range(r - 1, -1, -1):      # Z z = H_0 .. H_r-1 z
+            _apply(C, z, n, r, l, tau[l])
+    for j in range(r):
+        z[j] = q[j]
+    for l in range(r):                      # Z^T z = H_r-1 .. H_0 z
+        _apply(C, z, n, r, l, tau[l])
+    for j in range(n):
+        y[int(perm[j])] = z[j]
+
+
+@jit
+def _apply(C, z, n, r, l, t):
+    """z <- H_l z, H_l = I - t u u^T, u = e_l + its tail C[r:, l] (a reflector of _factor's [R11 R12] -> [T 0])."""
+    if t == 0.0 or r == n:
+        return
+    s = z[l]
+    for i in range(r, n):
+        s += C[i, l] * z[i]
+    s *= t
+    z[l] -= s
+    for i in range(r, n):
+        z[i] -= s * C[i, l]
