@@ -65,11 +65,13 @@ def solve(W, w0, kind, first, mu, state, direction, P, work):
     tried where the least-norm one fails), else anything. Out: the states found (the guess, when it verified),
     the sliding spatial contacts' directions -P_t / |P_t| (the others' (0, 0)), the impulses."""
     m, nb = w0.shape[0], kind.shape[0]
+    if m == 0:
+        return 0, True
     top = 0.0
     for i in range(m):
         top = max(top, abs(w0[i]))
     tol_v = 1e-10 * max(1.0, top)
-    warm = m > 0
+    warm = True
     for k in range(nb):
         warm = warm and state[k] >= 0
     if warm and _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
