@@ -210,6 +210,24 @@ def test_spatial_slide_with_an_anisotropic_inertia():
     assert np.allclose(direction[0], d, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("kind", [cs.PLANAR, cs.SPATIAL])
+def test_no_friction_on_tangent_rows(kind):
+    """mu = 0 on a contact with tangent rows: no tangential impulse, the slip left as it comes (the Python twin
+    leaves this unverified: it checks the slip against a direction the zero friction does not have)."""
+    w0 = np.array([-1.0, 0.3, -0.2][:kind])               # (kind: the block's rows)
+    P, state, direction, _, verified = solve(np.eye(kind), w0, [kind], [0.0])
+    assert verified and np.array_equal(P, [1.0] + [0.0] * (kind - 1)) and np.array_equal(direction, [[0.0, 0.0]])
+
+
+def test_a_slide_guess_needs_a_unit_direction():
+    """A warm start's sliding spatial contact with direction (0, 0) would give it no friction: refused (the
+    sweeps run), and the answer is the cold solve's."""
+    w0 = np.array([-1.0, 3.0, -4.0])
+    cold = solve(np.eye(3), w0, [cs.SPATIAL], [0.5])
+    warm = solve(np.eye(3), w0, [cs.SPATIAL], [0.5], [cs.SLIDE], [[0.0, 0.0]])
+    assert warm[3] == cold[3] > 0 and warm[4] and np.array_equal(warm[0], cold[0])
+
+
 def box_on_four_corners(v):
     """A box (mass 2, half sizes 0.3, 0.2, 0.1, its centre of mass at its centre) flat on the ground on its four
     bottom corners with spatial friction, moving at v (linear, angular: 6 speeds) for one step h of gravity:

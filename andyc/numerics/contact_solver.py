@@ -87,7 +87,7 @@ def solve(W, w0, kind, first, mu, state, direction, P, work):
         top = 1e-300
         for i in range(m):
             top = max(top, abs(P[i]))
-        if change <= SWEEP_TOL * top:
+        if change <= SWEEP_TOL * top or change != change:     # (NaN: no use sweeping on)
             break
     _states(P, kind, first, mu, state, direction)
     if _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
@@ -257,7 +257,8 @@ def _slide_spatial(W, f, mu, u1, u2, u3, P):
 @jit
 def _states(P, kind, first, mu, state, direction):
     """Each block's state as the impulses P say: open without a normal impulse, sticking inside the cone, else
-    sliding against the tangential impulse; a sliding spatial contact's slip direction -P_t / |P_t|."""
+    sliding against the tangential impulse; a sliding spatial contact's slip direction -P_t / |P_t| ((0, 0)
+    without friction, mu = 0: no P_t, and any slip will do)."""
     top = 1e-300
     for i in range(P.shape[0]):
         top = max(top, abs(P[i]))
@@ -277,7 +278,8 @@ def _states(P, kind, first, mu, state, direction):
             state[k] = STICK
         elif kind[k] == SPATIAL:
             state[k] = SLIDE
-            direction[k, 0], direction[k, 1] = -t1 / size, -t2 / size
+            if size > 0.0:
+                direction[k, 0], direction[k, 1] = -t1 / size, -t2 / size
         else:
             state[k] = SLIP_POS if t1 < 0.0 else SLIP_NEG
 
@@ -349,7 +351,8 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
 def _holds(kind, first, mu, state, direction, P, w, rows, n, tol_v):
     """Whether the impulses P and the velocities w after satisfy every condition of the states (to tol_v on the
     velocities, 1e-12 of the largest impulse on the impulses; NaN fails): w = 0 on the active set's n rows, and
-    each block's inequalities."""
+    each block's inequalities. (A slip's direction is not checked where mu = 0: the friction is nothing either
+    way; where mu > 0 a spatial slide's direction d must be a unit vector: its friction is -mu P_n d.)"""
     top = 1e-300
     for i in range(P.shape[0]):
         top = max(top, abs(P[i]))
@@ -369,9 +372,12 @@ def _holds(kind, first, mu, state, direction, P, w, rows, n, tol_v):
             ok = True
         elif s == STICK:
             ok = math.hypot(P[f + 1], P[f + 2] if kind[k] == SPATIAL else 0.0) <= mu[k] * P[f] + tol_p
+        elif mu[k] == 0.0:
+            ok = True
         elif kind[k] == SPATIAL:                    # the slip along d: no turn away from it, not reversed
             d1, d2 = direction[k, 0], direction[k, 1]
-            ok = abs(d1 * w[f + 2] - d2 * w[f + 1]) <= tol_v and d1 * w[f + 1] + d2 * w[f + 2] >= -tol_v
+            ok = (abs(d1 * w[f + 2] - d2 * w[f + 1]) <= tol_v and d1 * w[f + 1] + d2 * w[f + 2] >= -tol_v
+                  and abs(d1 * d1 + d2 * d2 - 1.0) <= 1e-12)
         else:
             ok = (1.0 if s == SLIP_POS else -1.0) * w[f + 1] >= -tol_v
         if not ok:
