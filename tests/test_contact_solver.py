@@ -213,7 +213,8 @@ def test_spatial_slide_with_an_anisotropic_inertia():
 @pytest.mark.parametrize("kind", [cs.PLANAR, cs.SPATIAL])
 def test_no_friction_on_tangent_rows(kind):
     """mu = 0 on a contact with tangent rows: no tangential impulse, the slip left as it comes (the Python twin
-    leaves this unverified: it checks the slip against a direction the zero friction does not have)."""
+    leaves the planar one unverified and raises on the spatial one: it checks the slip against a direction the
+    zero friction does not have, NaN in space)."""
     w0 = np.array([-1.0, 0.3, -0.2][:kind])               # (kind: the block's rows)
     P, state, direction, _, verified = solve(np.eye(kind), w0, [kind], [0.0])
     assert verified and np.array_equal(P, [1.0] + [0.0] * (kind - 1)) and np.array_equal(direction, [[0.0, 0.0]])

@@ -19,6 +19,7 @@ content (compiler.py), wherever the copy sits.
     sparse_rows.py the Gram solves along the tree of M and the rows' supports (banded factor, SVD per block)
     dynamics.py    the right-hand side of a flow, the multipliers, projection and the impact map
     slipping.py    a slipping contact's forces: friction in the normal row, the non-symmetric solve
+    contact_solver.py  the contact problem of a time step or an impact: impulses by Gauss-Seidel, then exact
     integrator.py  RK4 with event location, the hybrid step, evaluations over a run's log
     inputs.py      input callbacks: the model's and the run's, held values, tables
     api.py         the generated module's Python functions (rhs, mass_matrix, energy, ...)

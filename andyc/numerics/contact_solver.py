@@ -20,12 +20,14 @@ polish: the states found (open, stick, slip +/-, a spatial slide with its direct
 linear equations are solved in the least-norm least-squares sense (redundant rows allowed: a box flat on four
 corners has 12 rows on 6 speeds) and checked against every condition; a checked answer is exact to rounding,
 one that fails leaves the Gauss-Seidel answer (verified False). The states passed in are tried first (the warm
-start: a resting or sliding contact keeps its state, and the step costs one polish, no sweep).
+start: a resting or sliding contact keeps its state, and the step costs one polish, no sweep). Beyond the
+Python twin: where the active set's rows are dependent and the least-norm solution fails a check, the solution
+closest to the Gauss-Seidel answer (or to the warm start's impulses) is tried too (_polish).
 
 The polish's least squares: Householder QR with column pivoting (Businger & Golub 1965), the rank where a pivot
 falls below RANK_EPS of the first, then the complete orthogonal decomposition (R11 R12 -> T 0 by reflectors from
 the right, as LAPACK's xTZRZF) for the least-norm solution: np.linalg.lstsq's answer, written out so that no
-call allocates (np.linalg's do, in Numba). The only memory is the caller's `work` (work_size(m) float64s).
+call allocates (np.linalg's do, in Numba). The only memory is the caller's `work` (work_shape(m) float64s).
 """
 
 import math
@@ -105,15 +107,10 @@ def _sweep(W, w0, kind, first, mu, P):
     change = 0.0
     for k in range(kind.shape[0]):
         f, s = first[k], max(kind[k], 1)
-        u1 = u2 = u3 = 0.0
-        for r in range(f, f + s):   # the block's velocities without its own impulses (no cancellation with them)
-            v = w0[r] + _dot(W[r], P, 0, f) + _dot(W[r], P, f + s, m)
-            if r == f:
-                u1 = v
-            elif r == f + 1:
-                u2 = v
-            else:
-                u3 = v
+        # the block's velocities without its own impulses (summed without them: no cancellation)
+        u1 = w0[f] + _dot(W[f], P, 0, f) + _dot(W[f], P, f + s, m)
+        u2 = w0[f + 1] + _dot(W[f + 1], P, 0, f) + _dot(W[f + 1], P, f + s, m) if s > 1 else 0.0
+        u3 = w0[f + 2] + _dot(W[f + 2], P, 0, f) + _dot(W[f + 2], P, f + s, m) if s > 2 else 0.0
         o1, o2, o3 = P[f], P[f + 1] if s > 1 else 0.0, P[f + 2] if s > 2 else 0.0
         _local(W, f, kind[k], mu[k], u1, u2, u3, P)
         change = max(change, abs(P[f] - o1))
