@@ -87,9 +87,9 @@ def random_problem(seed):
     A = rng.normal(size=(m, nv))
     owner = np.repeat(np.arange(len(kind)), sizes)
     if seed % 3 == 2 and len(kind) > 1:
-        for _ in range(int(rng.integers(1, 4))):
-            i, j = rng.choice(m, 2, replace=False)
-            if owner[i] != owner[j]:                # (within one block: the local problem itself singular)
+        pairs = rng.choice(m, 2 * min(int(rng.integers(1, 4)), m // 2), replace=False).reshape(-1, 2)
+        for i, j in pairs:                      # (distinct rows, of two blocks: no local problem singular)
+            if owner[i] != owner[j]:
                 A[i] = A[j] * rng.uniform(0.5, 2.0)
     B = rng.normal(size=(nv, nv))
     W = A @ np.linalg.solve(B @ B.T + nv * np.eye(nv), A.T)
