@@ -101,12 +101,14 @@ def random_problem(seed):
 
 def test_random_problems_against_the_python_twin():
     """250 random problems (random_problem): on each the Python twin verifies (at least 200), the compiled solver
-    verifies too, with the same states (the sweeps taken may differ: roundings, where they converge slowly);
-    where W is positive definite the impulses agree to 1e-9 relative, elsewhere (impulses not unique) the
-    velocities w = w0 + W P do; and both answers satisfy every condition (checked here). Where the twin does not
-    verify, the compiled solver's answer, when it verifies (it also tries the solution closest to the
+    verifies too, and both answers satisfy every condition (checked here). Where W is positive definite the
+    impulses agree to 1e-9 relative, and the states and slip directions are the same; elsewhere the impulses
+    are not unique, the velocities w = w0 + W P agree to 1e-9 and the states do but for at most two problems
+    (where the impulses are not unique, neither need the active set be: roundings may tip a contact that carries
+    nothing in one solution, and in 1250 more problems one did so after 421 and 456 sweeps). Where the twin
+    does not verify, the compiled solver's answer, when it verifies (it also tries the solution closest to the
     Gauss-Seidel answer where the active set's rows are dependent), satisfies every condition too."""
-    both = definite = extra = 0
+    both = definite = extra = other = 0
     for seed in range(250):
         W, w0, kind, mu, pd = random_problem(seed)
         ref = cp.solve(W, w0, blocks_of(kind, mu))
@@ -120,17 +122,20 @@ def test_random_problems_against_the_python_twin():
         assert verified, seed
         check_conditions(W, w0, kind, mu, P)
         check_conditions(W, w0, kind, mu, ref.P)
-        assert list(state) == ref.states, seed
         scale = max(1.0, np.max(np.abs(w0)))
         assert np.max(np.abs(W @ (P - ref.P))) <= 1e-9 * scale, seed
         if pd:
             definite += 1
             assert np.max(np.abs(P - ref.P)) <= 1e-9 * np.max(np.abs(ref.P)), seed
-        for k in np.nonzero(state == cs.SLIDE)[0]:
-            if kind[k] == cs.SPATIAL:
-                assert np.allclose(direction[k], ref.directions[k], rtol=0, atol=1e-9)
-    print(f"both verified: {both} (W definite: {definite}); the compiled solver alone: {extra}")
-    assert both >= 200 and definite >= 60
+        if list(state) != ref.states:
+            assert not pd, seed
+            other += 1
+            continue
+        for k in np.nonzero((state == cs.SLIDE) & (kind == cs.SPATIAL))[0]:
+            assert np.allclose(direction[k], ref.directions[k], rtol=0, atol=1e-9), seed
+    print(f"both verified: {both} (W definite: {definite}; other states: {other}); the compiled solver alone: "
+          f"{extra}")
+    assert both >= 200 and definite >= 60 and other <= 2
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2, 4, 8])

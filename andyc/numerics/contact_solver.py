@@ -461,17 +461,7 @@ def _factor(K, b, n, vn1, vn2, tau, perm, v, s):
         t = _reflector(v, k + 1, n, k)
         K[k, k] = v[k]
         if t != 0.0:                        # the later columns j: K[k:, j] -= t v (v . K[k:, j]), row by row
-            for j in range(k + 1, n):
-                s[j] = K[k, j]
-            for i in range(k + 1, n):
-                for j in range(k + 1, n):
-                    s[j] += v[i] * K[i, j]
-            for j in range(k + 1, n):
-                s[j] *= t
-                K[k, j] -= s[j]
-            for i in range(k + 1, n):
-                for j in range(k + 1, n):
-                    K[i, j] -= v[i] * s[j]
+            _update(K, v, s, k, n, t)
             _reflect(v, b, k + 1, n, k, t)
         for j in range(k + 1, n):           # the columns' norms below row k, updated (LAPACK's xLAQP2)
             if vn1[j] != 0.0:
@@ -494,6 +484,27 @@ def _factor(K, b, n, vn1, vn2, tau, perm, v, s):
     for l in range(r - 1, -1, -1):          # T^-1 (Q^T b)[:r]
         b[l] = (b[l] - _dot(K[l], b, l + 1, r)) / K[l, l]
     return r
+
+
+@jit
+def _update(K, v, s, k, n, t):
+    """K[k:n, k + 1:n] <- H K[k:n, k + 1:n], H = I - t v v^T (v[k] = 1, its tail in v[k + 1:n]): s = t v^T K, then
+    K -= v s, both row by row over views indexed from 0, which LLVM vectorizes (indices it cannot prove
+    non-negative carry Numba's wraparound test, which keeps it from that: 3x slower)."""
+    sk, Kk = s[k + 1:n], K[k, k + 1:n]
+    for j in range(n - k - 1):
+        sk[j] = Kk[j]
+    for i in range(k + 1, n):
+        Ki, vi = K[i, k + 1:n], v[i]
+        for j in range(n - k - 1):
+            sk[j] += vi * Ki[j]
+    for j in range(n - k - 1):
+        sk[j] *= t
+        Kk[j] -= sk[j]
+    for i in range(k + 1, n):
+        Ki, vi = K[i, k + 1:n], v[i]
+        for j in range(n - k - 1):
+            Ki[j] -= vi * sk[j]
 
 
 @jit
