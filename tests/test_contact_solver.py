@@ -72,9 +72,9 @@ def test_constants_are_the_python_twins():
 
 def random_problem(seed):
     """A random problem of up to 40 rows: mixed blocks; W = A M^-1 A^T of random A and SPD M. Seeds % 3: 0, as
-    many speeds as rows or more (W positive definite); 1, fewer speeds than rows; 2, some rows copies (scaled) of
-    another block's (redundant contacts). w0 = A v (the rows' velocities at a random v, consistent however
-    redundant)."""
+    many speeds as rows or more (W positive definite); 1, fewer speeds than rows (at least 3); 2, as 1, and some
+    rows copies (scaled) of another block's (redundant contacts). w0 = A v (the rows' velocities at a random v,
+    consistent however redundant). Returns (W, w0, kind, mu, whether W is positive definite)."""
     rng = np.random.default_rng(seed)
     kind = rng.choice([cs.BILATERAL, cs.NORMAL, cs.PLANAR, cs.SPATIAL], size=int(rng.integers(1, 15)),
                       p=[0.1, 0.2, 0.3, 0.4])
