@@ -20,6 +20,7 @@ content (compiler.py), wherever the copy sits.
     active.py      the rows active at an instant: the flow's own and the closed contacts' (modes in d)
     dynamics.py    the right-hand side of a flow, the multipliers, projection and the impact map
     slipping.py    a slipping contact's forces: friction in the normal row, the non-symmetric solve
+    contact_solver.py  the contact problem of a time step or an impact: impulses by Gauss-Seidel, then exact
     integrator.py  RK4 with event location, the hybrid step, evaluations over a run's log
     inputs.py      input callbacks: the model's and the run's, held values, tables
     api.py         the generated module's Python functions (rhs, mass_matrix, energy, ...)

@@ -20,12 +20,14 @@ polish: the states found (open, stick, slip +/-, a spatial slide with its direct
 linear equations are solved in the least-norm least-squares sense (redundant rows allowed: a box flat on four
 corners has 12 rows on 6 speeds) and checked against every condition; a checked answer is exact to rounding,
 one that fails leaves the Gauss-Seidel answer (verified False). The states passed in are tried first (the warm
-start: a resting or sliding contact keeps its state, and the step costs one polish, no sweep).
+start: a resting or sliding contact keeps its state, and the step costs one polish, no sweep). Beyond the
+Python twin: where the active set's rows are dependent and the least-norm solution fails a check, the solution
+closest to the Gauss-Seidel answer (or to the warm start's impulses) is tried too (_polish).
 
 The polish's least squares: Householder QR with column pivoting (Businger & Golub 1965), the rank where a pivot
 falls below RANK_EPS of the first, then the complete orthogonal decomposition (R11 R12 -> T 0 by reflectors from
 the right, as LAPACK's xTZRZF) for the least-norm solution: np.linalg.lstsq's answer, written out so that no
-call allocates (np.linalg's do, in Numba). The only memory is the caller's `work` (work_size(m) float64s).
+call allocates (np.linalg's do, in Numba). The only memory is the caller's `work` (work_shape(m) float64s).
 """
 
 import math
@@ -87,7 +89,7 @@ def solve(W, w0, kind, first, mu, state, direction, P, work):
         top = 1e-300
         for i in range(m):
             top = max(top, abs(P[i]))
-        if change <= SWEEP_TOL * top:
+        if change <= SWEEP_TOL * top or change != change:     # (NaN: no use sweeping on)
             break
     _states(P, kind, first, mu, state, direction)
     if _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
@@ -105,19 +107,10 @@ def _sweep(W, w0, kind, first, mu, P):
     change = 0.0
     for k in range(kind.shape[0]):
         f, s = first[k], max(kind[k], 1)
-        u1 = u2 = u3 = 0.0
-        for r in range(f, f + s):   # the block's velocities without its own impulses (no cancellation with them)
-            v = w0[r]
-            for j in range(f):
-                v += W[r, j] * P[j]
-            for j in range(f + s, m):
-                v += W[r, j] * P[j]
-            if r == f:
-                u1 = v
-            elif r == f + 1:
-                u2 = v
-            else:
-                u3 = v
+        # the block's velocities without its own impulses (summed without them: no cancellation)
+        u1 = w0[f] + _dot(W[f], P, 0, f) + _dot(W[f], P, f + s, m)
+        u2 = w0[f + 1] + _dot(W[f + 1], P, 0, f) + _dot(W[f + 1], P, f + s, m) if s > 1 else 0.0
+        u3 = w0[f + 2] + _dot(W[f + 2], P, 0, f) + _dot(W[f + 2], P, f + s, m) if s > 2 else 0.0
         o1, o2, o3 = P[f], P[f + 1] if s > 1 else 0.0, P[f + 2] if s > 2 else 0.0
         _local(W, f, kind[k], mu[k], u1, u2, u3, P)
         change = max(change, abs(P[f] - o1))
@@ -261,7 +254,8 @@ def _slide_spatial(W, f, mu, u1, u2, u3, P):
 @jit
 def _states(P, kind, first, mu, state, direction):
     """Each block's state as the impulses P say: open without a normal impulse, sticking inside the cone, else
-    sliding against the tangential impulse; a sliding spatial contact's slip direction -P_t / |P_t|."""
+    sliding against the tangential impulse; a sliding spatial contact's slip direction -P_t / |P_t| ((0, 0)
+    without friction, mu = 0: no P_t, and any slip will do)."""
     top = 1e-300
     for i in range(P.shape[0]):
         top = max(top, abs(P[i]))
@@ -281,7 +275,8 @@ def _states(P, kind, first, mu, state, direction):
             state[k] = STICK
         elif kind[k] == SPATIAL:
             state[k] = SLIDE
-            direction[k, 0], direction[k, 1] = -t1 / size, -t2 / size
+            if size > 0.0:
+                direction[k, 0], direction[k, 1] = -t1 / size, -t2 / size
         else:
             state[k] = SLIP_POS if t1 < 0.0 else SLIP_NEG
 
@@ -300,7 +295,7 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
     m = w0.shape[0]
     cand, w, b, y, z, vn1, vn2, tau = work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7]
     c1, c2, rows, perm = work[8], work[9], work[10], work[11]   # (rows, perm: integers, as floats)
-    C = work[VECTORS:]                  # the reduced system K = C^T, by columns: C[j, :n] = K[:, j]
+    K = work[VECTORS:]                  # the reduced system, K[:n, :n]
     n = np.int64(0)     # (not the literal 0: Numba would compile the calls below once more for it)
     for k in range(kind.shape[0]):
         f, s = first[k], state[k]
@@ -325,14 +320,14 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
                 v += c1[j] * W[q, r + 1]
             if c2[j] != 0.0:
                 v += c2[j] * W[q, r + 2]
-            C[j, i] = v
-    rank = _factor(C, b, n, vn1, vn2, tau, perm)
+            K[i, j] = v
+    rank = _factor(K, b, n, vn1, vn2, tau, perm, y, z)
     for closest in (False, True):
         if closest and rank == n:           # (a unique solution: nothing else to try)
             break
         for j in range(n):                  # (P's coefficients: column j is P's only one with a 1 at rows[j])
             vn1[j] = P[int(rows[j])]
-        _solution(C, b, y, n, rank, tau, perm, vn1, closest, z)
+        _solution(K, b, y, n, rank, tau, perm, vn1, closest, z)
         for i in range(m):
             cand[i] = 0.0
         for j in range(n):
@@ -343,10 +338,7 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
             if c2[j] != 0.0:
                 cand[r + 2] += c2[j] * y[j]
         for i in range(m):
-            v = w0[i]
-            for j in range(m):
-                v += W[i, j] * cand[j]
-            w[i] = v
+            w[i] = w0[i] + _dot(W[i], cand, 0, m)
         if _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v):
             return True
     return False
@@ -356,7 +348,8 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
 def _holds(kind, first, mu, state, direction, P, w, rows, n, tol_v):
     """Whether the impulses P and the velocities w after satisfy every condition of the states (to tol_v on the
     velocities, 1e-12 of the largest impulse on the impulses; NaN fails): w = 0 on the active set's n rows, and
-    each block's inequalities."""
+    each block's inequalities. (A slip's direction is not checked where mu = 0: the friction is nothing either
+    way; where mu > 0 a spatial slide's direction d must be a unit vector: its friction is -mu P_n d.)"""
     top = 1e-300
     for i in range(P.shape[0]):
         top = max(top, abs(P[i]))
@@ -376,9 +369,12 @@ def _holds(kind, first, mu, state, direction, P, w, rows, n, tol_v):
             ok = True
         elif s == STICK:
             ok = math.hypot(P[f + 1], P[f + 2] if kind[k] == SPATIAL else 0.0) <= mu[k] * P[f] + tol_p
+        elif mu[k] == 0.0:
+            ok = True
         elif kind[k] == SPATIAL:                    # the slip along d: no turn away from it, not reversed
             d1, d2 = direction[k, 0], direction[k, 1]
-            ok = abs(d1 * w[f + 2] - d2 * w[f + 1]) <= tol_v and d1 * w[f + 1] + d2 * w[f + 2] >= -tol_v
+            ok = (abs(d1 * w[f + 2] - d2 * w[f + 1]) <= tol_v and d1 * w[f + 1] + d2 * w[f + 2] >= -tol_v
+                  and abs(d1 * d1 + d2 * d2 - 1.0) <= 1e-12)
         else:
             ok = (1.0 if s == SLIP_POS else -1.0) * w[f + 1] >= -tol_v
         if not ok:
@@ -387,13 +383,29 @@ def _holds(kind, first, mu, state, direction, P, w, rows, n, tol_v):
 
 
 @jit
+def _dot(x, y, lo, hi):
+    """The sum of x[i] y[i] over lo .. hi - 1, in four interleaved sums: four chains of dependent additions rather
+    than one, a few times faster (Numba keeps the order of floating-point additions, so it cannot do this)."""
+    s0 = s1 = s2 = s3 = 0.0
+    i = lo
+    while i + 4 <= hi:
+        s0 += x[i] * y[i]
+        s1 += x[i + 1] * y[i + 1]
+        s2 += x[i + 2] * y[i + 2]
+        s3 += x[i + 3] * y[i + 3]
+        i += 4
+    while i < hi:
+        s0 += x[i] * y[i]
+        i += 1
+    return (s0 + s1) + (s2 + s3)
+
+
+@jit
 def _reflector(x, lo, hi, at):
     """The Householder reflector H = I - tau v v^T with H x = (beta, 0, ..) over the entries `at`, lo .. hi - 1 of
     the row x (LAPACK's xLARFG): v's tail is left in x[lo:hi] (its head is 1), beta in x[at]; returns tau."""
     alpha = x[at]
-    tail = 0.0
-    for i in range(lo, hi):
-        tail += x[i] * x[i]
+    tail = _dot(x, x, lo, hi)
     if tail == 0.0:
         return 0.0
     beta = -math.copysign(math.sqrt(alpha * alpha + tail), alpha)
@@ -407,28 +419,27 @@ def _reflector(x, lo, hi, at):
 @jit
 def _reflect(v, x, lo, hi, at, tau):
     """x <- H x for the reflector _reflector left in v (its head at `at`, tail lo .. hi - 1)."""
-    s = x[at]
-    for i in range(lo, hi):
-        s += v[i] * x[i]
-    s *= tau
+    s = tau * (x[at] + _dot(v, x, lo, hi))
     x[at] -= s
     for i in range(lo, hi):
         x[i] -= s * v[i]
 
 
 @jit
-def _factor(C, b, n, vn1, vn2, tau, perm):
-    """The complete orthogonal decomposition K Pi = Q [T 0; 0 0] Z of K = C^T (n x n, C[j] its column j), in
-    place; b[:r] <- T^-1 (Q^T b)[:r]; returns the rank r. Householder QR with column pivoting, stopped where the
-    largest column left is below RANK_EPS |R_00| (the rest of R is rounding: dependent columns), then [R11 R12]
-    = [T 0] Z by r reflectors from the right, each on coordinates l and r .. n - 1 (their tails left in
-    C[r:, l], their tau in tau[l]). R[i, j] is at C[j, i]."""
+def _factor(K, b, n, vn1, vn2, tau, perm, v, s):
+    """The complete orthogonal decomposition K Pi = Q [T 0; 0 0] Z of K[:n, :n], in place; b[:r] <- T^-1 (Q^T
+    b)[:r]; returns the rank r. Householder QR with column pivoting, stopped where the largest column left is
+    below RANK_EPS |R_00| (the rest of R is rounding: dependent columns); then [R11 R12] = [T 0] Z by r
+    reflectors from the right, each on coordinates l and r .. n - 1 (bottom row first, as LAPACK's xLATRZ),
+    their tails left in K[l, r:n], their tau in tau[l]. v, s: scratch."""
     for j in range(n):
         perm[j] = j
-        s = 0.0
-        for i in range(n):
-            s += C[j, i] * C[j, i]
-        vn1[j] = vn2[j] = math.sqrt(s)
+        vn1[j] = 0.0
+    for i in range(n):
+        for j in range(n):
+            vn1[j] += K[i, j] * K[i, j]
+    for j in range(n):
+        vn1[j] = vn2[j] = math.sqrt(vn1[j])
     r, top = n, 0.0
     for k in range(n):
         p = k
@@ -437,91 +448,79 @@ def _factor(C, b, n, vn1, vn2, tau, perm):
                 p = j
         if p != k:
             for i in range(n):
-                C[k, i], C[p, i] = C[p, i], C[k, i]
+                K[i, k], K[i, p] = K[i, p], K[i, k]
             perm[k], perm[p] = perm[p], perm[k]
             vn1[k], vn1[p], vn2[k], vn2[p] = vn1[p], vn1[k], vn2[p], vn2[k]
-        pivot = 0.0
-        for i in range(k, n):               # (the pivot's norm afresh: the updated one may have lost digits)
-            pivot += C[k, i] * C[k, i]
-        pivot = math.sqrt(pivot)
+        for i in range(k, n):               # (column k, contiguous; its norm afresh: the updated one lost digits)
+            v[i] = K[i, k]
+        pivot = math.sqrt(_dot(v, v, k, n))
         top = pivot if k == 0 else top
         if not pivot > RANK_EPS * top:
             r = k
             break
-        t = _reflector(C[k], k + 1, n, k)
-        if t != 0.0:
-            for j in range(k + 1, n):
-                _reflect(C[k], C[j], k + 1, n, k, t)
-            _reflect(C[k], b, k + 1, n, k, t)
+        t = _reflector(v, k + 1, n, k)
+        K[k, k] = v[k]
+        if t != 0.0:                        # the later columns j: K[k:, j] -= t v (v . K[k:, j]), row by row
+            _update(K, v, s, k, n, t)
+            _reflect(v, b, k + 1, n, k, t)
         for j in range(k + 1, n):           # the columns' norms below row k, updated (LAPACK's xLAQP2)
             if vn1[j] != 0.0:
-                q = abs(C[j, k]) / vn1[j]
+                q = abs(K[k, j]) / vn1[j]
                 q = max(0.0, (1.0 - q) * (1.0 + q))
                 if q * (vn1[j] / vn2[j]) ** 2 <= TOL3Z:
-                    s = 0.0
+                    q = 0.0
                     for i in range(k + 1, n):
-                        s += C[j, i] * C[j, i]
-                    vn1[j] = vn2[j] = math.sqrt(s)
+                        q += K[i, j] * K[i, j]
+                    vn1[j] = vn2[j] = math.sqrt(q)
                 else:
                     vn1[j] *= math.sqrt(q)
-    for l in range(r - 1, -1, -1):          # [R11 R12] -> [T 0], bottom row first (LAPACK's xLATRZ)
+    for l in range(r - 1, -1, -1):          # [R11 R12] -> [T 0] (no reflector where the rank is full)
         if r == n:
             break
-        alpha, tail = C[l, l], 0.0
-        for i in range(r, n):
-            tail += C[i, l] * C[i, l]
-        tau[l] = 0.0
-        if tail == 0.0:
-            continue
-        beta = -math.copysign(math.sqrt(alpha * alpha + tail), alpha)
-        scale = 1.0 / (alpha - beta)
-        for i in range(r, n):
-            C[i, l] *= scale
-        C[l, l] = beta
-        t = tau[l] = (beta - alpha) / beta
-        for p in range(l):                  # the rows above, from the right: R[p, l] = C[l, p], R[p, r:] = C[r:, p]
-            s = C[l, p]
-            for i in range(r, n):
-                s += C[i, l] * C[i, p]
-            s *= t
-            C[l, p] -= s
-            for i in range(r, n):
-                C[i, p] -= s * C[i, l]
-    for l in range(r - 1, -1, -1):          # T^-1 (Q^T b)[:r], T[l, i] = C[i, l]
-        s = b[l]
-        for i in range(l + 1, r):
-            s -= C[i, l] * b[i]
-        b[l] = s / C[l, l]
+        t = tau[l] = _reflector(K[l], r, n, l)
+        if t != 0.0:
+            for p in range(l):
+                _reflect(K[l], K[p], r, n, l, t)
+    for l in range(r - 1, -1, -1):          # T^-1 (Q^T b)[:r]
+        b[l] = (b[l] - _dot(K[l], b, l + 1, r)) / K[l, l]
     return r
 
 
 @jit
-def _solution(C, q, y, n, r, tau, perm, ref, closest, z):
+def _update(K, v, s, k, n, t):
+    """K[k:n, k + 1:n] <- H K[k:n, k + 1:n], H = I - t v v^T (v[k] = 1, its tail in v[k + 1:n]): s = t v^T K, then
+    K -= v s, both row by row over views indexed from 0, which LLVM vectorizes (indices it cannot prove
+    non-negative carry Numba's wraparound test, which keeps it from that: 3x slower)."""
+    sk, Kk = s[k + 1:n], K[k, k + 1:n]
+    for j in range(n - k - 1):
+        sk[j] = Kk[j]
+    for i in range(k + 1, n):
+        Ki, vi = K[i, k + 1:n], v[i]
+        for j in range(n - k - 1):
+            sk[j] += vi * Ki[j]
+    for j in range(n - k - 1):
+        sk[j] *= t
+        Kk[j] -= sk[j]
+    for i in range(k + 1, n):
+        Ki, vi = K[i, k + 1:n], v[i]
+        for j in range(n - k - 1):
+            Ki[j] -= vi * sk[j]
+
+
+@jit
+def _solution(K, q, y, n, r, tau, perm, ref, closest, z):
     """y[:n] <- Pi Z^T (q[:r], f) of _factor's K Pi = Q [T 0; 0 0] Z, q[:r] = T^-1 (Q^T b)[:r]: a least-squares
     solution of K y = b: the least-norm one (f = 0), or with `closest`, the one closest to ref (f = (Z Pi^T ref)[r:],
     its part along K's null space). z: scratch."""
     for j in range(n):
         z[j] = ref[int(perm[j])] if closest else 0.0
-    if closest:
+    if closest and r < n:
         for l in range(r - 1, -1, -1):      # Z z = H_0 .. H_r-1 z
-            _apply(C, z, n, r, l, tau[l])
+            _reflect(K[l], z, r, n, l, tau[l])
     for j in range(r):
         z[j] = q[j]
-    for l in range(r):                      # Z^T z = H_r-1 .. H_0 z
-        _apply(C, z, n, r, l, tau[l])
+    if r < n:
+        for l in range(r):                  # Z^T z = H_r-1 .. H_0 z
+            _reflect(K[l], z, r, n, l, tau[l])
     for j in range(n):
         y[int(perm[j])] = z[j]
-
-
-@jit
-def _apply(C, z, n, r, l, t):
-    """z <- H_l z, H_l = I - t u u^T, u = e_l + its tail C[r:, l] (a reflector of _factor's [R11 R12] -> [T 0])."""
-    if t == 0.0 or r == n:
-        return
-    s = z[l]
-    for i in range(r, n):
-        s += C[i, l] * z[i]
-    s *= t
-    z[l] -= s
-    for i in range(r, n):
-        z[i] -= s * C[i, l]
