@@ -85,7 +85,7 @@ class UrdfModel:
 
 
 MAX_URDF_BYTES = 50_000_000       # robots are large, and lxml reads them fast
-LIMITS_DEFAULT = True             # `urdf: {limits: ...}` when not given: joint limits are stops
+LIMITS_DEFAULT = False            # TEMPORARY (drop with the contact redesign): True, joint limits are stops
 
 
 @dataclass(frozen=True)
