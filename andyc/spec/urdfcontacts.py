@@ -181,12 +181,7 @@ class ContactWriter:
                 text = limit.get(side)
                 if text is None:
                     continue
-                try:
-                    value = float(text)
-                except ValueError:
-                    self.reader.error(limit, label, f"the {side} limit {text!r} is not a number",
-                                      f'write {side}="{"-" if side == "lower" else ""}1.57" (rad or m)')
-                    continue
+                value = float(text)                 # a number: checked by the reader
                 if math.isfinite(value):
                     bounds[side] = value
             if len(bounds) == 2 and not bounds["lower"] < bounds["upper"]:

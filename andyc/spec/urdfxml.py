@@ -187,6 +187,14 @@ class XmlReader:
                 if kind in ("planar", "floating"):
                     self.error(mimic, label + ".mimic", f"a {kind} joint cannot mimic another joint",
                                "mimic joints are revolute, continuous or prismatic; remove the <mimic>")
+            limit = j.find("limit")
+            for attribute in ("lower", "upper", "effort", "velocity"):
+                text = limit.get(attribute) if limit is not None else None
+                try:
+                    float(text) if text is not None else None
+                except ValueError:
+                    self.error(limit, f"{label}.limit.{attribute}", f"expected a number, got {text!r}",
+                               f'write {attribute}="1.57" (rad or m; -1.57 for a lower limit)')
             dynamics = j.find("dynamics")
             if dynamics is not None:
                 for attribute in ("damping", "friction"):
