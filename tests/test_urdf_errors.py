@@ -186,11 +186,19 @@ def test_unknown_visual_geometry(tmp_path):
 
 
 def test_what_yourdfpy_refuses_is_located_by_its_value(tmp_path):
-    """A bad number in an element andyc does not read (a limit) is still reported at its line."""
+    """A bad number in an element andyc does not read (a safety controller) is still reported at its line."""
+    text = edit(ARM, '<axis xyz="0 0 1"/>', '<axis xyz="0 0 1"/>\n    <safety_controller k_velocity="lots"/>')
+    d = one_problem(tmp_path, text)
+    assert (d.line, d.path) == (line_of(text, 'k_velocity="lots"'), "safety_controller")
+    assert d.message == "yourdfpy cannot read the URDF: could not convert string to float: 'lots'"
+
+
+def test_a_limit_that_is_not_a_number_is_located_at_its_attribute(tmp_path):
+    """andyc reads a limit's lower and upper (joint-limit stops), and checks all four of its numbers first."""
     text = edit(ARM, '<axis xyz="0 0 1"/>', '<axis xyz="0 0 1"/>\n    <limit effort="lots" velocity="1"/>')
     d = one_problem(tmp_path, text)
-    assert (d.line, d.path) == (line_of(text, 'effort="lots"'), "limit")
-    assert d.message == "yourdfpy cannot read the URDF: could not convert string to float: 'lots'"
+    assert (d.line, d.path) == (line_of(text, 'effort="lots"'), "joint[shoulder].limit.effort")
+    assert d.message == "expected a number, got 'lots'"
 
 
 # -- what andyc does not use, and what it keeps -----------------------------------------
