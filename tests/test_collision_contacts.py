@@ -269,7 +269,8 @@ def write_model(tmp_path, name: str, urdf_text: str | None, options: str, ground
 
 def test_go1_feet_against_pinocchio(tmp_path, monkeypatch):
     """Go1 floating, its four foot spheres (r = 0.02) on a tilted ground with friction, its 12 joints' stops."""
-    path, urdf = write_model(tmp_path, "go1", None, 'base: floating, collide: ["*_foot"], friction: 0.7, limits: true', TILTED)
+    path, urdf = write_model(tmp_path, "go1", None, 'base: floating, collide: ["*_foot"], friction: 0.7, limits: true',
+                             TILTED)
     spec = rows_spec(path, monkeypatch)
     rows = Rows(spec)
     model = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer())

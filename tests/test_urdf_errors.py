@@ -12,6 +12,7 @@ import pytest
 
 import andyc
 from andyc.errors import SpecError
+from andyc.spec.urdf import LIMITS_DEFAULT
 from tests.support import ROBOTS_DIR
 from tests.support import diagnostics
 from tests.support.cli import andyc_cli, check
@@ -223,8 +224,10 @@ def test_unused_elements_are_listed_once_in_one_warning(tmp_path):
     assert len(unused) == 1
     w = unused[0]
     assert w.file == str(tmp_path / "arm.urdf") and w.line == line_of(text, "<collision>")     # the first
-    for kind in ("2 <joint><limit>", "1 <joint><safety_controller>", "1 <dynamics friction>",
-                 "1 <link><collision>", "1 <transmission>", "2 <gazebo>", "1 <material>"):
+    # limits are stops by default (LIMITS_DEFAULT): their lower and upper used, effort and velocity not
+    limits = ("2 <limit effort>", "2 <limit velocity>") if LIMITS_DEFAULT else ("2 <joint><limit>",)
+    for kind in limits + ("1 <joint><safety_controller>", "1 <dynamics friction>",
+                          "1 <link><collision>", "1 <transmission>", "2 <gazebo>", "1 <material>"):
         assert w.message.count(kind) == 1, (kind, w.message)
     assert "visual" not in w.message.split(":", 1)[1].split(";")[0]       # visuals are kept, not unused
     # The damping is used: a damper on the joint's coordinate.
