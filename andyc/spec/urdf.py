@@ -33,11 +33,14 @@ How URDF maps onto andyc:
                             inequality broken, no mass) is kept as written, as Pinocchio
                             does, and named in a warning
     visual                  kept as a reference in Spec.visuals (link, geometry, file, origin)
+    limit lower, upper      stops: contacts <joint>_lower, <joint>_upper (urdf: {limits: false}: none)
+    collision               contacts on the model's ground, for the links named in urdf: {collide: [...]}
+                            (andyc.spec.urdfcontacts, andyc.spec.geometry)
 
 Gravity is [0, 0, -g] with a parameter g = 9.81 (URDF has none). Everything
-else a URDF may hold (limits, friction, safety controllers, calibration,
-collision geometry, transmissions, gazebo tags, materials, unknown tags) is
-counted and named in one warning; nothing is dropped silently.
+else a URDF may hold (effort and velocity limits, friction, safety controllers,
+calibration, other collision geometry, transmissions, gazebo tags, materials,
+unknown tags) is counted and named in one warning; nothing is dropped silently.
 
 The work is split by what is read: andyc.spec.urdfxml checks the XML and keeps its lines,
 andyc.spec.urdfjoints turns the joints into coordinates (lock, mimic), andyc.spec.urdflinks the
@@ -47,8 +50,10 @@ the result with a YAML model's own keys.
 Options (the `urdf:` key of a YAML model): file, base (fixed | floating),
 position and quaternion (the root's pose in world; for a floating base, the
 initial pose), root (keep the subtree of this link), lock (joint: value, held
-at that value, no degree of freedom) and package_paths (folders searched for
-`package://` files).
+at that value, no degree of freedom), package_paths (folders searched for
+`package://` files), collide (links or fnmatch patterns whose <collision> shapes
+touch the YAML's `ground:`) with friction and restitution (their contacts'),
+and limits (joint limits as stops; default true).
 """
 
 from __future__ import annotations
