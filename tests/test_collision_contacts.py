@@ -568,3 +568,23 @@ def test_collision_mesh_is_warned_with_its_link(tmp_path, monkeypatch):
     warning = next(w for w in spec.warnings if "collision mesh" in w.message)
     assert "fore" in warning.message and warning.line == line_of(meshed, "hand.stl")
     assert {c.name for c in spec.constraints if c.holonomic} == {f"fore_1_rim_{e}_{k}" for e in "pm" for k in range(8)}
+
+
+def test_a_ground_nothing_touches_is_warned(tmp_path):
+    text = BALL.replace(", collide: true, friction: mu, restitution: e", "")
+    (tmp_path / "m.yaml").write_text(text)
+    spec = andyc.load(tmp_path / "m.yaml")
+    warning = next(w for w in spec.warnings if "nothing collides" in w.message)
+    assert (warning.line, warning.path) == (line_of(text, "ground:"), "ground")
+
+
+def test_generated_names_that_clash_in_a_urdf_are_located_there(tmp_path):
+    """Link 'fore' has two <collision>s (fore_0_..., fore_1_...); a link named 'fore_0' with a sphere makes
+    'fore_0_sphere' again."""
+    clash = ARM.replace("</robot>", """  <joint name="tip" type="fixed"><parent link="fore"/><child link="fore_0"/></joint>
+  <link name="fore_0"><collision><geometry><sphere radius="0.01"/></geometry></collision></link>
+</robot>""")
+    text, found = urdf_problems(tmp_path, "  collide: [fore, fore_0]\n  friction: 0.5", urdf_text=clash)
+    assert len(found) == 1 and found[0].file == str(tmp_path / "arm.urdf")
+    assert found[0].line == line_of(clash, '<link name="fore_0">')
+    assert "the name 'fore_0_sphere' is also made from link[fore].collision" in found[0].message

@@ -64,11 +64,11 @@ import numpy as np
 
 from andyc.errors import Diagnostic
 from andyc.spec.expressions import ExpressionError, parse
+from andyc.spec.frames import AXES
+from andyc.spec.urdflinks import rpy_matrix
 from andyc.spec.yamlpos import SourceMap
 
 RIM_POINTS = 8                  # points per rim circle of a cylinder
-AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0),
-        "-x": (-1.0, 0.0, 0.0), "-y": (0.0, -1.0, 0.0), "-z": (0.0, 0.0, -1.0)}
 PRIMITIVES = ("sphere", "box", "cylinder", "capsule")
 
 
@@ -137,15 +137,6 @@ def _direction(value) -> np.ndarray | None:
 
 
 # -- shapes -> points ---------------------------------------------------------
-
-def rpy_matrix(rpy) -> np.ndarray:
-    """R = Rz(yaw) Ry(pitch) Rx(roll) (URDF's and a YAML shape's roll-pitch-yaw)."""
-    r, p, y = rpy
-    cr, sr, cp, sp_, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return np.array([[cy * cp, cy * sp_ * sr - sy * cr, cy * sp_ * cr + sy * sr],
-                     [sy * cp, sy * sp_ * sr + cy * cr, sy * sp_ * cr - cy * sr],
-                     [-sp_, cp * sr, cp * cr]])
-
 
 def _perpendicular(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(e1, e2): orthonormal, perpendicular to the unit vector a, e1 x e2 = a; (x, y) for a = z."""
