@@ -157,7 +157,7 @@ def collision_points(model, geom, gdata, data):
     return out
 
 
-def expected(model, data, points: dict, ground: dict, q, v) -> dict:
+def expected(model, data, points: dict, ground: dict) -> dict:
     """contact -> (gap, gap rate, slip 1, slip 2) from Pinocchio: the contact point p - r n moves at
     v_p + w x (-r n), v_p = v_frame + w x (p - frame origin) (LOCAL_WORLD_ALIGNED: world axes)."""
     n, h, t1, t2 = plane(ground)
@@ -244,7 +244,7 @@ def compare(rows: Rows, model, urdf, base_link, ground: dict, seed: int) -> tupl
         pin.updateFramePlacements(model, data)
         pin.updateGeometryPlacements(model, data, geom, gdata)
         points = collision_points(model, geom, gdata, data)
-        want = expected(model, data, points, ground, q, v)
+        want = expected(model, data, points, ground)
         phi, c, A = rows(x)
         speeds = x[rows.module().NQ:rows.module().NQ + rows.module().NV]
         assert np.abs(A @ speeds - c).max() < TOL, "the rows are A v (no term without speeds)"
