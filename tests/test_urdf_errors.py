@@ -12,6 +12,7 @@ import pytest
 
 import andyc
 from andyc.errors import SpecError
+from andyc.spec.urdf import LIMITS_DEFAULT
 from tests.support import ROBOTS_DIR
 from tests.support import diagnostics
 from tests.support.cli import andyc_cli, check
@@ -186,11 +187,19 @@ def test_unknown_visual_geometry(tmp_path):
 
 
 def test_what_yourdfpy_refuses_is_located_by_its_value(tmp_path):
-    """A bad number in an element andyc does not read (a limit) is still reported at its line."""
+    """A bad number in an element andyc does not read (a safety controller) is still reported at its line."""
+    text = edit(ARM, '<axis xyz="0 0 1"/>', '<axis xyz="0 0 1"/>\n    <safety_controller k_velocity="lots"/>')
+    d = one_problem(tmp_path, text)
+    assert (d.line, d.path) == (line_of(text, 'k_velocity="lots"'), "safety_controller")
+    assert d.message == "yourdfpy cannot read the URDF: could not convert string to float: 'lots'"
+
+
+def test_a_limit_that_is_not_a_number_is_located_at_its_attribute(tmp_path):
+    """andyc reads a limit's lower and upper (joint-limit stops), and checks all four of its numbers first."""
     text = edit(ARM, '<axis xyz="0 0 1"/>', '<axis xyz="0 0 1"/>\n    <limit effort="lots" velocity="1"/>')
     d = one_problem(tmp_path, text)
-    assert (d.line, d.path) == (line_of(text, 'effort="lots"'), "limit")
-    assert d.message == "yourdfpy cannot read the URDF: could not convert string to float: 'lots'"
+    assert (d.line, d.path) == (line_of(text, 'effort="lots"'), "joint[shoulder].limit.effort")
+    assert d.message == "expected a number, got 'lots'"
 
 
 # -- what andyc does not use, and what it keeps -----------------------------------------
@@ -215,8 +224,10 @@ def test_unused_elements_are_listed_once_in_one_warning(tmp_path):
     assert len(unused) == 1
     w = unused[0]
     assert w.file == str(tmp_path / "arm.urdf") and w.line == line_of(text, "<collision>")     # the first
-    for kind in ("2 <joint><limit>", "1 <joint><safety_controller>", "1 <dynamics friction>",
-                 "1 <link><collision>", "1 <transmission>", "2 <gazebo>", "1 <material>"):
+    # limits are stops by default (LIMITS_DEFAULT): their lower and upper used, effort and velocity not
+    limits = ("2 <limit effort>", "2 <limit velocity>") if LIMITS_DEFAULT else ("2 <joint><limit>",)
+    for kind in limits + ("1 <joint><safety_controller>", "1 <dynamics friction>",
+                          "1 <link><collision>", "1 <transmission>", "2 <gazebo>", "1 <material>"):
         assert w.message.count(kind) == 1, (kind, w.message)
     assert "visual" not in w.message.split(":", 1)[1].split(";")[0]       # visuals are kept, not unused
     # The damping is used: a damper on the joint's coordinate.

@@ -8,5 +8,6 @@ diagnostic `FILE:LINE: PATH: what; fix`.
     schema_errors.py  the schema's errors in the loader's words;  suggest.py: "did you mean"
     model.py          the Spec and its parts;  meaning.py: the build key (what shapes the equations)
     urdf.py, urdfxml.py, urdfjoints.py, urdflinks.py: a URDF as the same model dictionary
+    geometry.py       contacts made from shapes on a ground plane;  urdfcontacts.py: a URDF's (collision, limits)
     yamlpos.py        YAML with the line of every value
 """

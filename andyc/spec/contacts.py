@@ -47,7 +47,7 @@ IMPACT, LIFTOFF, SLIP, STOP = "impact", "liftoff", "slip", "stop"
 OPEN, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3      # a contact's mode (without friction: 0 open, 1 closed)
 SLIDE = 2                                          # spatial friction: 0 open, 1 stick, 2 slip
 CLOSED = (1 << STICK) | (1 << SLIP_POS) | (1 << SLIP_NEG)      # masks of modes (bit s: mode s)
-MAX_CONTACTS = 256                                 # a scene's contact candidates (the schema's limit)
+MAX_CONTACTS = 1024                                # a scene's contact candidates (the schema's limit)
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,7 @@ from andyc.spec.elements import build_elements
 from andyc.spec.energy_law import build_energy_laws
 from andyc.spec.expect import build_expect
 from andyc.spec.frames import build_frames
+from andyc.spec.geometry import expand_shapes
 from andyc.spec.hybrid import build_hybrid, check_nonlinear_impacts
 from andyc.spec.meaning import meaning_sha256
 from andyc.spec.model import Spec
@@ -93,7 +94,11 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
 
     `sha`: of the bytes read; `robot`: the URDF the document was made from (the document is then the
     URDF's, merged with a YAML model's own keys, if any)."""
+    # Colliding shapes become contacts and frames, read below as if written by hand (andyc.spec.geometry).
+    data, smap, found, noted = expand_shapes(data, smap, bool(robot and robot.collides))
     report = Report(smap)
+    report.problems += found
+    report.warnings += noted
     # Names are unique and not reserved; the constants come first, then the states written with them.
     declared = check_names(data, report)
     scope = declare_states(data, declare_constants(data, report, declared))
@@ -127,8 +132,8 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
     shapes = build_shapes(data, scope, smap.file)
     gravity = (scope.vector(data["gravity"], ("gravity",), scope.parameter_names, "only parameters are allowed here")
                if "gravity" in data else sp.zeros(3, 1))
-    if report.problems:
-        raise SpecError(sorted(report.problems, key=lambda p: p.line))
+    if report.problems:     # (the contacts made from one option or shape may each report it: once)
+        raise SpecError(sorted(dict.fromkeys(report.problems), key=lambda p: p.line))
     warn_unused(scope)
     if robot is None:
         origin = dict(meaning_sha256=meaning_sha256(data), files=(smap.file,), warnings=report.warnings)

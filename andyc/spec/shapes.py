@@ -9,7 +9,9 @@
 
 A capsule's length is that of its cylinder, between the centres of its two half-spheres (as URDF's and
 MuJoCo's). Sizes are expressions of parameters, taken at the defaults: a picture, not an equation, so no
-shape changes what a model means (andyc.spec.meaning leaves `shape` out of the build key). A body's shape
+shape changes what a model means (andyc.spec.meaning leaves `shape` out of the build key). A shape with
+`collide: true` is also made into contacts (andyc.spec.geometry), which are in the document the key is
+made of, so those count. A body's shape
 sits on the body's frame. The shapes travel in DISPLAY (andyc.spec.display) into the module and run files.
 """
 

@@ -33,11 +33,14 @@ How URDF maps onto andyc:
                             inequality broken, no mass) is kept as written, as Pinocchio
                             does, and named in a warning
     visual                  kept as a reference in Spec.visuals (link, geometry, file, origin)
+    limit lower, upper      stops: contacts <joint>_lower, <joint>_upper (urdf: {limits: false}: none)
+    collision               contacts on the model's ground, for the links named in urdf: {collide: [...]}
+                            (andyc.spec.urdfcontacts, andyc.spec.geometry)
 
 Gravity is [0, 0, -g] with a parameter g = 9.81 (URDF has none). Everything
-else a URDF may hold (limits, friction, safety controllers, calibration,
-collision geometry, transmissions, gazebo tags, materials, unknown tags) is
-counted and named in one warning; nothing is dropped silently.
+else a URDF may hold (effort and velocity limits, friction, safety controllers,
+calibration, other collision geometry, transmissions, gazebo tags, materials,
+unknown tags) is counted and named in one warning; nothing is dropped silently.
 
 The work is split by what is read: andyc.spec.urdfxml checks the XML and keeps its lines,
 andyc.spec.urdfjoints turns the joints into coordinates (lock, mimic), andyc.spec.urdflinks the
@@ -47,20 +50,24 @@ the result with a YAML model's own keys.
 Options (the `urdf:` key of a YAML model): file, base (fixed | floating),
 position and quaternion (the root's pose in world; for a floating base, the
 initial pose), root (keep the subtree of this link), lock (joint: value, held
-at that value, no degree of freedom) and package_paths (folders searched for
-`package://` files).
+at that value, no degree of freedom), package_paths (folders searched for
+`package://` files), collide (links or fnmatch patterns whose <collision> shapes
+touch the YAML's `ground:`) with friction and restitution (their contacts'),
+and limits (joint limits as stops; default true).
 """
 
 from __future__ import annotations
 
 import io
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from andyc.errors import Diagnostic, SpecError, format_path
+from andyc.spec import geometry
 from andyc.spec.expressions import MODULE_NAMES
 from andyc.spec.suggest import did_you_mean
 from andyc.spec.urdfjoints import Draft, identifier, joint_motions, link_order
+from andyc.spec.urdfcontacts import ContactWriter
 from andyc.spec.urdflinks import LinkWriter
 from andyc.spec.urdfxml import LIST_SECTIONS, MAP_SECTIONS, MergedSourceMap, UrdfSourceMap, XmlReader
 from andyc.spec.yamlpos import SourceMap
@@ -78,9 +85,12 @@ class UrdfModel:
     raw: bytes                  # the URDF's bytes (for the spec hash)
     locked: tuple = ()          # the joints held at given values, by their URDF name
     file: str = ""              # the URDF's path
+    option_paths: dict = field(default_factory=dict)   # generated entry's path -> its `urdf:` option's path
+    collides: bool = False      # some link's collision geometry touches the ground
 
 
 MAX_URDF_BYTES = 50_000_000       # robots are large, and lxml reads them fast
+LIMITS_DEFAULT = True              # `urdf: {limits: ...}` when not given: joint limits are stops
 
 
 @dataclass(frozen=True)
@@ -92,13 +102,17 @@ class _Options:
     root: str | None            # the link whose subtree is kept; None: the robot's root
     lock: dict                  # joint -> the value it is held at
     package_paths: list
+    collide: list = ()          # link names or fnmatch patterns whose <collision> shapes touch the ground
+    friction: object = None     # their contacts' friction coefficient (an expression), None: frictionless
+    restitution: object = None  # their contacts' restitution (an expression), None: 0
+    limits: bool = True         # joint limits as stops (andyc.spec.urdfcontacts)
 
 
 def _options(raw, links: dict, tree_root: str | None, option_error) -> _Options:
     """The options given (defaults for the others). A root link that does not exist is reported and
     ignored; a floating 'world' is reported, and stays fixed."""
-    given = {k: raw[k] for k in ("base", "position", "quaternion", "root", "lock", "package_paths") if k in raw} \
-        if isinstance(raw, dict) else {}
+    given = {k: raw[k] for k in ("base", "position", "quaternion", "root", "lock", "package_paths", "collide",
+                                 "friction", "restitution", "limits") if k in raw} if isinstance(raw, dict) else {}
     root = given.get("root")
     if root is not None and root not in links:
         option_error(("root",), f"link '{root}' does not exist in the URDF",
@@ -110,14 +124,16 @@ def _options(raw, links: dict, tree_root: str | None, option_error) -> _Options:
                      "name the link to float with 'root: <link>' (the subtree of that link is kept)")
         base = "fixed"
     return _Options(base, given.get("position", [0, 0, 0]), given.get("quaternion", [1, 0, 0, 0]), root,
-                    dict(given.get("lock") or {}), given.get("package_paths", []))
+                    dict(given.get("lock") or {}), given.get("package_paths", []), list(given.get("collide", [])),
+                    given.get("friction"), given.get("restitution"), bool(given.get("limits", LIMITS_DEFAULT)))
 
 
 def _convert(reader: XmlReader, robot, links: dict, joints: dict, parent_joint: dict, tree_root: str,
-             options: _Options, option_error, folder: Path) -> tuple[Draft, LinkWriter]:
+             options: _Options, option_error, folder: Path, ground) -> tuple[Draft, LinkWriter, ContactWriter]:
     """yourdfpy's robot + the XML lines -> the model dictionary (in the draft), in this order: the
-    coordinates of the joints, then each link's frame, body and damper, then the checks and visuals.
-    Names are claimed in this order, so a clash names the element that came first."""
+    coordinates of the joints, then each link's frame, body and damper, then the checks and visuals, then
+    the contacts (collision shapes on `ground`, joint limits). Names are claimed in this order, so a clash
+    names the element that came first."""
     draft = Draft(reader)
     root = options.root or tree_root
     order, children = link_order(joints, parent_joint, root)
@@ -135,14 +151,18 @@ def _convert(reader: XmlReader, robot, links: dict, joints: dict, parent_joint: 
     writer.dampers(order, root)
     writer.check_moving_mass(order, root, children)
     writer.collect_visuals(order)
-    return draft, writer
+    contacts = ContactWriter(writer, option_error)
+    contacts.collisions(order, root, ground)
+    contacts.limits(order, root)
+    return draft, writer, contacts
 
 
-def read(path, options=None, option_error=None, raw: bytes | None = None) -> UrdfModel:
+def read(path, options=None, option_error=None, raw: bytes | None = None, ground=None) -> UrdfModel:
     """A URDF file -> UrdfModel; raises SpecError listing every problem.
 
     `options`: the `urdf:` mapping of a YAML model (see the module docstring);
-    `option_error(path, message, hint)` reports a problem in it (default: at the URDF's line 1).
+    `option_error(path, message, hint)` reports a problem in it (default: at the URDF's line 1);
+    `ground`: the YAML model's ground (andyc.spec.geometry.Ground), which `collide` links touch.
     """
     import yourdfpy
 
@@ -180,12 +200,26 @@ def read(path, options=None, option_error=None, raw: bytes | None = None) -> Urd
         line, element = reader.locate(str(exc))
         raise SpecError([Diagnostic(file, line, element, f"yourdfpy cannot read the URDF: {exc}",
                                     "check this element against the URDF format")])
-    draft, writer = _convert(reader, robot, links, joints, parent_joint, root, o, option_error, path.parent)
+    draft, writer, contacts = _convert(reader, robot, links, joints, parent_joint, root, o, option_error,
+                                       path.parent, ground)
     data = draft.data
     problems = reader.problems + option_problems
     if problems:
         raise SpecError(sorted(problems, key=lambda d: (d.file, d.line)))
-    warnings = [w for w in [reader.unused()] if w is not None]
+    warnings = [w for w in [reader.unused(contacts.stops, set(contacts.colliding))] if w is not None]
+    if contacts.mesh_links:
+        n = len(contacts.mesh_links)
+        line, _ = contacts.mesh_links[0]
+        names = ", ".join(dict.fromkeys(link for _, link in contacts.mesh_links))
+        warnings.append(Diagnostic(file, line, "robot", f"{n} collision mesh(es) give no contact (not yet): "
+                                   f"links {names}", "give those links primitive <collision> shapes (box, "
+                                   "sphere, cylinder), or touch the ground with others"))
+    if contacts.odd_limits:
+        line, _ = contacts.odd_limits[0]
+        warnings.append(Diagnostic(file, line, "robot", f"{len(contacts.odd_limits)} joint limit(s) with lower "
+                                   "not below upper give no stops: " + ", ".join(t for _, t in contacts.odd_limits),
+                                   "lock such a joint in a YAML model (urdf: {lock: {JOINT: value}}), or fix "
+                                   "its <limit>"))
     if writer.missing_meshes:
         n = len(writer.missing_meshes)
         warnings.append(Diagnostic(file, 1, "robot", f"{n} visual mesh file(s) not found (first: "
@@ -215,7 +249,7 @@ def read(path, options=None, option_error=None, raw: bytes | None = None) -> Urd
     if not data["bodies"]:
         del data["bodies"]
     return UrdfModel(data, UrdfSourceMap(file, draft.entries), warnings, writer.visuals, raw, tuple(o.lock),
-                     file)
+                     file, contacts.option_paths, bool(contacts.colliding))
 
 
 def merge(data: dict, smap: SourceMap, yaml_path: Path) -> tuple[dict, SourceMap, UrdfModel]:
@@ -233,7 +267,13 @@ def merge(data: dict, smap: SourceMap, yaml_path: Path) -> tuple[dict, SourceMap
                                    "give a path relative to this model file")])
     options["package_paths"] = [str(p if Path(p).is_absolute() else yaml_path.parent / p)
                                 for p in options.get("package_paths", [])]
-    model = read(target, options, lambda path, message, hint="": smap.diag(("urdf",) + tuple(path), message, hint))
+    problems = []
+    ground = geometry.ground_plane(data.get("ground"), lambda path, message, hint: problems.append(
+        smap.diag(path, message, hint)))
+    if problems:
+        raise SpecError(problems)
+    model = read(target, options, lambda path, message, hint="": smap.diag(("urdf",) + tuple(path), message, hint),
+                 ground=ground)
     merged = dict(model.data)
     counts = {section: len(model.data.get(section, [])) for section in LIST_SECTIONS}
     for key, value in data.items():
@@ -245,4 +285,8 @@ def merge(data: dict, smap: SourceMap, yaml_path: Path) -> tuple[dict, SourceMap
             merged[key] = {**model.data.get(key, {}), **(value or {})}
         else:
             merged[key] = value
-    return merged, MergedSourceMap(smap, model.source, counts, data), model
+    merged_map = MergedSourceMap(smap, model.source, counts, data)
+    if model.option_paths:      # a generated contact's friction and restitution: the urdf: option's line
+        merged_map = geometry.RedirectedSourceMap(merged_map, {path: ("urdf",) + option for path, option
+                                                               in model.option_paths.items()})
+    return merged, merged_map, model

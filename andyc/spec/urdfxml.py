@@ -17,7 +17,8 @@ from andyc.spec.yamlpos import SourceMap
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 ONE_DOF = ("revolute", "continuous", "prismatic")
-LIST_SECTIONS = ("frames", "bodies", "forces", "torques", "dampers", "springs", "potentials", "constraints")
+LIST_SECTIONS = ("frames", "bodies", "forces", "torques", "dampers", "springs", "potentials", "constraints",
+                 "contacts")
 MAP_SECTIONS = ("parameters", "inputs", "coordinates", "speeds", "discrete")
 # What andyc reads of each element; every other child is counted in the unused-elements warning.
 _USED = {"robot": {"link", "joint"}, "link": {"inertial", "visual"}, "inertial": {"origin", "mass", "inertia"},
@@ -186,6 +187,14 @@ class XmlReader:
                 if kind in ("planar", "floating"):
                     self.error(mimic, label + ".mimic", f"a {kind} joint cannot mimic another joint",
                                "mimic joints are revolute, continuous or prismatic; remove the <mimic>")
+            limit = j.find("limit")
+            for attribute in ("lower", "upper", "effort", "velocity"):
+                text = limit.get(attribute) if limit is not None else None
+                try:
+                    float(text) if text is not None else None
+                except ValueError:
+                    self.error(limit, f"{label}.limit.{attribute}", f"expected a number, got {text!r}",
+                               f'write {attribute}="1.57" (rad or m; -1.57 for a lower limit)')
             dynamics = j.find("dynamics")
             if dynamics is not None:
                 for attribute in ("damping", "friction"):
@@ -266,8 +275,10 @@ class XmlReader:
             self.error(self.root, "robot", "the robot has no root link", "one link must be no joint's child")
         return parent_joint, (roots[0] if roots else None)
 
-    def unused(self) -> Diagnostic | None:
-        """One warning naming every kind of element andyc does not use, with counts."""
+    def unused(self, limits: bool = False, colliding: frozenset = frozenset()) -> Diagnostic | None:
+        """One warning naming every kind of element andyc does not use, with counts. `limits`: joint limits
+        are stops (their lower and upper are used, effort and velocity not); `colliding`: the links whose
+        <collision> elements touch the ground."""
         counts, first = {}, None
         joint_types = {j.get("name"): j.get("type") for j in self.root.findall("joint")}
 
@@ -280,6 +291,13 @@ class XmlReader:
         def walk(element, parent_tag):
             for child in element:
                 if not isinstance(child.tag, str):
+                    continue
+                if parent_tag == "joint" and child.tag == "limit" and limits:
+                    for attribute in ("effort", "velocity"):
+                        if child.get(attribute) is not None:
+                            note(f"<limit {attribute}>", child)
+                    continue
+                if parent_tag == "link" and child.tag == "collision" and element.get("name") in colliding:
                     continue
                 if parent_tag in _USED and child.tag not in _USED[parent_tag]:
                     note(f"<{child.tag}>" if parent_tag == "robot" else f"<{parent_tag}><{child.tag}>", child)
@@ -300,5 +318,6 @@ class XmlReader:
             return None
         listed = ", ".join(f"{n} {kind}" for kind, n in sorted(counts.items(), key=lambda kv: -kv[1]))
         return Diagnostic(self.file, first, "robot", f"not used by andyc (no effect on the simulation): {listed}",
-                          "andyc simulates the rigid bodies, joints, mimic joints and joint damping; visual "
-                          "geometry is kept in Spec.visuals")
+                          "andyc simulates the rigid bodies, joints, mimic joints, joint damping, joint limits "
+                          "(as stops, unless urdf: {limits: false}) and the collision geometry of the links named "
+                          "in urdf: {collide: [...]}; visual geometry is kept in Spec.visuals")
