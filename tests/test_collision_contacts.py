@@ -1,5 +1,5 @@
 """Contacts made from geometry (andyc/spec/geometry.py, andyc/spec/urdfcontacts.py), at the Spec and symbolic
-level (no simulation: today's runtime enumerates 2^n contact modes).
+level (their simulation: tests/test_go1.py and the contact tests).
 
 - Against Pinocchio: example-robot-data's Go1 on a floating base with its four foot spheres colliding, and a
   small arm of our own with a box, a sphere and a cylinder, both on a tilted ground. At random states, andyc's
@@ -7,9 +7,8 @@ level (no simulation: today's runtime enumerates 2^n contact modes).
   point's velocity computed here from Pinocchio's collision placements (buildGeomFromUrdf,
   updateGeometryPlacements) and frame velocities (getFrameVelocity) with this file's own plane geometry, to
   1e-12. The joint-limit stops' rows are q - lower and upper - q with Pinocchio's limits.
-- The rows are read from `andyc.load` with the contacts' mode enumeration (andyc.spec.contacts.build_contacts)
-  skipped: their gap and stick rows stay constraints of one flow, as the loader builds them for any contact.
-  (Many contacts, and spatial friction beside others, are beyond today's 2^n modes; the rows are not.)
+- The rows are read from `andyc.load`: a contact's gap and stick rows are constraint rows of the Spec, which
+  the runtime adds to a flow's while the contact is closed.
 - A joint-limit URDF: stops for revolute and prismatic joints, none for continuous, mimic or locked joints or
   an unwritten side; `limits: false` gives none.
 - A YAML shape with collide: true gives the rows of the hand-written contact.
@@ -18,7 +17,6 @@ level (no simulation: today's runtime enumerates 2^n contact modes).
 
 from __future__ import annotations
 
-import importlib
 import math
 import types
 
@@ -174,12 +172,8 @@ def expected(model, data, points: dict, ground: dict) -> dict:
 # -- andyc's rows ------------------------------------------------------------------------
 
 def rows_spec(path, monkeypatch) -> Spec:
-    """andyc.load, with the contacts' mode enumeration skipped: every gap and stick row a constraint of the one
-    flow (see the module docstring)."""
-    loader = importlib.import_module("andyc.spec.load")
-    with monkeypatch.context() as m:
-        m.setattr(loader, "build_contacts", lambda *args: ([], [], []))
-        return andyc.load(path)
+    """andyc.load: every contact's gap and stick rows are constraint rows of the Spec (the runtime switches them)."""
+    return andyc.load(path)
 
 
 class Rows:
@@ -564,7 +558,7 @@ def test_collision_mesh_is_warned_with_its_link(tmp_path, monkeypatch):
                          '<geometry><mesh filename="hand.stl"/></geometry>')
     (tmp_path / "arm.urdf").write_text(meshed)
     (tmp_path / "m.yaml").write_text("urdf: {file: arm.urdf, collide: [fore], limits: false}\nground: {}\n")
-    spec = rows_spec(tmp_path / "m.yaml", monkeypatch)          # (16 rim contacts: past today's modes)
+    spec = rows_spec(tmp_path / "m.yaml", monkeypatch)
     warning = next(w for w in spec.warnings if "collision mesh" in w.message)
     assert "fore" in warning.message and warning.line == line_of(meshed, "hand.stl")
     assert {c.name for c in spec.constraints if c.holonomic} == {f"fore_1_rim_{e}_{k}" for e in "pm" for k in range(8)}

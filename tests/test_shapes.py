@@ -4,7 +4,6 @@ bytes), so that andyc view needs only the run file. Bad values: one FILE:LINE: P
 
 import math
 import re
-import struct
 
 import numpy as np
 import pytest
@@ -15,6 +14,7 @@ from andyc.runtime.run import read_h5
 from andyc.spec.display import display
 from andyc.spec.meaning import meaning_sha256
 from tests.support import MODELS, ROBOTS_DIR
+from tests.support.meshes import binary_stl
 from tests.support.diagnostics import assert_at, line_of, load_text, one_problem
 
 PENDULUM = """\
@@ -35,15 +35,6 @@ def _with(shape: str) -> str:
     return PENDULUM.replace("SHAPE", shape)
 
 
-def _binary_stl(triangles) -> bytes:
-    """A binary STL of `triangles` [(a, b, c)], each corner three floats (the format's 80-byte header, count,
-    then per triangle a normal, three corners and a 2-byte attribute)."""
-    out = b"andyc test".ljust(80, b" ") + struct.pack("<I", len(triangles))
-    for tri in triangles:
-        out += struct.pack("<3f", 0, 0, 0) + b"".join(struct.pack("<3f", *p) for p in tri) + b"\0\0"
-    return out
-
-
 def test_double_pendulum_shapes_are_its_yaml_at_the_defaults(compiled):
     """The shipped double pendulum: the links' boxes and the masses' spheres, as the file says (read with
     pyyaml), sizes and offsets evaluated at the defaults L1 = 1, L2 = 0.8 by hand."""
@@ -62,7 +53,7 @@ def test_double_pendulum_shapes_are_its_yaml_at_the_defaults(compiled):
 
 def test_every_kind_with_its_pose_colour_and_a_mesh_beside_the_model(tmp_path):
     (tmp_path / "parts").mkdir()
-    (tmp_path / "parts" / "wedge.stl").write_bytes(_binary_stl([((0, 0, 0), (1, 0, 0), (0, 1, 0))]))
+    (tmp_path / "parts" / "wedge.stl").write_bytes(binary_stl([((0, 0, 0), (1, 0, 0), (0, 1, 0))]))
     spec = load_text(tmp_path, _with(
         "[{box: {size: [0.05, L, 0.05]}, xyz: [0, -L/2, 0], rpy: [0, 0, pi/2], colour: [0, 0.5, 1]},"
         " {cylinder: {radius: 0.02, length: L, axis: -y}, colour: '#ff8000'},"
@@ -113,7 +104,7 @@ def test_a_bad_shape_is_one_line_at_its_place(tmp_path, shape, path, words):
 def test_the_run_file_carries_the_shapes_and_the_mesh_bytes(tmp_path):
     """A run's HDF5 file holds the display record's shapes and each mesh file's bytes: once the mesh file is
     gone, the run read back still has them (andyc view needs only the run file)."""
-    stl = _binary_stl([((0, 0, 0), (0.1, 0, 0), (0, 0.1, 0)), ((0, 0, 0), (0, 0, 0.1), (0.1, 0, 0))])
+    stl = binary_stl([((0, 0, 0), (0.1, 0, 0), (0, 0.1, 0)), ((0, 0, 0), (0, 0, 0.1), (0.1, 0, 0))])
     (tmp_path / "wedge.stl").write_bytes(stl)
     (tmp_path / "model.yaml").write_text(_with("{mesh: {file: wedge.stl}}"))
     model, _ = andyc.compile_model(tmp_path / "model.yaml", tmp_path / "build")
@@ -157,7 +148,7 @@ def test_urdf_visuals_become_the_same_shapes(tmp_path):
     meshes through package:// and a relative path, resolved as the importer resolves them."""
     folder = tmp_path / "shaped"
     (folder / "meshes").mkdir(parents=True)
-    (folder / "meshes" / "wedge.stl").write_bytes(_binary_stl([((0, 0, 0), (1, 0, 0), (0, 1, 0))]))
+    (folder / "meshes" / "wedge.stl").write_bytes(binary_stl([((0, 0, 0), (1, 0, 0), (0, 1, 0))]))
     (folder / "arm.urdf").write_text(URDF)
     spec = andyc.load(folder / "arm.urdf")
     box, cylinder, sphere, packaged, relative = display(spec)["shapes"]

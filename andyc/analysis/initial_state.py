@@ -60,7 +60,13 @@ def initial_problems(model: SymbolicModel, init: str = "check", tol: float = 1e-
         for k, (j, s) in enumerate(jumps):
             g, enabled = values[2 * k], values[2 * k + 1]
             past = g < -GUARD_ROUND_OFF if j.direction == FALLING else g > GUARD_ROUND_OFF
-            if past and enabled >= 0 and np.isfinite(g):
+            if past and enabled >= 0 and np.isfinite(g) and s.kind == "impact":
+                out.append(spec.source.diag(
+                    s.where, f"contact '{spec.contacts[s.contact].name}' starts {-g:.3g} into its surface (its gap "
+                    f"is {g:.3g} at the initial state)", "fix the initial values so that the gap starts >= 0, or give "
+                    "the model `simulate: {init: project}` to move the state onto the surface (the smallest change "
+                    "in the mass-matrix metric)"))
+            elif past and enabled >= 0 and np.isfinite(g):
                 side = "below" if j.direction == FALLING else "above"
                 out.append(spec.source.diag(
                     s.where + ("guard",), f"the guard of jump '{j.name}' is already past zero at the start: "

@@ -20,15 +20,15 @@ set already separating (a corner lifted, a ball rising out of its push-out) must
 that speed. The step's contact problem, W = A M^-1 A^T over the rows, is contact_solver.solve's (nonlinear
 Gauss-Seidel, then the active set it finds solved exactly); each contact's state in the last step is its warm
 start. Then two position corrections, since the scheme holds its rows at velocity level only: the bilateral rows
-are put back on their manifold (dynamics.project over the flow's own rows: positions, then speeds), and a contact
-that landed in the step (open at its start, closed at its end) with its gap below -PENETRATION is pushed out to
-zero by the least M-norm change of the positions (the position correction of Braun & Goldfarb, over those gaps and
-the flow's holonomic rows; no speed changes: its normal speed is the scheme's). A closing contact enters the index
-set from half a step ahead, so it sinks by up to h |u_n| / 2 in its impact step; a contact left open (a bounce)
-rises out by itself, and one that stays closed keeps its gap to O(h^2) a step (held at velocity level), so only a
-landing is corrected. The push-out's potential energy is the scheme's error: E - E0 - W shows it. A contact in the index set whose normal speed after the step
-exceeds REST_SPEED is open (a bounce); the others keep the solver's state (stick, slip either way): the modes go
-into d at each step, so the log shows them.
+are put back on their manifold (dynamics.project over the flow's own rows: positions, then speeds), and each
+contact closed after the step whose gap ended further than PENETRATION from zero is put back on it, by the least
+change of the positions in the metric of M at the step's mid point (the position correction of Braun & Goldfarb
+over those gaps and the flow's holonomic rows; no speed changes: the normal speeds are the scheme's). Why: a
+closing contact enters the index set from half a step ahead, so it sinks by up to h |u_n| / 2 in its impact step;
+and one that stays closed keeps u_n = 0 at the mid point's Jacobian only, so its gap drifts by O(h^2) a step
+while the body turns on it (a rocking block's pivot, a robot's rolling foot). A contact in the index set whose
+normal speed after the step exceeds REST_SPEED is open (a bounce, left alone: it rises out by itself); the others
+keep the solver's state (stick, slip either way): the modes go into d at each step, so the log shows them.
 
 The work slots: the elements' at the step's forces, h times their power at (t_{k+theta}, q_{k+theta}, v_k) (first
 order, the scheme's own evaluation); the contact and bilateral impulses' in the `jumps` slot, P . (A v_{k+1/2} + b)
@@ -52,7 +52,10 @@ from .model import borrowed, call
 from .status import DIVERGED, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, REST_SPEED, SINGULAR_MASS
 
 TOUCHING = 1e-12        # m: a contact whose predicted gap is at most this is in the step's index set
-PENETRATION = 1e-9      # m: a gap below minus this after a step is pushed out to zero
+KEEP = 1e-6             # m: ... or at most this, when it was closed in the last step: the mid point's linear update
+#                         lifts a pivot by O((h w)^2) (a corner a block rocks about: 1e-8 m at 0.3 rad/s); out of the
+#                         set for that, it would fall for a step and land again
+PENETRATION = 1e-9      # m: a closed contact's gap further than this from zero after a step is put back on it
 
 Scratch = namedtuple("Scratch", "W w0 X rows owner kind first mu state direction P work v a col xm x0 xdot "
                                 "d_open e cmu total seen guess guess_dir landed stats")
@@ -127,7 +130,8 @@ def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
             s.x0[j] += 0.5 * h * v[j]
         call(model.constraints_into, (t + 0.5 * h, s.x0, u, p, d, S))
         for i in range(nc):
-            if S[model.s_phi, model.contact_rows[i]] > TOUCHING:
+            near = KEEP if d[model.contact_mode[i]] != 0.0 else TOUCHING
+            if S[model.s_phi, model.contact_rows[i]] > near:
                 s.guess[i] = -2                          # (out of the index set)
     call(model.constraints_into, (tm, xm, u, p, d, S))
     call(model.dynamics, (tm, xm, u, p, d, M, G))
@@ -149,7 +153,8 @@ def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
         nb += 1
     for i in range(nc):
         n = model.contact_rows[i]
-        out = s.guess[i] == -2 if theta != 0.5 else S[model.s_phi, n] > TOUCHING
+        near = KEEP if d[model.contact_mode[i]] != 0.0 else TOUCHING     # (hysteresis: see KEEP)
+        out = s.guess[i] == -2 if theta != 0.5 else S[model.s_phi, n] > near
         if out:
             s.guess[i] = -1
             continue
@@ -271,8 +276,9 @@ def _modes(model, s, nb, d):
 @jit
 def _corrections(model, w, s, t, x, u, p, d, flow):
     """After the step: the flow's own rows back on their manifold (positions and speeds: dynamics.project with every
-    contact open), then each contact that landed in the step with its gap below -PENETRATION pushed out to zero
-    (positions only, with the flow's holonomic rows held). Returns a status."""
+    contact open), then each closed contact's gap put back on zero where it is further than PENETRATION from it
+    (positions only, the least change in the metric of M at the step's mid point, whose factor w.M holds: one
+    linearized step, with the flow's holonomic rows held). Returns a status."""
     nc = model.contact_rows.shape[0]
     d_open = s.d_open
     for k in range(d.shape[0]):
@@ -287,21 +293,17 @@ def _corrections(model, w, s, t, x, u, p, d, flow):
         return OK
     S = w.S
     call(model.constraints_into, (t, x, u, p, d, S))
-    deep = False
+    off = False
     for i in range(nc):
-        if s.landed[i] == 1 and S[model.s_phi, model.contact_rows[i]] < -PENETRATION:
+        if d[model.contact_mode[i]] != 0.0 and abs(S[model.s_phi, model.contact_rows[i]]) > PENETRATION:
             d_open[model.contact_mode[i]] = 1.0
-            deep = True
-    if not deep:
+            off = True
+    if not off:
         return OK
     s.stats[3] += 1
-    nr = select_rows(model, w, flow, d_open)
-    call(model.dynamics, (t, x, u, p, d, w.M, w.G))
-    if not factor(model, w.M):
-        return SINGULAR_MASS
-    if nr > 0 and w.nactive[1] > 0:
-        correct_rows(model, w, w.nactive[1], model.s_phi, w.M)
-        move(model, t, x, u, p, d, S[model.s_dv, :model.nv])
+    select_rows(model, w, flow, d_open)
+    correct_rows(model, w, w.nactive[1], model.s_phi, w.M)
+    move(model, t, x, u, p, d, S[model.s_dv, :model.nv])
     return OK
 
 

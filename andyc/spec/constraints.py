@@ -87,15 +87,16 @@ class FrameQuantities:
 
 def build_constraints(written: list, scope: Scope, quantities: FrameQuantities,
                       contacts: list = ()) -> list[Constraint]:
-    """The `constraints:` section, then the rows of the `contacts:` section's gaps (andyc.spec.contacts), holonomic
-    ones first (DESIGN.md run layout; a contact's row is holonomic); multiplier names checked."""
+    """The `constraints:` section, then the rows of the `contacts:` section's gaps (andyc.spec.contacts; an entry None
+    is left out), holonomic ones first (DESIGN.md run layout; a contact's row is holonomic); multiplier names
+    checked."""
     constraints = [_constraint(("constraints", i), c, scope, quantities) for i, c in enumerate(written)]
-    constraints += [_constraint(("contacts", i), c, scope, quantities) for i, c in enumerate(contacts)]
+    constraints += [_constraint(("contacts", i), c, scope, quantities) for i, c in enumerate(contacts) if c]
     # A contact with friction: its stick row, the slip speed = 0 (nonholonomic), active while it sticks; spatial
     # friction (slip: a list of two tangential speeds): one constraint of two rows.
     constraints += [_constraint(("contacts", i), {"name": f"{c['name']}_stick", "slip": c["slip"],
                                                   "multiplier": c.get("friction_multiplier", _friction_names(c))},
-                                scope, quantities) for i, c in enumerate(contacts) if "slip" in c]
+                                scope, quantities) for i, c in enumerate(contacts) if c and "slip" in c]
     constraints.sort(key=lambda c: not c.holonomic)
     _check_multipliers(constraints, {"constraints": written, "contacts": contacts}, scope)
     return constraints
@@ -320,7 +321,8 @@ def check_conservative(elements: Elements, constraints: list, frames: list, writ
     z_dot - k sqrt(x_dot^2 + y_dot^2) does no work, Gauss's isokinetic |v|^2 - c does).
     `written`: the `constraints:` section as written (a row is named as written).
     """
-    workers = [f"damper '{x.name}'" for x in elements.dampers] + [f"{x.kind} '{x.name}'" for x in elements.loads]
+    workers = [f"damper '{x.name}'" for x in elements.dampers] + [f"{x.kind} '{x.name}'" for x in elements.loads] + [
+        f"actuator '{x.name}'" for x in elements.actuators]
     # (Rows without coordinates, or without speeds, are reported by _constraint() already.)
     speeds = set(scope.rates.values())
     positions = {q.q for q in scope.coordinates}
@@ -382,7 +384,7 @@ def check_work_names(data: dict, jumps: list, scope: Scope):
                 "prescribed_motion": "what drives the links that depend on t"}
     if jumps:
         reserved["jumps"] = "the model's jumps"
-    for section in ("forces", "torques", "dampers", "springs", "potentials", "constraints"):
+    for section in ("forces", "torques", "actuators", "dampers", "springs", "potentials", "constraints"):
         for i, entry in enumerate(data.get(section) or []):
             name = entry.get("name") if isinstance(entry, dict) else None
             if name in reserved:

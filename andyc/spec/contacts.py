@@ -74,6 +74,8 @@ def build_contacts(written: list, constraints: list, scope: Scope) -> tuple[list
     by_name = {c.name: c for c in constraints}
     lams = multiplier_symbols(constraints)
     for i, c in enumerate(written):
+        if c is None:                       # (a stop left out: stops_inside)
+            continue
         where = ("contacts", i)
         e = restitution(c.get("restitution", 0), where + ("restitution",), scope)
         mu = stick = None
@@ -96,6 +98,30 @@ def build_contacts(written: list, constraints: list, scope: Scope) -> tuple[list
         contacts.append(contact)
         jumps += _jumps(contact, c, by_name, lams, scope, len(contacts) - 1)
     return contacts, jumps
+
+
+def stops_inside(written: list, robot, scope: Scope) -> list:
+    """The `contacts:` entries with a URDF's joint-limit stops that its joints start beyond (their coordinate's
+    initial value at the parameters' defaults past the limit: a robot's zero pose, panda's fourth joint) replaced by
+    None, each named in a warning: such a stop would start the run inside the limit's wall."""
+    stops = getattr(robot, "stops", None) or {}
+    if not stops:
+        return list(written)
+    initial = {c.name: c.initial for c in scope.coordinates}
+    values = {symbol: value for symbol, value in scope.parameters.values()}
+    out = []
+    for i, c in enumerate(written):
+        joint, q, side, bound = stops.get(c["name"], (None, None, None, None))
+        start = float(initial[q].subs(values)) if joint is not None and q in initial else None
+        if start is not None and (start < bound if side == "lower" else start > bound):
+            scope.report.warn(("contacts", i), f"joint '{joint}' starts at {start:g}, beyond its {side} limit "
+                              f"{bound:g}: its stop '{c['name']}' is left out", f"give '{q}' an initial value within "
+                              "its limits to keep the stop (coordinates: {" + q + ": {initial: ...}}), or urdf: "
+                              "{limits: false}")
+            out.append(None)
+        else:
+            out.append(c)
+    return out
 
 
 def _jumps(c: Contact, w: dict, by_name: dict, lams: dict, scope: Scope, i: int) -> list:

@@ -1,4 +1,4 @@
-"""Elements: bodies with their inertia, forces and torques, dampers, springs and potentials.
+"""Elements: bodies with their inertia, forces and torques, actuators, dampers, springs and potentials.
 
 A body's COM or a force's point of action away from its frame's origin becomes a fixed child frame,
 internal to andyc (`<element>__com`, `<element>__point`); elements at the same point share it.
@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
-from andyc.spec.model import Body, Damper, Frame, Load, Potential, Spring, Translate
+from andyc.spec.model import Actuator, Body, Damper, Frame, Load, Potential, Spring, Translate
 from andyc.spec.scope import Scope
 from andyc.spec.suggest import did_you_mean
 
@@ -20,6 +20,7 @@ from andyc.spec.suggest import did_you_mean
 class Elements:
     bodies: list                # of Body
     loads: list                 # of Load: the forces, then the torques
+    actuators: list             # of Actuator
     dampers: list               # of Damper
     springs: list               # of Spring
     potentials: list            # of Potential
@@ -37,12 +38,13 @@ def build_elements(data: dict, scope: Scope, urdf_bodies: int = 0) -> Elements:
     loads = [_force_or_torque(kind, i, f, scope, offset_frames)
              for kind, section in (("force", "forces"), ("torque", "torques"))
              for i, f in enumerate(data.get(section) or [])]
+    actuators = [_actuator(i, x, scope) for i, x in enumerate(data.get("actuators") or [])]
     dampers = [_damper(i, x, scope, offset_frames) for i, x in enumerate(data.get("dampers") or [])]
     springs = [_spring(i, x, scope) for i, x in enumerate(data.get("springs") or [])]
     potentials = [Potential(x["name"], scope.expr(x["energy"], ("potentials", i, "energy"), scope.kinematic,
                                                   "potentials use parameters, coordinates and t"),
                             ("potentials", i)) for i, x in enumerate(data.get("potentials") or [])]
-    return Elements(bodies, loads, dampers, springs, potentials, offset_frames)
+    return Elements(bodies, loads, actuators, dampers, springs, potentials, offset_frames)
 
 
 def _offset_frame(owner: str, frame: str, offset, where, scope: Scope, offset_frames: list) -> str:
@@ -132,6 +134,25 @@ def _force_or_torque(kind: str, i: int, f: dict, scope: Scope, offset_frames: li
     vec = scope.vector(f["vector"], where + ("vector",), scope.forcing,
                        "forces use parameters, inputs, coordinates and t")
     return Load(f["name"], kind, frame, vec, in_frame, where)
+
+
+def _actuator(i: int, x: dict, scope: Scope) -> Actuator:
+    where = ("actuators", i)
+    driven = [c.name for c in scope.coordinates] + [s.name for s in scope.speeds]
+    if x["coordinate"] not in driven:
+        scope.report.error(where + ("coordinate",), f"'{x['coordinate']}' is not a coordinate or a speed",
+                           did_you_mean(x["coordinate"], driven) + "coordinates and speeds: " + ", ".join(driven))
+    force = scope.expr(x["force"], where + ("force",), {**scope.forcing, **scope.rates},
+                       "an actuator's force uses parameters, inputs, coordinates, speeds (<coordinate>_dot), "
+                       "discrete states and t")
+    limit = None
+    if "limit" in x:
+        before = len(scope.report.problems)
+        limit, value = scope.constant(x["limit"], where + ("limit",))
+        if len(scope.report.problems) == before and not value > 0:
+            scope.report.error(where + ("limit",), f"the limit {x['limit']!r} = {value:g} is not > 0",
+                               "give the largest |force| the actuator can exert (a motor's effort limit), > 0")
+    return Actuator(x["name"], x["coordinate"], force, limit, where)
 
 
 def _damper(i: int, x: dict, scope: Scope, offset_frames: list) -> Damper:

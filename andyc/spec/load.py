@@ -23,7 +23,7 @@ from andyc.spec import urdf
 from andyc.spec.closed_form import build_closed_form
 from andyc.spec.constraints import (FrameQuantities, build_constraints, check_conservative, check_energy_law,
                                     check_work_names)
-from andyc.spec.contacts import build_contacts
+from andyc.spec.contacts import build_contacts, stops_inside
 from andyc.spec.elements import build_elements
 from andyc.spec.energy_law import build_energy_laws
 from andyc.spec.expect import build_expect
@@ -110,12 +110,13 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
     elements = build_elements(data, scope, len(robot.data.get("bodies", [])) if robot else 0)
     # Frame quantities (F.x, F.vy, ...) are named once for the constraints and the jumps together.
     quantities = FrameQuantities(scope, data.get("bodies") or [])
-    constraints = build_constraints(data.get("constraints") or [], scope, quantities, data.get("contacts") or [])
+    # (A URDF's joint-limit stops that its joints start beyond are left out: None, keeping the entries' places.)
+    written_contacts = stops_inside(data.get("contacts") or [], robot, scope)
+    constraints = build_constraints(data.get("constraints") or [], scope, quantities, written_contacts)
     # The user's flows and jumps; then the contacts': each contact's mode is a discrete state that its jumps
     # (impact, liftoff, slip, stop; from and to every flow) change (andyc.spec.contacts).
-    written_contacts = data.get("contacts") or []
-    contact_rows = frozenset(c["name"] for c in written_contacts) | frozenset(
-        f"{c['name']}_stick" for c in written_contacts if "slip" in c)
+    contact_rows = frozenset(c["name"] for c in written_contacts if c) | frozenset(
+        f"{c['name']}_stick" for c in written_contacts if c and "slip" in c)
     flows, jumps, initial_flow = build_hybrid(data.get("hybrid"), constraints, scope, quantities, contact_rows)
     contacts, contact_jumps = build_contacts(written_contacts, constraints, scope)
     jumps = jumps + [dataclasses.replace(j, priority=len(jumps) + k) for k, j in enumerate(contact_jumps)]
@@ -148,7 +149,8 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
                 source=smap, parameters=scope.parameters, inputs=scope.inputs, coordinates=scope.coordinates,
                 speeds=scope.speeds, signals=scope.signals, gravity=gravity,
                 frames=frames + elements.offset_frames, bodies=elements.bodies, loads=elements.loads,
-                dampers=elements.dampers, springs=elements.springs, potentials=elements.potentials,
+                actuators=elements.actuators, dampers=elements.dampers, springs=elements.springs,
+                potentials=elements.potentials,
                 constraints=constraints, conserves_energy=conserves, discrete=scope.discrete, flows=flows,
                 jumps=jumps, initial_flow=initial_flow, contacts=contacts, input_expressions=input_expressions, shapes=shapes,
                 driven_inputs=driven, closed_form=closed_form, simulate=simulate, expect=expect,

@@ -127,6 +127,17 @@ class Damper:
 
 
 @dataclass(frozen=True)
+class Actuator:
+    """A generalized force on one speed (a coordinate's rate or a declared speed): `force`, clamped to
+    [-limit, limit] when `limit` is not None; its virtual power force * speed."""
+    name: str
+    speed: str                  # coordinate name (its rate) or declared speed name
+    force: sp.Expr
+    limit: sp.Expr | None
+    where: tuple
+
+
+@dataclass(frozen=True)
 class Spring:
     name: str
     stiffness: sp.Expr
@@ -240,6 +251,7 @@ class Spec:
     frames: list                # of Frame, parents before children
     bodies: list = field(default_factory=list)
     loads: list = field(default_factory=list)
+    actuators: list = field(default_factory=list)
     dampers: list = field(default_factory=list)
     springs: list = field(default_factory=list)
     potentials: list = field(default_factory=list)

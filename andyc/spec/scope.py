@@ -27,11 +27,12 @@ from andyc.spec.model import Coordinate, DiscreteState, Speed
 from andyc.spec.suggest import did_you_mean
 from andyc.spec.yamlpos import SourceMap
 
-ELEMENT_SECTIONS = ("bodies", "forces", "torques", "dampers", "springs", "potentials")
+ELEMENT_SECTIONS = ("bodies", "forces", "torques", "actuators", "dampers", "springs", "potentials")
 # One entry of each section that declares names, as messages call it ("parameter 'L' cannot be used here").
 SECTION_SINGULAR = {"parameters": "parameter", "inputs": "input", "coordinates": "coordinate", "speeds": "speed",
                     "frames": "frame",
-                    "bodies": "body", "forces": "force", "torques": "torque", "dampers": "damper",
+                    "bodies": "body", "forces": "force", "torques": "torque", "actuators": "actuator",
+                    "dampers": "damper",
                     "springs": "spring", "potentials": "potential", "constraints": "constraint",
                     "contacts": "contact",
                     "discrete": "discrete state"}

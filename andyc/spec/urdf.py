@@ -87,6 +87,7 @@ class UrdfModel:
     file: str = ""              # the URDF's path
     option_paths: dict = field(default_factory=dict)   # generated entry's path -> its `urdf:` option's path
     collides: bool = False      # some link's collision geometry touches the ground
+    stops: dict = field(default_factory=dict)   # joint-limit stop -> (joint, coordinate, side, bound)
 
 
 MAX_URDF_BYTES = 50_000_000       # robots are large, and lxml reads them fast
@@ -106,13 +107,15 @@ class _Options:
     friction: object = None     # their contacts' friction coefficient (an expression), None: frictionless
     restitution: object = None  # their contacts' restitution (an expression), None: 0
     limits: bool = True         # joint limits as stops (andyc.spec.urdfcontacts)
+    actuators: bool = False     # a motor (input tau_<joint>, actuator <joint>_motor) on every moving joint
 
 
 def _options(raw, links: dict, tree_root: str | None, option_error) -> _Options:
     """The options given (defaults for the others). A root link that does not exist is reported and
     ignored; a floating 'world' is reported, and stays fixed."""
-    given = {k: raw[k] for k in ("base", "position", "quaternion", "root", "lock", "package_paths", "collide",
-                                 "friction", "restitution", "limits") if k in raw} if isinstance(raw, dict) else {}
+    given = ({k: raw[k] for k in ("base", "position", "quaternion", "root", "lock", "package_paths", "collide",
+                                  "friction", "restitution", "limits", "actuators") if k in raw}
+             if isinstance(raw, dict) else {})
     root = given.get("root")
     if root is not None and root not in links:
         option_error(("root",), f"link '{root}' does not exist in the URDF",
@@ -125,7 +128,8 @@ def _options(raw, links: dict, tree_root: str | None, option_error) -> _Options:
         base = "fixed"
     return _Options(base, given.get("position", [0, 0, 0]), given.get("quaternion", [1, 0, 0, 0]), root,
                     dict(given.get("lock") or {}), given.get("package_paths", []), list(given.get("collide", [])),
-                    given.get("friction"), given.get("restitution"), bool(given.get("limits", LIMITS_DEFAULT)))
+                    given.get("friction"), given.get("restitution"), bool(given.get("limits", LIMITS_DEFAULT)),
+                    bool(given.get("actuators", False)))
 
 
 def _convert(reader: XmlReader, robot, links: dict, joints: dict, parent_joint: dict, tree_root: str,
@@ -154,6 +158,8 @@ def _convert(reader: XmlReader, robot, links: dict, joints: dict, parent_joint: 
     contacts = ContactWriter(writer, option_error)
     contacts.collisions(order, root, ground)
     contacts.limits(order, root)
+    if options.actuators:
+        writer.actuators(order, root)
     return draft, writer, contacts
 
 
@@ -206,7 +212,7 @@ def read(path, options=None, option_error=None, raw: bytes | None = None, ground
     problems = reader.problems + option_problems
     if problems:
         raise SpecError(sorted(problems, key=lambda d: (d.file, d.line)))
-    warnings = [w for w in [reader.unused(contacts.stops, set(contacts.colliding))] if w is not None]
+    warnings = [w for w in [reader.unused(contacts.stops, set(contacts.colliding), o.actuators)] if w is not None]
     if contacts.mesh_links:
         n = len(contacts.mesh_links)
         line, _ = contacts.mesh_links[0]
@@ -249,7 +255,7 @@ def read(path, options=None, option_error=None, raw: bytes | None = None, ground
     if not data["bodies"]:
         del data["bodies"]
     return UrdfModel(data, UrdfSourceMap(file, draft.entries), warnings, writer.visuals, raw, tuple(o.lock),
-                     file, contacts.option_paths, bool(contacts.colliding))
+                     file, contacts.option_paths, bool(contacts.colliding), contacts.stop_bounds)
 
 
 def merge(data: dict, smap: SourceMap, yaml_path: Path) -> tuple[dict, SourceMap, UrdfModel]:

@@ -41,6 +41,8 @@ class ContactWriter:
         self.odd_limits: list = []          # (line, text) of limits with lower >= upper: no stop
         self.colliding: list = []           # the links whose collision geometry gives contacts
         self.stops = False                  # limits were read (any joint's)
+        self.stop_bounds: dict = {}         # stop contact -> (joint, coordinate, side, bound): andyc.spec.load drops
+        #                                     a stop its joint starts beyond (a robot's zero pose past a limit)
 
     # collision geometry -------------------------------------------------------------
     def moving(self, order: list, root: str) -> dict:
@@ -195,4 +197,6 @@ class ContactWriter:
                 contacts.append({"name": f"{base}_lower", "gap": geometry.combination([(1, q)], -bounds["lower"])})
             if "upper" in bounds:
                 contacts.append({"name": f"{base}_upper", "gap": f"{bounds['upper']!r} - {q}"})
+            for c, side in zip(contacts, [k for k in ("lower", "upper") if k in bounds]):
+                self.stop_bounds[c["name"]] = (jname, q, side, bounds[side])
             self.add([], contacts, limit, label)

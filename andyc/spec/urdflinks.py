@@ -253,6 +253,31 @@ class LinkWriter:
                              f"give link '{link}' an <inertial> with <mass value=...> > 0, make joint "
                              f"'{jname}' fixed, or lock it in a YAML model: urdf: {{lock: {{{jname}: 0}}}}")
 
+    def actuators(self, order, root):
+        """A motor on every moving joint (urdf: {actuators: true}): an input tau_<joint> (default 0) and an actuator
+        <joint>_motor on the joint's coordinate, clamped to its <limit effort> when it gives one (> 0)."""
+        data = self.draft.data
+        for link in order:
+            if link == root:
+                continue
+            jname = self.parent_joint[link]
+            j = self.joints[jname]
+            if (j.get("type") not in ("revolute", "continuous", "prismatic") or jname in self.options.lock
+                    or jname in self.mimics):
+                continue
+            q = self.coordinate_of[jname]
+            label = f"joint[{jname}]"
+            tau = self.draft.name(f"tau_{q}", j, label)
+            data.setdefault("inputs", {})[tau] = 0.0
+            self.draft.entry(("inputs", tau), j, label)
+            motor = {"name": self.draft.name(f"{q}_motor", j, label), "coordinate": q, "force": tau}
+            limit = j.find("limit")
+            effort = _numbers(limit.get("effort", "")) if limit is not None else None
+            if isinstance(effort, float) and math.isfinite(effort) and effort > 0:
+                motor["limit"] = effort
+            self.draft.entry(("actuators", len(data.setdefault("actuators", []))), j, label)
+            data["actuators"].append(motor)
+
     def collect_visuals(self, order):
         for link in order:
             for k, element in enumerate(self.links[link].findall("visual")):

@@ -17,7 +17,7 @@ from andyc.spec.yamlpos import SourceMap
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 ONE_DOF = ("revolute", "continuous", "prismatic")
-LIST_SECTIONS = ("frames", "bodies", "forces", "torques", "dampers", "springs", "potentials", "constraints",
+LIST_SECTIONS = ("frames", "bodies", "forces", "torques", "actuators", "dampers", "springs", "potentials", "constraints",
                  "contacts")
 MAP_SECTIONS = ("parameters", "inputs", "coordinates", "speeds", "discrete")
 # What andyc reads of each element; every other child is counted in the unused-elements warning.
@@ -275,10 +275,11 @@ class XmlReader:
             self.error(self.root, "robot", "the robot has no root link", "one link must be no joint's child")
         return parent_joint, (roots[0] if roots else None)
 
-    def unused(self, limits: bool = False, colliding: frozenset = frozenset()) -> Diagnostic | None:
+    def unused(self, limits: bool = False, colliding: frozenset = frozenset(),
+               efforts: bool = False) -> Diagnostic | None:
         """One warning naming every kind of element andyc does not use, with counts. `limits`: joint limits
         are stops (their lower and upper are used, effort and velocity not); `colliding`: the links whose
-        <collision> elements touch the ground."""
+        <collision> elements touch the ground; `efforts`: the joints' motors are clamped to their <limit effort>."""
         counts, first = {}, None
         joint_types = {j.get("name"): j.get("type") for j in self.root.findall("joint")}
 
@@ -292,8 +293,8 @@ class XmlReader:
             for child in element:
                 if not isinstance(child.tag, str):
                     continue
-                if parent_tag == "joint" and child.tag == "limit" and limits:
-                    for attribute in ("effort", "velocity"):
+                if parent_tag == "joint" and child.tag == "limit" and (limits or efforts):
+                    for attribute in ("lower", "upper") * (not limits) + ("effort",) * (not efforts) + ("velocity",):
                         if child.get(attribute) is not None:
                             note(f"<limit {attribute}>", child)
                     continue

@@ -52,9 +52,12 @@ def derive(spec: Spec) -> SymbolicModel:
     laws = energy_law_terms(spec, quantities)
     work_names, powers, row_work, prescribed = work_slots(spec, terms, constraints)
     rates = {sym: rate for K in kin.values() for sym, rate in K.signal_rates.items()}
-    # ABA (aba.py) for the unconstrained rhs, chosen from the operation counts of the whole dv/dt.
-    aba = articulated_body(spec, terms) if not spec.constraints else None
-    forward = choose(M, aba=aba, G=G, pool=dict(emit.assignments)) if not spec.constraints else choose(M)
+    # ABA (aba.py) for the unconstrained rhs, chosen from the operation counts of the whole dv/dt: for a model
+    # whose flows have no rows of their own (a contact's rows join only while it is closed).
+    contact_rows = {c.constraint for c in spec.contacts} | {c.stick for c in spec.contacts if c.stick}
+    bilateral = [c for c in spec.constraints if c.name not in contact_rows]
+    aba = articulated_body(spec, terms) if not bilateral else None
+    forward = choose(M, aba=aba, G=G, pool=dict(emit.assignments)) if not bilateral else choose(M)
     return SymbolicModel(
         spec=spec, t=TIME,
         q=[c.q for c in spec.coordinates], v=spec.speed_symbols,

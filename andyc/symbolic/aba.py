@@ -219,8 +219,10 @@ def _inertia_to_parent(link, Ia, out, label):
 
 def articulated_body(spec: Spec, terms) -> ArticulatedBody | None:
     """ABA's dv/dt for `spec` (its element terms `terms`, bodies first, as dynamics.element_terms gives them),
-    or None when it does not apply (module docstring)."""
-    if spec.constraints:
+    or None when it does not apply (module docstring). A contact's rows do not count: its flows are solved with M
+    only while it is closed (andyc_numerics' dynamics.rhs_mode_into)."""
+    contact_rows = {c.constraint for c in spec.contacts} | {c.stick for c in spec.contacts if c.stick}
+    if any(c.name not in contact_rows for c in spec.constraints):
         return None
     links = _links(spec)
     if links is None:

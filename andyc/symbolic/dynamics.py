@@ -107,6 +107,12 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
             vec = kin[f.in_frame].R * f.vector
             J, rate = (K.Jv, K.v) if f.kind == "force" else (K.Jw, K.w)
         out.append(_driven(ElementTerms(f.name, loads=[(J, vec)], power=rate.dot(vec)), f.frame in driven, v))
+    for a in spec.actuators:            # a generalized force on one speed, clamped to its limit
+        j = damped.index(a.speed)
+        J = sp.zeros(1, n)
+        J[0, j] = 1
+        force = a.force if a.limit is None else sp.Min(sp.Max(a.force, -a.limit), a.limit)
+        out.append(ElementTerms(a.name, loads=[(J, sp.Matrix([force]))], power=force * v[j]))
     for d in spec.dampers:
         if d.speed is not None:
             j = damped.index(d.speed)

@@ -60,19 +60,25 @@ class SymbolicModel:
         bodies merged): its bodies are counted as written. Default self.spec."""
         spec = self.spec if spec is None else spec
         speeds = ", ".join([c.name for c in spec.coordinates] + [s.name for s in spec.speeds])
-        cons = self.constraints
-        freedom = (f"{plural(self.dof, 'degree')} of freedom ({speeds})" if not spec.constraints else
-                   f"{self.dof} speeds ({speeds}) less {plural(cons.nc, 'constraint row')} ({cons.nh} holonomic) "
-                   f"in {plural(len(spec.constraints), 'constraint')}")
+        contact_rows = {c.constraint for c in spec.contacts} | {c.stick for c in spec.contacts if c.stick}
+        own = [c for c in spec.constraints if c.name not in contact_rows]
+        nc, nh = sum(len(c.rows) for c in own), sum(len(c.rows) for c in own if c.holonomic)
+        freedom = (f"{plural(self.dof, 'degree')} of freedom ({speeds})" if not own else
+                   f"{self.dof} speeds ({speeds}) less {plural(nc, 'constraint row')} ({nh} holonomic) "
+                   f"in {plural(len(own), 'constraint')}")
         signals = f" incl. {len(self.signals)} nonholonomic signals" if self.signals else ""
         if spec.jumps:
             def rows(flow) -> int:
                 return sum(len(c.rows) for c in spec.constraints if c.name in flow.constraints)
             flows = ", ".join(f"{f.name} ({plural(rows(f), 'row')})" for f in spec.flows)
-            kind = f"contacts {', '.join(c.name for c in spec.contacts)}" if spec.contacts else "hybrid"
-            freedom += (f"; {kind}: {plural(len(spec.flows), 'flow')} ({flows}), {plural(len(spec.jumps), 'jump')}, "
-                        f"{plural(len(spec.discrete), 'discrete state')}")
-        n_elements = len(spec.loads) + len(spec.dampers) + len(spec.springs) + len(spec.potentials)
+            kind = "hybrid" if len(spec.jumps) > sum(1 for j in spec.jumps if j.kind) else "one flow"
+            shown = ", ".join(c.name for c in spec.contacts[:6]) + (f" and {len(spec.contacts) - 6} more"
+                                                                   if len(spec.contacts) > 6 else "")
+            contacts = f"; {plural(len(spec.contacts), 'contact')} ({shown})" if spec.contacts else ""
+            freedom += (f"{contacts}; {kind}: {plural(len(spec.flows), 'flow')} ({flows}), "
+                        f"{plural(len(spec.jumps), 'jump')}, {plural(len(spec.discrete), 'discrete state')}")
+        n_elements = (len(spec.loads) + len(spec.actuators) + len(spec.dampers) + len(spec.springs)
+                      + len(spec.potentials))
         n_frames = len([f for f in spec.frames if not f.internal])
         return (f"{file}: model '{spec.name}' is valid: {freedom}, "
                 f"{plural(len(self.q) + self.dof + len(self.signals), 'state')}{signals}, "
