@@ -101,7 +101,9 @@ def test_compass_gait_cycle(compiled, shipped_build):
     mult = np.sort_complex(cycle.multipliers)
     assert len(mult) == 3 and cycle.basis.shape[1] == 3
     assert np.max(np.abs(mult - np.sort_complex(EIGENVALUES ** 2))) < 2e-5
-    # ... and, to 1e-8, those of central differences of the one-step map with the legs swapped, at the fixed point
+    # ... and, to 5e-8, those of central differences of the one-step map with the legs swapped, at the fixed point
+    # (differences of step 1e-6 of maps through located events: their roundings, divided by the step, are of 1e-8;
+    # measured 5e-9 to 1.4e-8 on machines whose libmvec vector sines round differently, AVX2 and AVX-512)
     z = got[[0, 2, 3]]
     assert np.max(np.abs(gait_step(model, z) - z)) < 1e-10
     J = np.empty((3, 3))
@@ -110,7 +112,7 @@ def test_compass_gait_cycle(compiled, shipped_build):
         e[k] = 1e-6
         J[:, k] = (gait_step(model, z + e) - gait_step(model, z - e)) / 2e-6
     step_eigenvalues = np.linalg.eigvals(J)
-    assert np.max(np.abs(np.sort_complex(step_eigenvalues ** 2) - mult)) < 1e-8
+    assert np.max(np.abs(np.sort_complex(step_eigenvalues ** 2) - mult)) < 5e-8
     assert np.max(np.abs(np.sort_complex(step_eigenvalues) - np.sort_complex(EIGENVALUES))) < 1e-5
 
 

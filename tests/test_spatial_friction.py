@@ -327,8 +327,10 @@ def test_a_puck_pushed_harder_and_harder_sticks_then_slips_along_the_push(puck, 
     friction = np.stack([run.friction_forces[:, 0], run.friction_forces_2[:, 0]], axis=1)
     assert np.max(np.abs(friction[before] + c * run.time[before, None] * push)) < 1e-10
     assert np.allclose(np.linalg.norm(friction[after], axis=1), 0.4 * G, rtol=0, atol=1e-10)
-    # along -push: at the slip's first samples the slip is slow (1e-6 m/s) and its direction within 1e-5 rad of the
+    # along -push: at the slip's first samples the slip is slow (1e-6 m/s) and its direction within 5e-5 rad of the
     # push (rk4 holds the direction predicted at each step's end while the slip is too slow for its step:
-    # numerics.dynamics.slip_direction), an error that the friction itself damps as the slip grows: 1e-10 at 1 s
-    assert np.max(np.abs(friction[after] + 0.4 * G * push)) < 1e-4
+    # numerics.dynamics.slip_direction; DOP853 follows it with the steps its error control sizes over every
+    # integrated quantity, the friction's work among them: measured 3.4e-5 rad), an error that the friction itself
+    # damps as the slip grows: 1e-10 at 1 s
+    assert np.max(np.abs(friction[after] + 0.4 * G * push)) < 2e-4
     assert np.max(np.abs(friction[-1] + 0.4 * G * push)) < 1e-10
