@@ -103,7 +103,7 @@ def test_compass_gait_cycle(compiled, shipped_build):
     assert np.max(np.abs(mult - np.sort_complex(EIGENVALUES ** 2))) < 2e-5
     # ... and, to 5e-8, those of central differences of the one-step map with the legs swapped, at the fixed point
     # (differences of step 1e-6 of maps through located events: their roundings, divided by the step, are of 1e-8;
-    # measured 5e-9 to 1.4e-8 on machines whose libmvec vector sines round differently, AVX2 and AVX-512)
+    # measured 1.4e-8 on an AVX-512 machine, below 1e-8 on earlier ones: libmvec's vector sines round by machine)
     z = got[[0, 2, 3]]
     assert np.max(np.abs(gait_step(model, z) - z)) < 1e-10
     J = np.empty((3, 3))
