@@ -40,9 +40,7 @@ def test_ball_rests_after_the_zeno_point(ball_run):
     """Past t_inf = t1 (1 + 2e / (1 - e)) = 4.0637 s the ball rests to t = 10 s: speed 0 to 1e-12, mean normal
     force P / h = m g to 1e-10, closed. From t_inf + 0.2 s: in the index set the rebound is v_(k+1) = -e v_k
     (Newton's law, step by step) from speeds of order g h, so 1e-12 comes log(1e-12 / (g h)) / log(e) = 103 steps
-    later. Its height stays within h^2 g of 0: it rests where its last approach left it, in the step it entered
-    the index set (from a positive gap, with y + h v / 2 <= 0), a step's travel h |v| from 0 at a speed |v| of at
-    most one step of gravity, g h (a faster one bounces out again)."""
+    later. Its height stays within h^2 g of 0 (it rests on the ground: its gap put back on zero when it closes)."""
     run = ball_run
     late = run.time >= 4.0637 + 0.2
     assert run.finished and run.time[-1] == pytest.approx(10.0)
@@ -51,8 +49,9 @@ def test_ball_rests_after_the_zeno_point(ball_run):
     assert np.max(np.abs(run.column("y")[late])) <= H ** 2 * G
     assert set(run.contact_modes[late, 0]) == {1}
     # (the impulses' work is in the `jumps` slot: E - E0 - W is the scheme's own error, exact parabolas here, but
-    # for the last landing: it sank at most h |u_n| / 2 <= g h^2 / 2 below the ground in its step, and was pushed
-    # out to zero, which raised its potential energy by at most m g (g h^2 / 2))
+    # for the step in which it closes: the contact enters the problem where the gap predicted at the step's end
+    # reaches zero, so the ball stops up to a step's travel of its last, slowest approach (g h^2 / 2) above the
+    # ground, and is set on it, which changes its potential energy by at most m g (g h^2 / 2))
     assert np.max(np.abs(run.energy_balance)) <= 1.0 * G * G * H ** 2 / 2
     assert np.max(np.abs(run.energy_balance[run.time < 4.0])) <= 1e-9
 

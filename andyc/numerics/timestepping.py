@@ -5,7 +5,9 @@ Acary & Brogliato 2008 (Numerical Methods for Nonsmooth Dynamical Systems, sec. 
 theta in [1/2, 1]:
 
     q_{k+theta} = q_k + theta h v_k                                    (signals: sigma + theta h dsigma/dt)
-    index set   I = {contact i : g_i(q_k + h v_k / 2) <= TOUCHING}    (the gap predicted half a step on)
+    index set   I = {contact i : g_i(q_{k+theta}) + (1 - theta) h u_i <= TOUCHING}   (the gap predicted at the
+                                                          step's end, u_i = A_i v_free + b_i at the free velocity
+                                                          v_free = v_k + h M^-1 G: gravity's pull included)
     M (v_{k+1} - v_k) = h G(t_{k+theta}, q_{k+theta}, v_k) + A^T P     (M, G, A at the mid point)
     each contact in I:  0 <= u_n,k+1 + e min(u_n,k, 0)  _|_  P_n >= 0  (Newton's law at velocity level)
                         Coulomb on P_t: |P_t| <= mu P_n, the slip u_t,k+1 = 0 inside the cone,
@@ -21,11 +23,13 @@ that speed. The step's contact problem, W = A M^-1 A^T over the rows, is contact
 Gauss-Seidel, then the active set it finds solved exactly); each contact's state in the last step is its warm
 start. Then two position corrections, since the scheme holds its rows at velocity level only: the bilateral rows
 are put back on their manifold (dynamics.project over the flow's own rows: positions, then speeds), and each
-contact closed after the step whose gap ended further than PENETRATION from zero is put back on it, by the least
+contact closed after the step whose gap ended further than PENETRATION from zero, or in the step's problem,
+below -PENETRATION and not rising out of it within a step (a bounce does by itself: pushing it out would add
+the energy of its dip), is put back on the surface, by the least
 change of the positions in the metric of M at the step's mid point (the position correction of Braun & Goldfarb
 over those gaps and the flow's holonomic rows; no speed changes: the normal speeds are the scheme's). Why: a
-closing contact enters the index set from half a step ahead, so it sinks by up to h |u_n| / 2 in its impact step;
-and one that stays closed keeps u_n = 0 at the mid point's Jacobian only, so its gap drifts by O(h^2) a step
+closing contact enters the index set in the step at whose end it would first sink (its predicted gap, to first
+order), so that it stops on the surface or up to h |u_n| above it, and is pulled onto it; and one that stays closed keeps u_n = 0 at the mid point's Jacobian only, so its gap drifts by O(h^2) a step
 while the body turns on it (a rocking block's pivot, a robot's rolling foot). A contact in the index set whose
 normal speed after the step exceeds REST_SPEED is open (a bounce, left alone: it rises out by itself); the others
 keep the solver's state (stick, slip either way): the modes go into d at each step, so the log shows them.
@@ -58,14 +62,15 @@ KEEP = 1e-6             # m: ... or at most this, when it was closed in the last
 PENETRATION = 1e-9      # m: a closed contact's gap further than this from zero after a step is put back on it
 
 Scratch = namedtuple("Scratch", "W w0 X rows owner kind first mu state direction P work v a col xm x0 xdot "
-                                "d_open e cmu total seen guess guess_dir landed stats")
+                                "d_open e cmu total seen guess guess_dir landed speed stats")
 Scratch.__doc__ = """The arrays of a time-stepping run (new_scratch). The step's problem over at most nc rows: W (nc * nc),
 w0, P (nc,), X (nv * nc) M^-1 A^T, rows (nc,) its constraint rows; per block: owner (its contact, -1 bilateral),
 kind, first, mu, state, direction (2 each) as contact_solver takes them; work the solver's. v, a, col (nv,),
 xm, x0, xdot (nx + nw,) buffers; d_open (nd,) d with every contact open; e, cmu (contacts,) each contact's
 restitution and mu; total (nc,) each row's impulse since the last sample, seen (nc,) 1 where it took part; guess
 (contacts,) each contact's block state in the last step (-1: not in it), guess_dir (contacts, 2); landed
-(contacts,) 1 where a contact open at the step's start is closed at its end; stats (4,):
+(contacts,) 1 where a contact open at the step's start is closed at its end; speed (contacts,) each contact's
+normal speed after the step (those of its problem); stats (4,):
 steps, Gauss-Seidel sweeps, steps whose answer did not verify, push-outs."""
 
 
@@ -75,7 +80,7 @@ def new_scratch(nq, nv, nx, nw, nc, nd, contacts) -> Scratch:
     z, i = np.zeros, np.int64
     return Scratch(z(m * m), z(m), z(nv * m), z(m, i), z(m, i), z(m, i), z(m, i), z(m), z(m, i), z(2 * m), z(m),
                    z(work_shape(m)), z(nv), z(nv), z(nv), z(nx + nw), z(nx + nw), z(nx + nw), z(nd), z(contacts),
-                   z(contacts), z(m), z(m), np.full(contacts, -1, i), z((contacts, 2)), z(contacts, i), z(4, i))
+                   z(contacts), z(m), z(m), np.full(contacts, -1, i), z((contacts, 2)), z(contacts, i), z(contacts), z(4, i))
 
 
 @jit
@@ -123,16 +128,6 @@ def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
             xm[j] += theta * h * xdot[j]
     if update_inputs(inputs, tm, xm, p, d, flow, u, data) != OK:
         return INPUT_FAILED
-    if theta != 0.5:                                    # the index set from the gap half a step on
-        for j in range(x.shape[0]):
-            s.x0[j] = x[j]
-        for j in range(nq):
-            s.x0[j] += 0.5 * h * v[j]
-        call(model.constraints_into, (t + 0.5 * h, s.x0, u, p, d, S))
-        for i in range(nc):
-            near = KEEP if d[model.contact_mode[i]] != 0.0 else TOUCHING
-            if S[model.s_phi, model.contact_rows[i]] > near:
-                s.guess[i] = -2                          # (out of the index set)
     call(model.constraints_into, (tm, xm, u, p, d, S))
     call(model.dynamics, (tm, xm, u, p, d, M, G))
     if not cholesky(M, nv, 0.0):
@@ -154,8 +149,10 @@ def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
     for i in range(nc):
         n = model.contact_rows[i]
         near = KEEP if d[model.contact_mode[i]] != 0.0 else TOUCHING     # (hysteresis: see KEEP)
-        out = s.guess[i] == -2 if theta != 0.5 else S[model.s_phi, n] > near
-        if out:
+        u_free = S[model.s_cv, n]                       # (the normal speed at the free velocity: A v_free + b)
+        for j in range(nv):
+            u_free += S[model.s_a + n, j] * (a[j] - v[j])
+        if S[model.s_phi, n] + (1.0 - theta) * h * u_free > near:       # the gap predicted at the step's end
             s.guess[i] = -1
             continue
         t1, kind = model.contact_stick[i], NORMAL
@@ -188,7 +185,7 @@ def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
     for j in range(nv):
         x[nq + j] = a[j]
     _modes(model, s, nb, d)
-    return _corrections(model, w, s, t + h, x, u, p, d, flow)
+    return _corrections(model, w, s, t + h, h, x, u, p, d, flow)
 
 
 @jit
@@ -267,6 +264,7 @@ def _modes(model, s, nb, d):
         s.guess[i] = state
         s.guess_dir[i, 0] = s.direction[2 * k]
         s.guess_dir[i, 1] = s.direction[2 * k + 1]
+        s.speed[i] = s.w0[s.first[k]]
         if s.w0[s.first[k]] > REST_SPEED:
             state = OPEN
             s.landed[i] = 0
@@ -274,10 +272,11 @@ def _modes(model, s, nb, d):
 
 
 @jit
-def _corrections(model, w, s, t, x, u, p, d, flow):
+def _corrections(model, w, s, t, h_step, x, u, p, d, flow):
     """After the step: the flow's own rows back on their manifold (positions and speeds: dynamics.project with every
-    contact open), then each closed contact's gap put back on zero where it is further than PENETRATION from it
-    (positions only, the least change in the metric of M at the step's mid point, whose factor w.M holds: one
+    contact open), then the gap of each closed contact further than PENETRATION from zero, and of each other one
+    of the step's problem below -PENETRATION that its speed does not lift out within a step (h_step), put back on
+    zero (positions only, the least change in the metric of M at the step's mid point, whose factor w.M holds: one
     linearized step, with the flow's holonomic rows held). Returns a status."""
     nc = model.contact_rows.shape[0]
     d_open = s.d_open
@@ -295,7 +294,10 @@ def _corrections(model, w, s, t, x, u, p, d, flow):
     call(model.constraints_into, (t, x, u, p, d, S))
     off = False
     for i in range(nc):
-        if d[model.contact_mode[i]] != 0.0 and abs(S[model.s_phi, model.contact_rows[i]]) > PENETRATION:
+        gap = S[model.s_phi, model.contact_rows[i]]
+        closed = d[model.contact_mode[i]] != 0.0
+        rising = s.guess[i] >= 0 and s.speed[i] * h_step > -gap         # (it leaves the surface by itself)
+        if (closed and abs(gap) > PENETRATION) or (s.guess[i] >= 0 and gap < -PENETRATION and not rising):
             d_open[model.contact_mode[i]] = 1.0
             off = True
     if not off:
