@@ -49,9 +49,10 @@ import numpy as np
 from .active import select_rows
 from .compiler import jit
 from .contact_solver import BILATERAL, NORMAL, OPEN, PLANAR, SPATIAL, solve, work_shape
-from .dynamics import correct_rows, factor, move, normalize, project
+from .dynamics import correct_rows, move, normalize, project
 from .integrator import update_inputs
-from .linalg import cholesky, solve_lower, solve_upper
+from .linalg import add_rows_transposed, cholesky, solve_gram, solve_lower, solve_upper
+from .sparse_rows import tree_factor, tree_upper
 from .model import borrowed, call
 from .status import DIVERGED, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, REST_SPEED, SINGULAR_MASS
 
@@ -62,16 +63,18 @@ KEEP = 1e-6             # m: ... or at most this, when it was closed in the last
 PENETRATION = 1e-9      # m: a closed contact's gap further than this from zero after a step is put back on it
 
 Scratch = namedtuple("Scratch", "W w0 X rows owner kind first mu state direction P work v a col xm x0 xdot "
-                                "d_open e cmu total seen guess guess_dir landed speed stats")
+                                "d_open e cmu total seen guess guess_dir landed speed stats tree span")
 Scratch.__doc__ = """The arrays of a time-stepping run (new_scratch). The step's problem over at most nc rows: W (nc * nc),
-w0, P (nc,), X (nv * nc) M^-1 A^T, rows (nc,) its constraint rows; per block: owner (its contact, -1 bilateral),
+w0, P (nc,), X (nc * nv) its rows whitened, C = A R^-1 (M = R^T R: _factor), row by row, span (nc, 2) the first
+and one past the last speed where each row of C may be nonzero; rows (nc,) its constraint rows; per block: owner (its contact, -1 bilateral),
 kind, first, mu, state, direction (2 each) as contact_solver takes them; work the solver's. v, a, col (nv,),
 xm, x0, xdot (nx + nw,) buffers; d_open (nd,) d with every contact open; e, cmu (contacts,) each contact's
 restitution and mu; total (nc,) each row's impulse since the last sample, seen (nc,) 1 where it took part; guess
 (contacts,) each contact's block state in the last step (-1: not in it), guess_dir (contacts, 2); landed
 (contacts,) 1 where a contact open at the step's start is closed at its end; speed (contacts,) each contact's
 normal speed after the step (those of its problem); stats (4,):
-steps, Gauss-Seidel sweeps, steps whose answer did not verify, push-outs."""
+steps, Gauss-Seidel sweeps, steps whose answer did not verify, push-outs; tree (1,) 1 where M is factored along
+its tree (coefficients)."""
 
 
 def new_scratch(nq, nv, nx, nw, nc, nd, contacts) -> Scratch:
@@ -80,7 +83,8 @@ def new_scratch(nq, nv, nx, nw, nc, nd, contacts) -> Scratch:
     z, i = np.zeros, np.int64
     return Scratch(z(m * m), z(m), z(nv * m), z(m, i), z(m, i), z(m, i), z(m, i), z(m), z(m, i), z(2 * m), z(m),
                    z(work_shape(m)), z(nv), z(nv), z(nv), z(nx + nw), z(nx + nw), z(nx + nw), z(nd), z(contacts),
-                   z(contacts), z(m), z(m), np.full(contacts, -1, i), z((contacts, 2)), z(contacts, i), z(contacts), z(4, i))
+                   z(contacts), z(m), z(m), np.full(contacts, -1, i), z((contacts, 2)), z(contacts, i), z(contacts), z(4, i),
+                   z(1, i), z((m, 2), i))
 
 
 @jit
@@ -93,6 +97,71 @@ def coefficients(model, w, s, p):
             s.e[i] = w.S[model.s_e, k]
     for i in range(model.contact_rows.shape[0]):
         s.cmu[i] = w.S[model.s_e, model.contact_mu[i]] if model.contact_mu[i] >= 0 else 0.0
+    s.tree[0] = 1 if _tree_pays(model) else 0
+
+
+@jit
+def _tree_pays(model):
+    """Whether the step factors M along its tree (M = L^T D L, linalg.ltdl: no fill-in) rather than densely: where
+    the model has a tree (MASS_PARENT) whose factor has at most 3/4 of the dense one's entries below the diagonal
+    (the sum of the speeds' depths against n (n - 1) / 2): a floating base's legs, bodies side by side; a chain,
+    whose M is full, keeps the dense Cholesky (unrolled up to linalg.UNROLLED speeds)."""
+    n = model.nv
+    if model.mass_order.shape[0] != n or n < 2:
+        return False
+    entries = 0
+    for k in range(n):
+        i = model.mass_parent[k]
+        while i >= 0:
+            entries += 1
+            i = model.mass_parent[i]
+    return 4 * entries <= 3 * (n * (n - 1) // 2)
+
+
+@jit
+def _factor(model, M, tree):
+    """M <- a square root R of M = R^T R, in place: along the tree (sparse_rows.tree_factor: R = D^1/2 L) or dense
+    (linalg.cholesky: R = L^T); False when M is not positive definite."""
+    if tree:
+        return tree_factor(model, M)
+    return cholesky(M, model.nv, 0.0)
+
+
+@jit
+def _lower(model, M, b, tree):
+    """b[:nv] <- R^-T b, M factored by _factor. Returns the first and one past the last entry of the result that
+    may be nonzero. Along the tree, a speed whose entry is still zero adds nothing to its ancestors and is skipped
+    (a foot's row reaches its leg and the base, not the other legs)."""
+    n = model.nv
+    if not tree:
+        solve_lower(M, b, n)
+        lo = 0
+        while lo < n and b[lo] == 0.0:
+            lo += 1
+        return lo, n
+    parent, order = model.mass_parent, model.mass_order
+    lo, hi = n, 0
+    for kk in range(n):                 # L^T y = b: descendants first (sparse_rows.tree_lower)
+        k = order[kk]
+        v = b[k]
+        if v == 0.0:
+            continue
+        i = parent[k]
+        while i >= 0:
+            b[i] -= M[k, i] * v
+            i = parent[i]
+        b[k] = v * M[k, k]
+        lo, hi = min(lo, k), max(hi, k + 1)
+    return lo, max(hi, lo)
+
+
+@jit
+def _upper(model, M, b, tree):
+    """b[:nv] <- R^-1 b, M factored by _factor."""
+    if tree:
+        tree_upper(model, M, b)
+    else:
+        solve_upper(M, b, model.nv)
 
 
 @jit(inline="always")
@@ -130,12 +199,13 @@ def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
         return INPUT_FAILED
     call(model.constraints_into, (tm, xm, u, p, d, S))
     call(model.dynamics, (tm, xm, u, p, d, M, G))
-    if not cholesky(M, nv, 0.0):
+    tree = s.tree[0] == 1
+    if not _factor(model, M, tree):
         return SINGULAR_MASS
     for j in range(nv):                                 # a = v_free = v + h M^-1 G
         a[j] = G[j]
-    solve_lower(M, a, nv)
-    solve_upper(M, a, nv)
+    _lower(model, M, a, tree)
+    _upper(model, M, a, tree)
     for j in range(nv):
         a[j] = v[j] + h * a[j]
     for j in range(model.nw):                           # the elements' work at the step's forces (first order)
@@ -169,7 +239,7 @@ def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
         m = _block(s, m, nb, kind, i, s.cmu[i], guess, s.guess_dir[i, 0], s.guess_dir[i, 1])
         nb += 1
     if m > 0:
-        impulse_work = _impulses(model, w, s, m, nb, v, a)
+        impulse_work = _impulses(model, w, s, m, nb, v, a, tree)
         if model.nj > 0:
             x[nx + model.nw - 1] += impulse_work
     # q_{k+1}, the signals, v_{k+1} (in a)
@@ -185,38 +255,42 @@ def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
     for j in range(nv):
         x[nq + j] = a[j]
     _modes(model, s, nb, d)
-    return _corrections(model, w, s, t + h, h, x, u, p, d, flow)
+    return _corrections(model, w, s, t + h, h, x, u, p, d, flow, tree)
 
 
 @jit
-def _impulses(model, w, s, m, nb, v, vel):
+def _impulses(model, w, s, m, nb, v, vel, tree):
     """Solve the step's problem over s.rows' first m rows (nb blocks); vel: the free velocity in, v_{k+1} out;
     v: v_k. Each row's impulse into s.total (and s.seen), its normal speed after into s.w0, the blocks' states into
-    s.state (and s.direction); returns the impulses' work P . (A v_{k+1/2} + b)."""
+    s.state (and s.direction); returns the impulses' work P . (A v_{k+1/2} + b). W = A M^-1 A^T = C C^T with
+    C = A R^-1 (one triangular solve a row, the tree's skipping the speeds a row does not reach), each entry over
+    the speeds where both rows may be nonzero, the lower triangle mirrored."""
     S, M, nv = w.S, w.M, model.nv
-    X = s.X[:nv * m].reshape((nv, m))
+    C = s.X[:m * nv].reshape((m, nv))
     W = s.W[:m * m].reshape((m, m))
-    w0, col = s.w0[:m], s.col
-    for c in range(m):                                  # X = M^-1 A^T, column by column
-        row = s.rows[c]
+    w0, span = s.w0[:m], s.span
+    for r in range(m):                                  # C = A R^-1, row by row
+        row = s.rows[r]
+        Cr = C[r]
         for j in range(nv):
-            col[j] = S[model.s_a + row, j]
-        solve_lower(M, col, nv)
-        solve_upper(M, col, nv)
-        for j in range(nv):
-            X[j, c] = col[j]
-    for r in range(m):                                  # W = A X; w0 = A v_free + b (b = c - A v_k)
+            Cr[j] = S[model.s_a + row, j]
+        span[r, 0], span[r, 1] = _lower(model, M, Cr, tree)
+    for r in range(m):                                  # W = C C^T; w0 = A v_free + b (b = c - A v_k)
         row = s.rows[r]
         av, af = 0.0, 0.0
         for j in range(nv):
             av += S[model.s_a + row, j] * v[j]
             af += S[model.s_a + row, j] * vel[j]
         w0[r] = af + S[model.s_cv, row] - av
-        for c in range(m):
+        Cr = C[r]
+        for c in range(r + 1):
+            lo, hi = max(span[r, 0], span[c, 0]), min(span[r, 1], span[c, 1])
+            Cc = C[c]
             total = 0.0
-            for j in range(nv):
-                total += S[model.s_a + row, j] * X[j, c]
+            for j in range(lo, hi):
+                total += Cr[j] * Cc[j]
             W[r, c] = total
+            W[c, r] = total
     for k in range(nb):                                 # Newton's law: u_n,k+1 + e min(u_n,k, 0) >= 0
         if s.owner[k] >= 0:
             w0[s.first[k]] += s.e[s.owner[k]] * min(S[model.s_cv, s.rows[s.first[k]]], 0.0)
@@ -225,11 +299,18 @@ def _impulses(model, w, s, m, nb, v, vel):
     s.stats[1] += sweeps
     if not verified:
         s.stats[2] += 1
-    for j in range(nv):                                 # v_{k+1} = v_free + X P
-        total = 0.0
-        for c in range(m):
-            total += X[j, c] * s.P[c]
-        vel[j] += total
+    col = s.col                                         # v_{k+1} = v_free + R^-1 C^T P
+    for j in range(nv):
+        col[j] = 0.0
+    for r in range(m):
+        P = s.P[r]
+        if P != 0.0:
+            Cr = C[r]
+            for j in range(span[r, 0], span[r, 1]):
+                col[j] += Cr[j] * P
+    _upper(model, M, col, tree)
+    for j in range(nv):
+        vel[j] += col[j]
     work = 0.0
     for r in range(m):
         row = s.rows[r]
@@ -272,12 +353,13 @@ def _modes(model, s, nb, d):
 
 
 @jit
-def _corrections(model, w, s, t, h_step, x, u, p, d, flow):
+def _corrections(model, w, s, t, h_step, x, u, p, d, flow, tree):
     """After the step: the flow's own rows back on their manifold (positions and speeds: dynamics.project with every
     contact open), then the gap of each closed contact further than PENETRATION from zero, and of each other one
     of the step's problem below -PENETRATION that its speed does not lift out within a step (h_step), put back on
     zero (positions only, the least change in the metric of M at the step's mid point, whose factor w.M holds: one
-    linearized step, with the flow's holonomic rows held). Returns a status."""
+    linearized step, with the flow's holonomic rows held; tree: how the step factored M, _factor). Returns a
+    status."""
     nc = model.contact_rows.shape[0]
     d_open = s.d_open
     for k in range(d.shape[0]):
@@ -288,6 +370,7 @@ def _corrections(model, w, s, t, h_step, x, u, p, d, flow):
         status = project(model, w, t, x, u, p, d_open, flow, True, 0.0, -1.0)
         if status != OK:
             return status
+        tree = False                                    # (w.M: project's dense factor at the step's end)
     if nc == 0:
         return OK
     S = w.S
@@ -304,9 +387,31 @@ def _corrections(model, w, s, t, h_step, x, u, p, d, flow):
         return OK
     s.stats[3] += 1
     select_rows(model, w, flow, d_open)
-    correct_rows(model, w, w.nactive[1], model.s_phi, w.M)
+    if tree:
+        _correct_tree(model, w, w.nactive[1])
+    else:
+        correct_rows(model, w, w.nactive[1], model.s_phi, w.M)
     move(model, t, x, u, p, d, S[model.s_dv, :model.nv])
     return OK
+
+
+@jit
+def _correct_tree(model, w, nr):
+    """S's dv row <- the least M-norm change with A dv = -phi over the first nr active rows, M factored along its
+    tree (_factor): dynamics.correct_rows' dense path with the tree's R (C = A R^-1, dv = R^-1 C^+ (-phi))."""
+    S, M, nv, c0 = w.S, w.M, model.nv, model.s_c
+    for r in range(nr):
+        row = w.active[0, r]
+        for j in range(nv):
+            S[c0 + r, j] = S[model.s_a + row, j]
+        _lower(model, M, S[c0 + r], True)
+        S[model.s_y, r] = -S[model.s_phi, row]
+    solve_gram(model, S, nr, True)
+    dv = S[model.s_dv, :nv]
+    for j in range(nv):
+        dv[j] = 0.0
+    add_rows_transposed(model, S, nr, 1.0, dv)
+    tree_upper(model, M, dv)
 
 
 @jit(nogil=True)
