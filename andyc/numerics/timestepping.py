@@ -63,7 +63,7 @@ KEEP = 1e-6             # m: ... or at most this, when it was closed in the last
 PENETRATION = 1e-9      # m: a closed contact's gap further than this from zero after a step is put back on it
 
 Scratch = namedtuple("Scratch", "W w0 X rows owner kind first mu state direction P work v a col xm x0 xdot "
-                                "d_open e cmu total seen guess guess_dir landed speed stats tree span")
+                                "d_open e cmu total seen guess guess_dir landed speed stats tree span cut runs")
 Scratch.__doc__ = """The arrays of a time-stepping run (new_scratch). The step's problem over at most nc rows: W (nc * nc),
 w0, P (nc,), X (nc * nv) its rows whitened, C = A R^-1 (M = R^T R: _factor), row by row, span (nc, 2) the first
 and one past the last speed where each row of C may be nonzero; rows (nc,) its constraint rows; per block: owner (its contact, -1 bilateral),
@@ -74,7 +74,8 @@ restitution and mu; total (nc,) each row's impulse since the last sample, seen (
 (contacts,) 1 where a contact open at the step's start is closed at its end; speed (contacts,) each contact's
 normal speed after the step (those of its problem); stats (4,):
 steps, Gauss-Seidel sweeps, steps whose answer did not verify, push-outs; tree (1,) 1 where M is factored along
-its tree (coefficients)."""
+its tree (coefficients); cut (nc + 1,) the first block of each independent part of the step's problem, runs (nc, 2)
+the speeds each part reaches (_parts)."""
 
 
 def new_scratch(nq, nv, nx, nw, nc, nd, contacts) -> Scratch:
@@ -84,7 +85,7 @@ def new_scratch(nq, nv, nx, nw, nc, nd, contacts) -> Scratch:
     return Scratch(z(m * m), z(m), z(nv * m), z(m, i), z(m, i), z(m, i), z(m, i), z(m), z(m, i), z(2 * m), z(m),
                    z(work_shape(m)), z(nv), z(nv), z(nv), z(nx + nw), z(nx + nw), z(nx + nw), z(nd), z(contacts),
                    z(contacts), z(m), z(m), np.full(contacts, -1, i), z((contacts, 2)), z(contacts, i), z(contacts), z(4, i),
-                   z(1, i), z((m, 2), i))
+                   z(1, i), z((m, 2), i), z(m + 1, i), z((m, 2), i))
 
 
 @jit
@@ -264,38 +265,33 @@ def _impulses(model, w, s, m, nb, v, vel, tree):
     v: v_k. Each row's impulse into s.total (and s.seen), its normal speed after into s.w0, the blocks' states into
     s.state (and s.direction); returns the impulses' work P . (A v_{k+1/2} + b). W = A M^-1 A^T = C C^T with
     C = A R^-1 (one triangular solve a row, the tree's skipping the speeds a row does not reach), each entry over
-    the speeds where both rows may be nonzero, the lower triangle mirrored."""
+    the speeds where both rows may be nonzero, the lower triangle mirrored; solved part by part where the blocks
+    fall into parts that share no speed (_parts: boxes side by side), each part's W alone."""
     S, M, nv = w.S, w.M, model.nv
     C = s.X[:m * nv].reshape((m, nv))
-    W = s.W[:m * m].reshape((m, m))
     w0, span = s.w0[:m], s.span
-    for r in range(m):                                  # C = A R^-1, row by row
+    for r in range(m):                                  # C = A R^-1, row by row; w0 = A v_free + b (b = c - A v_k)
         row = s.rows[r]
         Cr = C[r]
-        for j in range(nv):
-            Cr[j] = S[model.s_a + row, j]
-        span[r, 0], span[r, 1] = _lower(model, M, Cr, tree)
-    for r in range(m):                                  # W = C C^T; w0 = A v_free + b (b = c - A v_k)
-        row = s.rows[r]
         av, af = 0.0, 0.0
         for j in range(nv):
-            av += S[model.s_a + row, j] * v[j]
-            af += S[model.s_a + row, j] * vel[j]
+            a = S[model.s_a + row, j]
+            Cr[j] = a
+            av += a * v[j]
+            af += a * vel[j]
         w0[r] = af + S[model.s_cv, row] - av
-        Cr = C[r]
-        for c in range(r + 1):
-            lo, hi = max(span[r, 0], span[c, 0]), min(span[r, 1], span[c, 1])
-            Cc = C[c]
-            total = 0.0
-            for j in range(lo, hi):
-                total += Cr[j] * Cc[j]
-            W[r, c] = total
-            W[c, r] = total
+        span[r, 0], span[r, 1] = _lower(model, M, Cr, tree)
     for k in range(nb):                                 # Newton's law: u_n,k+1 + e min(u_n,k, 0) >= 0
         if s.owner[k] >= 0:
             w0[s.first[k]] += s.e[s.owner[k]] * min(S[model.s_cv, s.rows[s.first[k]]], 0.0)
-    sweeps, verified = solve(W, w0, s.kind[:nb], s.first[:nb], s.mu[:nb], s.state[:nb],
-                             s.direction[:2 * nb].reshape((nb, 2)), s.P[:m], s.work)
+    parts = _parts(s, nb, nv)
+    if parts == 1:
+        W = s.W[:m * m].reshape((m, m))
+        _gram(C, span, W, 0, m)
+        sweeps, verified = solve(W, w0, s.kind[:nb], s.first[:nb], s.mu[:nb], s.state[:nb],
+                                 s.direction[:2 * nb].reshape((nb, 2)), s.P[:m], s.work)
+    else:
+        sweeps, verified = _solve_parts(s, C, span, w0, parts)
     s.stats[1] += sweeps
     if not verified:
         s.stats[2] += 1
@@ -326,6 +322,71 @@ def _impulses(model, w, s, m, nb, v, vel, tree):
         s.total[row] += s.P[r]
         s.seen[row] = 1.0
     return work
+
+
+@jit(inline="always")
+def _gram(C, span, W, r0, n):
+    """W[:n, :n] <- C C^T over C's rows r0 .. r0 + n - 1, each entry over the speeds where both rows may be nonzero
+    (span), symmetric."""
+    for r in range(n):
+        Cr, lo_r, hi_r = C[r0 + r], span[r0 + r, 0], span[r0 + r, 1]
+        for q in range(r + 1):
+            lo, hi = max(lo_r, span[r0 + q, 0]), min(hi_r, span[r0 + q, 1])
+            Cq = C[r0 + q]
+            total = 0.0
+            for j in range(lo, hi):
+                total += Cr[j] * Cq[j]
+            W[r, q] = total
+            W[q, r] = total
+
+
+@jit
+def _solve_parts(s, C, span, w0, parts):
+    """The step's problem part by part (_parts), each part's W alone; returns (sweeps, verified) over them all."""
+    used, sweeps, verified = 0, 0, True
+    for c in range(parts):
+        k0, k1 = s.cut[c], s.cut[c + 1]
+        r0, r1 = s.first[k0], s.first[k1 - 1] + max(s.kind[k1 - 1], 1)
+        n = r1 - r0
+        W = s.W[used:used + n * n].reshape((n, n))
+        used += n * n
+        _gram(C, span, W, r0, n)
+        for k in range(k0, k1):
+            s.first[k] -= r0
+        part_sweeps, part_verified = solve(W, w0[r0:r1], s.kind[k0:k1], s.first[k0:k1], s.mu[k0:k1], s.state[k0:k1],
+                                           s.direction[2 * k0:2 * k1].reshape((k1 - k0, 2)), s.P[r0:r1], s.work)
+        for k in range(k0, k1):
+            s.first[k] += r0
+        sweeps += part_sweeps
+        verified = verified and part_verified
+    return sweeps, verified
+
+
+@jit(inline="always")
+def _parts(s, nb, nv):
+    """The blocks' independent parts: runs of consecutive blocks whose rows (of C) reach speed intervals that meet
+    no other run's, so that W is zero between runs (bodies side by side; a robot's feet all meet at its base: one
+    part). s.cut[c] the first block of run c, s.cut[parts] = nb; returns the number of parts, 1 where runs would
+    interleave (a block meeting an earlier run but the last: kept as one problem)."""
+    parts = 0
+    for k in range(nb):
+        lo, hi = nv, 0
+        for r in range(s.first[k], s.first[k] + max(s.kind[k], 1)):
+            if s.span[r, 0] < s.span[r, 1]:
+                lo, hi = min(lo, s.span[r, 0]), max(hi, s.span[r, 1])
+        for c in range(parts - 1):
+            if lo < s.runs[c, 1] and hi > s.runs[c, 0]:
+                s.cut[0], s.cut[1] = 0, nb
+                return 1
+        if parts > 0 and (lo >= hi or (lo < s.runs[parts - 1, 1] and hi > s.runs[parts - 1, 0])):
+            s.runs[parts - 1, 0] = min(s.runs[parts - 1, 0], lo)       # (joins the last run; an empty row too)
+            s.runs[parts - 1, 1] = max(s.runs[parts - 1, 1], hi)
+            continue
+        s.cut[parts] = k
+        s.runs[parts, 0], s.runs[parts, 1] = lo, hi
+        parts += 1
+    s.cut[parts] = nb
+    return parts
 
 
 @jit(inline="always")
