@@ -18,7 +18,7 @@ does, nonlinear Gauss-Seidel over the blocks, each block's local problem solved 
 either way; a spatial slide's direction by the secant method, else a scan of the circle and bisection), then a
 polish: the states found (open, stick, slip +/-, a spatial slide with its direction) fix an active set whose
 linear equations are solved in the least-norm least-squares sense (redundant rows allowed: a box flat on four
-corners has 12 rows on 6 speeds) and checked against every condition; a checked answer is exact to rounding,
+corners has 12 rows on 6 speeds; without a slide and of full rank, by Cholesky) and checked against every condition; a checked answer is exact to rounding,
 one that fails leaves the Gauss-Seidel answer (verified False). The states passed in are tried first (the warm
 start: a resting or sliding contact keeps its state, and the step costs one polish, no sweep). Beyond the
 Python twin: where the active set's rows are dependent and the least-norm solution fails a check, the solution
@@ -45,6 +45,7 @@ SWEEPS = 500        # Gauss-Seidel sweeps at most (the polish makes the answer e
 SWEEP_TOL = 1e-15   # ... until no impulse changes by more than this, relative to the largest
 VECTORS = 12        # work's rows before the reduced system's
 RANK_EPS = 1e-12    # least squares: a pivot below this times the first is rounding (a dependent column)
+CHOLESKY_EPS = 1e-8     # the polish's Cholesky (no slide): each pivot above this times its diagonal entry, else QR
 TOL3Z = math.sqrt(np.finfo(np.float64).eps)     # pivoting: a column norm updated past this cancellation is recomputed
 
 
@@ -291,7 +292,9 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
 
     Column j of the active set is e_r + c1 e_(r+1) + c2 e_(r+2), r = rows[j]: a bilateral or sticking row's own
     impulse (c = 0), or a sliding contact's, its friction riding on its normal impulse (planar: c1 = -+mu;
-    spatial: c = -mu d); its equation is w_r = 0."""
+    spatial: c = -mu d); its equation is w_r = 0. Without a slide the system is W over the rows, symmetric: where
+    it is positive definite and well conditioned (_cholesky_solve), its one solution by Cholesky first, a fifth
+    of the QR's cost (a robot standing on its feet: every step); should that fail a condition, the QR's as ever."""
     m = w0.shape[0]
     cand, w, b, y, z, vn1, vn2, tau = work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7]
     c1, c2, rows, perm = work[8], work[9], work[10], work[11]   # (rows, perm: integers, as floats)
@@ -310,17 +313,23 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
             elif kind[k] == SPATIAL:
                 c1[n], c2[n] = -mu[k] * direction[k, 0], -mu[k] * direction[k, 1]
             n += 1
-    for i in range(n):
-        q = int(rows[i])
-        b[i] = -w0[q]
-        for j in range(n):
-            r = int(rows[j])
-            v = W[q, r]
-            if c1[j] != 0.0:
-                v += c1[j] * W[q, r + 1]
-            if c2[j] != 0.0:
-                v += c2[j] * W[q, r + 2]
-            K[i, j] = v
+    symmetric = True
+    for j in range(n):
+        symmetric = symmetric and c1[j] == 0.0 and c2[j] == 0.0
+    _system(W, w0, rows, c1, c2, n, K, b)
+    if symmetric:                           # no slide: K = W over the rows, symmetric; full rank: K^-1 b at once
+        for i in range(n):
+            y[i] = b[i]
+        if _cholesky_solve(K, y, n):
+            for i in range(m):
+                cand[i] = 0.0
+            for j in range(n):
+                cand[int(rows[j])] = y[j]
+            for i in range(m):
+                w[i] = w0[i] + _dot(W[i], cand, 0, m)
+            if _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v):
+                return True
+        _system(W, w0, rows, c1, c2, n, K, b)          # (the factor, or a part of it, took K's place)
     rank = _factor(K, b, n, vn1, vn2, tau, perm, y, z)
     for closest in (False, True):
         if closest and rank == n:           # (a unique solution: nothing else to try)
@@ -342,6 +351,54 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
         if _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v):
             return True
     return False
+
+
+@jit(inline="always")
+def _system(W, w0, rows, c1, c2, n, K, b):
+    """K[:n, :n] y = b[:n]: the active set's equations (_polish), K's column j the rows' velocities per unit of
+    its column of impulses, b = -w0 at its rows."""
+    for i in range(n):
+        q = int(rows[i])
+        b[i] = -w0[q]
+        for j in range(n):
+            r = int(rows[j])
+            v = W[q, r]
+            if c1[j] != 0.0:
+                v += c1[j] * W[q, r + 1]
+            if c2[j] != 0.0:
+                v += c2[j] * W[q, r + 2]
+            K[i, j] = v
+
+
+@jit
+def _cholesky_solve(K, y, n):
+    """y[:n] <- K^-1 y for K[:n, :n] symmetric positive definite (its lower triangle read), by Cholesky in place
+    (K's lower triangle <- L, K = L L^T); False where a pivot is not above CHOLESKY_EPS times its diagonal entry:
+    K singular or near it (dependent rows: the least squares of _factor decide), y then undefined."""
+    for j in range(n):
+        d = K[j, j]
+        for k in range(j):
+            d -= K[j, k] * K[j, k]
+        if not d > CHOLESKY_EPS * K[j, j]:
+            return False
+        ljj = math.sqrt(d)
+        K[j, j] = ljj
+        for i in range(j + 1, n):
+            s = K[i, j]
+            for k in range(j):
+                s -= K[i, k] * K[j, k]
+            K[i, j] = s / ljj
+    for i in range(n):                      # L z = y
+        s = y[i]
+        for k in range(i):
+            s -= K[i, k] * y[k]
+        y[i] = s / K[i, i]
+    for i in range(n - 1, -1, -1):          # L^T y = z
+        s = y[i]
+        for k in range(i + 1, n):
+            s -= K[k, i] * y[k]
+        y[i] = s / K[i, i]
+    return True
 
 
 @jit
