@@ -63,7 +63,7 @@ KEEP = 1e-6             # m: ... or at most this, when it was closed in the last
 PENETRATION = 1e-9      # m: a closed contact's gap further than this from zero after a step is put back on it
 
 Scratch = namedtuple("Scratch", "W w0 X rows owner kind first mu state direction P work v a col xm x0 xdot "
-                                "d_open e cmu total seen guess guess_dir landed speed stats tree span cut runs")
+                                "d_open e cmu total seen guess guess_dir landed speed stats tree span cut runs av")
 Scratch.__doc__ = """The arrays of a time-stepping run (new_scratch). The step's problem over at most nc rows: W (nc * nc),
 w0, P (nc,), X (nc * nv) its rows whitened, C = A R^-1 (M = R^T R: _factor), row by row, span (nc, 2) the first
 and one past the last speed where each row of C may be nonzero; rows (nc,) its constraint rows; per block: owner (its contact, -1 bilateral),
@@ -75,7 +75,7 @@ restitution and mu; total (nc,) each row's impulse since the last sample, seen (
 normal speed after the step (those of its problem); stats (4,):
 steps, Gauss-Seidel sweeps, steps whose answer did not verify, push-outs; tree (1,) 1 where M is factored along
 its tree (coefficients); cut (nc + 1,) the first block of each independent part of the step's problem, runs (nc, 2)
-the speeds each part reaches (_parts)."""
+the speeds each part reaches (_parts); av (nc,) A v_k over the problem's rows."""
 
 
 def new_scratch(nq, nv, nx, nw, nc, nd, contacts) -> Scratch:
@@ -85,7 +85,7 @@ def new_scratch(nq, nv, nx, nw, nc, nd, contacts) -> Scratch:
     return Scratch(z(m * m), z(m), z(nv * m), z(m, i), z(m, i), z(m, i), z(m, i), z(m), z(m, i), z(2 * m), z(m),
                    z(work_shape(m)), z(nv), z(nv), z(nv), z(nx + nw), z(nx + nw), z(nx + nw), z(nd), z(contacts),
                    z(contacts), z(m), z(m), np.full(contacts, -1, i), z((contacts, 2)), z(contacts, i), z(contacts), z(4, i),
-                   z(1, i), z((m, 2), i), z(m + 1, i), z((m, 2), i))
+                   z(1, i), z((m, 2), i), z(m + 1, i), z((m, 2), i), z(m))
 
 
 @jit
@@ -280,6 +280,7 @@ def _impulses(model, w, s, m, nb, v, vel, tree):
             av += a * v[j]
             af += a * vel[j]
         w0[r] = af + S[model.s_cv, row] - av
+        s.av[r] = av
         span[r, 0], span[r, 1] = _lower(model, M, Cr, tree)
     for k in range(nb):                                 # Newton's law: u_n,k+1 + e min(u_n,k, 0) >= 0
         if s.owner[k] >= 0:
@@ -308,17 +309,14 @@ def _impulses(model, w, s, m, nb, v, vel, tree):
     for j in range(nv):
         vel[j] += col[j]
     work = 0.0
-    for r in range(m):
+    for r in range(m):                                  # A v_{k+1} + b, and P . (A v_{k+1/2} + b), b = c - A v_k
         row = s.rows[r]
-        after, half = 0.0, 0.0
+        after = 0.0
         for j in range(nv):
             after += S[model.s_a + row, j] * vel[j]
-            half += S[model.s_a + row, j] * 0.5 * (v[j] + vel[j])
-        b = S[model.s_cv, row]
-        for j in range(nv):
-            b -= S[model.s_a + row, j] * v[j]
+        b = S[model.s_cv, row] - s.av[r]
         w0[r] = after + b
-        work += s.P[r] * (half + b)
+        work += s.P[r] * (0.5 * (s.av[r] + after) + b)
         s.total[row] += s.P[r]
         s.seen[row] = 1.0
     return work
