@@ -45,14 +45,16 @@ SWEEPS = 500        # Gauss-Seidel sweeps at most (the polish makes the answer e
 SWEEP_TOL = 1e-15   # ... until no impulse changes by more than this, relative to the largest
 VECTORS = 12        # work's rows before the reduced system's
 RANK_EPS = 1e-12    # least squares: a pivot below this times the first is rounding (a dependent column)
-CHOLESKY_EPS = 1e-8     # the polish's Cholesky (no slide): each pivot above this times its diagonal entry, else QR
+CHOLESKY_EPS = 1e-8     # the polish's Cholesky (no slide): each pivot above this times its diagonal entry, else
+PSD_EPS = 1e-10         # ... with diagonal pivoting, where a pivot at most this times the first is rounding
 TOL3Z = math.sqrt(np.finfo(np.float64).eps)     # pivoting: a column norm updated past this cancellation is recomputed
 
 
 @jit
 def work_shape(m):
-    """The shape of `work` for problems of up to m rows: twelve vectors, then the polish's reduced system."""
-    return m + VECTORS, m
+    """The shape of `work` for problems of up to m rows: twelve vectors, the polish's reduced system, then the
+    Gram matrix of its pivoted Cholesky (_psd_least_norm)."""
+    return 2 * m + VECTORS, m
 
 
 @jit
@@ -292,13 +294,14 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
 
     Column j of the active set is e_r + c1 e_(r+1) + c2 e_(r+2), r = rows[j]: a bilateral or sticking row's own
     impulse (c = 0), or a sliding contact's, its friction riding on its normal impulse (planar: c1 = -+mu;
-    spatial: c = -mu d); its equation is w_r = 0. Without a slide the system is W over the rows, symmetric: where
-    it is positive definite and well conditioned (_cholesky_solve), its one solution by Cholesky first, a fifth
-    of the QR's cost (a robot standing on its feet: every step); should that fail a condition, the QR's as ever."""
+    spatial: c = -mu d); its equation is w_r = 0. Without a slide the system is W over the rows, symmetric
+    positive semidefinite: its least-norm solution by Cholesky first, a fraction of the QR's cost (a robot standing
+    on its feet: every step), with diagonal pivoting where plain Cholesky meets a pivot near zero (dependent rows:
+    a box resting on four corners, _psd_least_norm); should that answer fail a condition, the QR's as ever."""
     m = w0.shape[0]
     cand, w, b, y, z, vn1, vn2, tau = work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7]
     c1, c2, rows, perm = work[8], work[9], work[10], work[11]   # (rows, perm: integers, as floats)
-    K = work[VECTORS:]                  # the reduced system, K[:n, :n]
+    K = work[VECTORS:VECTORS + m]       # the reduced system, K[:n, :n]
     n = np.int64(0)     # (not the literal 0: Numba would compile the calls below once more for it)
     for k in range(kind.shape[0]):
         f, s = first[k], state[k]
@@ -317,10 +320,16 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
     for j in range(n):
         symmetric = symmetric and c1[j] == 0.0 and c2[j] == 0.0
     _system(W, w0, rows, c1, c2, n, K, b)
-    if symmetric:                           # no slide: K = W over the rows, symmetric; full rank: K^-1 b at once
+    if symmetric:                           # no slide: K = W over the rows, symmetric: K^+ b by Cholesky first
         for i in range(n):
             y[i] = b[i]
-        if _cholesky_solve(K, y, n):
+        solved = _cholesky_solve(K, y, n)
+        if not solved:                      # (dependent rows, or near it: a box resting on four corners)
+            _system(W, w0, rows, c1, c2, n, K, b)
+            for i in range(n):
+                y[i] = b[i]
+            solved = _psd_least_norm(K, y, n, perm, z, vn1, work[VECTORS + m:])
+        if solved:
             for i in range(m):
                 cand[i] = 0.0
             for j in range(n):
@@ -398,6 +407,101 @@ def _cholesky_solve(K, y, n):
         for k in range(i + 1, n):
             s -= K[k, i] * y[k]
         y[i] = s / K[i, i]
+    return True
+
+
+@jit
+def _psd_least_norm(K, y, n, perm, t, u, G):
+    """y[:n] <- K^+ y, the least-norm least-squares solution of K x = y, for K[:n, :n] symmetric positive
+    semidefinite (both triangles read, and overwritten), by Cholesky with diagonal pivoting (LAPACK's xPSTRF):
+    Pi K Pi^T = L L^T with L (n, r) lower trapezoidal, r the pivots above PSD_EPS times the first (the rest is
+    rounding: dependent rows); then x = Pi^T L (L^T L)^-2 L^T Pi y, K^+ for that factor (full rank: L^-T L^-1 at
+    once). perm, t, u (n,) and G (at least r x r): scratch. False where no pivot is positive, or L^T L is not
+    positive definite (the caller's QR decides then); the answer is the caller's to check."""
+    for i in range(n):
+        perm[i] = i
+    r, first = n, 0.0
+    for j in range(n):
+        p = j
+        for i in range(j + 1, n):
+            if K[i, i] > K[p, p]:
+                p = i
+        if j == 0:
+            first = K[p, p]
+            if not first > 0.0:
+                return False
+        if not K[p, p] > PSD_EPS * first:
+            r = j
+            break
+        if p != j:                          # rows and columns j and p swapped (the factor's columns with them)
+            for i in range(n):
+                K[j, i], K[p, i] = K[p, i], K[j, i]
+            for i in range(n):
+                K[i, j], K[i, p] = K[i, p], K[i, j]
+            perm[j], perm[p] = perm[p], perm[j]
+        ljj = math.sqrt(K[j, j])
+        K[j, j] = ljj
+        for i in range(j + 1, n):
+            K[i, j] /= ljj
+        for i in range(j + 1, n):           # the Schur complement, both triangles
+            lij = K[i, j]
+            for k in range(j + 1, i + 1):
+                K[i, k] -= lij * K[k, j]
+                K[k, i] = K[i, k]
+    for i in range(n):                      # t = Pi y
+        t[i] = y[int(perm[i])]
+    if r == n:
+        for i in range(n):                  # L L^T x = t
+            s = t[i]
+            for k in range(i):
+                s -= K[i, k] * t[k]
+            t[i] = s / K[i, i]
+        for i in range(n - 1, -1, -1):
+            s = t[i]
+            for k in range(i + 1, n):
+                s -= K[k, i] * t[k]
+            t[i] = s / K[i, i]
+    else:
+        for a in range(r):                  # u = L^T t, G = L^T L (its lower triangle)
+            s = 0.0
+            for i in range(a, n):
+                s += K[i, a] * t[i]
+            u[a] = s
+            for c in range(a + 1):
+                s = 0.0
+                for i in range(a, n):
+                    s += K[i, a] * K[i, c]
+                G[a, c] = s
+        for j in range(r):                  # G = R R^T, then u <- G^-1 G^-1 u
+            d = G[j, j]
+            for k in range(j):
+                d -= G[j, k] * G[j, k]
+            if not d > 0.0:
+                return False
+            G[j, j] = math.sqrt(d)
+            for i in range(j + 1, r):
+                s = G[i, j]
+                for k in range(j):
+                    s -= G[i, k] * G[j, k]
+                G[i, j] = s / G[j, j]
+        for _ in range(2):
+            for i in range(r):
+                s = u[i]
+                for k in range(i):
+                    s -= G[i, k] * u[k]
+                u[i] = s / G[i, i]
+            for i in range(r - 1, -1, -1):
+                s = u[i]
+                for k in range(i + 1, r):
+                    s -= G[k, i] * u[k]
+                u[i] = s / G[i, i]
+        for i in range(n):                  # t = L u
+            s = 0.0
+            for k in range(min(i + 1, r)):
+                s += K[i, k] * u[k]
+            t[i] = s
+    for i in range(n):                      # x = Pi^T t
+        y[int(perm[i])] = t[i]
     return True
 
 
