@@ -273,8 +273,8 @@ def resolve_stop(model, t, x, u, p, d, k: int, flow: int) -> None:
     nq, nv = model.nq, model.nv
     M, _, c, A = terms(model, t, x, u, p, d)
     states, stick, tangents = model.contact_states(d), model.contact_stick_rows, model.tangents
-    stopping = [model.jump_kinds[k][1]] + [i for i, s in enumerate(states) if s > STICK and tangents[i] == 1
-                                           and abs(c[stick[i]]) <= REST_SPEED]
+    stopping = [model.jump_kinds[k][1]] + [i for i, s in enumerate(states) if s > STICK
+                                           and np.linalg.norm(c[stick[i]:stick[i] + tangents[i]]) <= REST_SPEED]
     for i in stopping:
         states[i] = STICK
     model.set_contact_states(d, states)

@@ -11,6 +11,7 @@ import numpy as np
 
 import andyc
 from andyc.errors import plural, printable
+from andyc.numerics.status import SLIP_TINY
 from andyc.outputs import write_atomic
 from andyc.runtime.status import drift, largest_residual
 from andyc.spec.meshfiles import read_mesh
@@ -168,7 +169,8 @@ class Run:
     @property
     def friction_forces(self) -> np.ndarray:
         """(N, contacts) each contact's friction force along +tangent (the direction of positive slip): its stick
-        row's multiplier while it sticks, -mu lam_n slipping forwards, +mu lam_n backwards; 0 open or frictionless."""
+        row's multiplier while it sticks, -mu lam_n slipping forwards, +mu lam_n backwards; 0 open or frictionless.
+        A moreau run's, after sample 0: the steps' mean tangential impulse P_t / dt, in every closed mode."""
         return self._friction(0)
 
     @property
@@ -189,9 +191,12 @@ class Run:
                 known = f"{self.contact_names[i]}_slip_dir_1"
                 if known in self.discrete_names:        # a slip from rest, or a step that held it: the run's
                     k = self.discrete_names.index(known)
-                    own = (size > 0) & (self.discrete[:, k + 2] == 0)
-                    direction = np.where(own[:, None], slip / np.where(size > 0, size, 1.0)[:, None],
-                                         self.discrete[:, k:k + 2])
+                    # (as numerics.slipping.slip_unit: the run's direction where |s| <= SLIP_TINY or held, else
+                    # s / |s| turned towards it)
+                    ref = self.discrete[:, k:k + 2]
+                    own = (size > SLIP_TINY) & (self.discrete[:, k + 2] == 0)
+                    sigma = np.where(np.sum(slip * ref, axis=1) < 0.0, -1.0, 1.0)
+                    direction = np.where(own[:, None], slip * (sigma / np.where(size > 0, size, 1.0))[:, None], ref)
                 else:
                     direction = slip / np.where(size > 0, size, 1.0)[:, None]
                 out[:, i] = np.where(modes[:, i] == 1, self.multipliers[:, row + j], 0.0)
@@ -203,6 +208,12 @@ class Run:
             out[:, i] = np.where(modes[:, i] == 1, self.multipliers[:, row], 0.0)
             out[:, i] += np.where(modes[:, i] == 2, -mu * normal[:, i], 0.0) + np.where(modes[:, i] == 3,
                                                                                          mu * normal[:, i], 0.0)
+        if self.method == "moreau":
+            # after sample 0 (the initial modes' ideal multipliers), the steps' mean tangential impulses P_t / dt,
+            # logged in the stick rows whatever the contact's mode (a slip at rest, a slide: the step's own force)
+            for i, row in enumerate(self.contact_stick_rows):
+                if row >= 0 and j < self.contact_tangents[i]:
+                    out[1:, i] = np.where(modes[1:, i] > 0, np.nan_to_num(self.multipliers[1:, row + j]), 0.0)
         return out
 
     @property
