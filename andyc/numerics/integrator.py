@@ -281,6 +281,8 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
                 if update_inputs(inputs, t_next, x1, p, d, flow, u, data) != OK:
                     return i, row, INPUT_FAILED, t, flow, -1
                 g1 = guard_value(model, w, n, t_next, x1, u, p, d, flow)
+                if model.jump_multipliers[n] and abs(g1) <= ON_CONE * force_scale(w.lam):
+                    continue        # (a force a rounding from its bound: no crossing yet; g0 keeps its side)
                 if crosses(direction[n], g0[n], g1):
                     tau, status = locate(model, w, opts, inputs, data, n, tol, t, h, x, u, p, d, flow, g0[n], g1, scale)
                     if status == OK:

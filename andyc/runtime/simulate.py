@@ -46,7 +46,7 @@ from andyc.errors import SimulationError
 from andyc.numerics.status import IDEAL
 from andyc.runtime.adaptive import run_adaptive
 from andyc.runtime.compiled import CompiledModel, compile_integrator, work
-from andyc.runtime.contacts import friction_coefficients, initial_mode, slip_speeds
+from andyc.runtime.contacts import TOUCHING, friction_coefficients, initial_mode, slip_speeds
 from andyc.runtime.events import EventLog
 from andyc.runtime.fixed_step import MODE, run_fixed_step
 from andyc.runtime.initial import consistent_initial_state, initial_state, require_independent_rows
@@ -294,7 +294,8 @@ class _Assembly:
 
 
 def _close_sunk(model: CompiledModel, x, u, p, d) -> bool:
-    """Close (mode 1, into d) every open contact whose gap starts below zero: its impact would never come (its guard
+    """Close (mode 1, into d) every open contact whose gap starts below zero (beyond TOUCHING, a rounding: a foot
+    leaving the ground at the start): its impact would never come (its guard
     is past zero), and the body would fall through. Closed, its row is checked like any active row by the initial
     state's check (consistent_initial_state: refused past init.tol, with the contact's line; moved onto the surface
     with init 'project'; kept with 'as-is'), as `andyc check` refuses it. Returns whether any was."""
@@ -308,7 +309,7 @@ def _close_sunk(model: CompiledModel, x, u, p, d) -> bool:
                               f"{phi[model.contact_rows[bad[0]]]} at the initial state; write it so that it is real "
                               "and finite there (a square root of a negative number, a division by zero?)")
     states = model.contact_states(d)
-    sunk = [i for i, r in enumerate(model.contact_rows) if states[i] == 0 and phi[r] < 0.0]
+    sunk = [i for i, r in enumerate(model.contact_rows) if states[i] == 0 and phi[r] < -TOUCHING]
     for i in sunk:
         states[i] = 1
     model.set_contact_states(d, states)
