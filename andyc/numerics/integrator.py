@@ -252,15 +252,18 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
     for n in range(model.nj):
         if in_mode(model, n, flow, d):
             g0[n] = guard_value(model, w, n, t, x, u, p, d, flow)
-            # A contact leaving an impact (a bounce, or a rocking block's pivot corner lifted when the other
-            # strikes) starts with its gap a rounding from zero, either side. A rounding below zero, moving up,
-            # would hide its coming down again within the step (a block's late, short rocks), and one above would
-            # have locate try the step's start again and again: it starts on the open side, of no known size.
-            if model.jump_contact[n] >= 0 and abs(g0[n]) <= ON_ZERO * scale:
+            # A guard leaving its surface (a bounce, a rocking block's pivot corner lifted when the other strikes,
+            # a hand-written walker's foot after its strike) starts a rounding from zero, either side. A rounding
+            # past zero, moving away, would hide its coming back within the step (a block's late, short rocks: the
+            # run would pass through the surface unnoticed), and one before it would have locate try the step's
+            # start again and again: it starts on the open side, of no known size. (A guard of multipliers has no
+            # derived rate: not this.)
+            if (direction[n] != EITHER and not model.jump_multipliers[n]
+                    and abs(g0[n]) <= ON_ZERO * scale):
                 if not have_rate:
                     have_rate = rhs_mode_into(model, w, t, x, u, p, d, flow, w.xdot, opts.mode) == OK
-                if have_rate and call(model.guard_rate, (n, t, x, u, p, d, w.xdot)) > REST_SPEED:
-                    g0[n] = OPEN_SIDE
+                if have_rate and direction[n] * call(model.guard_rate, (n, t, x, u, p, d, w.xdot)) < -REST_SPEED:
+                    g0[n] = -direction[n] * OPEN_SIDE
     while i < i_end:
         t_next = t0 + (i + 1) * dt
         h = t_next - t
