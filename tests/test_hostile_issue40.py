@@ -122,3 +122,34 @@ def test_simulate_and_expect_numbers_are_finite_at_check(tmp_path, section, path
     found = LINE_FORMAT.match(lines[0])
     assert found and found["path"] == path and what in found["what"], lines[0]
     assert int(found["line"]) == line_of(text, section.split(":")[0] + ":")
+
+
+# ---- 8. andyc test that tested nothing does not pass ---------------------------------------------------------
+
+def test_andyc_test_on_an_empty_folder_exits_5(tmp_path):
+    (tmp_path / "empty").mkdir()
+    result = invoke("test", tmp_path / "empty", "--build-dir", tmp_path / "build")
+    assert result.exit_code == 5, result.output
+    assert "0 checks in 0 models: nothing tested" in result.stdout
+    assert result.stderr.strip().startswith("andyc test: nothing tested: no model file (*.yaml, *.yml) in ")
+    assert not (tmp_path / "build").exists()
+    ok = invoke("test", tmp_path / "empty", "--no-tests-ok", "--build-dir", tmp_path / "build")
+    assert ok.exit_code == 0, ok.output
+
+
+def test_andyc_test_on_models_without_expectations_exits_5_and_json_says_so(tmp_path):
+    (tmp_path / "m.yaml").write_text(PENDULUM.split("\nexpect:")[0] + "\n")
+    result = invoke("test", tmp_path, "--build-dir", tmp_path / "build", "--format", "json")
+    assert result.exit_code == 5
+    import json
+    document = json.loads(result.stdout)
+    assert document["exit_code"] == 5 and not document["ok"]
+    assert "no model has an expect: section" in document["problems"][0]["message"]
+
+
+def test_an_unreadable_model_in_the_folder_is_reported_not_skipped(tmp_path):
+    (tmp_path / "m.yaml").symlink_to(tmp_path / "nowhere.yaml")       # a broken link
+    result = invoke("test", tmp_path, "--build-dir", tmp_path / "build")
+    assert result.exit_code == 1, result.output
+    assert re.search(r"m\.yaml:1: <document>: cannot read the file", result.stderr), result.output
+    assert "0 checks in 1 model: 1 failure" in result.stdout
