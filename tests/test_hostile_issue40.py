@@ -153,3 +153,201 @@ def test_an_unreadable_model_in_the_folder_is_reported_not_skipped(tmp_path):
     assert result.exit_code == 1, result.output
     assert re.search(r"m\.yaml:1: <document>: cannot read the file", result.stderr), result.output
     assert "0 checks in 1 model: 1 failure" in result.stdout
+
+
+# ---- 5. internal errors that are messages: damaged run files, an unknown image type ------------------------
+
+def synthetic_run(tmp_path: Path, name: str = "run.h5") -> Path:
+    """A small run file of a made-up model with one logged frame (no build)."""
+    from andyc.runtime.run import Run
+
+    n = 11
+    time = np.linspace(0, 1, n)
+    run = Run(model="m", spec_sha256="0", method="rk4", dt=0.1, nq=1, nv=1, rtol=0.0, atol=0.0, t_end=1.0,
+              parameters={}, inputs={}, state_names=["y", "y_dot"], time=time, state=np.ones((n, 2)),
+              energy=np.zeros(n), frames={"tip": np.zeros((n, 3))}, frame_parents={"tip": "world"})
+    return run.save(tmp_path / name)
+
+
+def _replace(f, key, value):
+    attrs = dict(f[key].attrs)
+    del f[key]
+    f[key] = value
+    f[key].attrs.update(attrs)
+
+
+DAMAGE = {
+    "not-hdf5": None,
+    "truncated": None,
+    "no-state": lambda f: f.__delitem__("state"),
+    "no-time": lambda f: f.__delitem__("time"),
+    "no-attributes": lambda f: f.attrs.__delitem__("model"),
+    "state-columns": lambda f: _replace(f, "state", f["state"][:, :1]),
+    "state-rows": lambda f: _replace(f, "state", f["state"][:5]),
+    "state-1d": lambda f: _replace(f, "state", f["state"][:, 0]),
+    "state-text": lambda f: _replace(f, "state", np.array([b"x"] * 11)),
+    "time-short": lambda f: _replace(f, "time", f["time"][:3]),
+    "time-nan": lambda f: _replace(f, "time", np.full(11, np.nan)),
+    "time-backwards": lambda f: _replace(f, "time", f["time"][()][::-1].copy()),
+    "energy-short": lambda f: _replace(f, "energy", f["energy"][:2]),
+    "frame-1d": lambda f: _replace(f, "frames/tip", np.zeros(3)),
+    "flow-names-number": lambda f: f.attrs.__setitem__("flow_names", "5"),
+    "parameters-not-json": lambda f: f.attrs.__setitem__("parameters", "{"),
+    "parameters-a-list": lambda f: f.attrs.__setitem__("parameters", "[1]"),
+    "nq-text": lambda f: f.attrs.__setitem__("nq", "abc"),
+    "nq-past-the-states": lambda f: f.attrs.__setitem__("nq", 5),
+    "name-with-escape": lambda f: f["state"].attrs.__setitem__("names", ["\x1b[2J", "y_dot"]),
+    "model-with-escape": lambda f: f.attrs.__setitem__("model", "\x1b]0;pwned\x07"),
+}
+
+
+@pytest.mark.parametrize("damage", list(DAMAGE))
+@pytest.mark.parametrize("command", ["plot", "plot --animate", "view"])
+def test_a_damaged_run_file_is_one_line_not_an_internal_error(tmp_path, damage, command):
+    import h5py
+
+    path = synthetic_run(tmp_path)
+    if damage == "not-hdf5":
+        path.write_bytes(b"garbage, not HDF5\n" * 10)
+    elif damage == "truncated":
+        path.write_bytes(path.read_bytes()[:3000])
+    else:
+        with h5py.File(path, "a") as f:
+            DAMAGE[damage](f)
+    before = path.read_bytes()
+    out = tmp_path / ("out.html" if command == "view" else "out.gif" if "animate" in command else "out.png")
+    result = invoke(*command.split(), path, "-o", out)
+    one_line_error(result, f"Invalid value for RUN_FILE: {path}: ")
+    assert "\x1b" not in result.output and "\x07" not in result.output
+    assert path.read_bytes() == before and not out.exists()
+
+
+@pytest.mark.parametrize("command", ["plot", "view"])
+def test_a_run_with_no_samples_is_one_line(tmp_path, command):
+    import h5py
+
+    path = synthetic_run(tmp_path)
+    with h5py.File(path, "a") as f:
+        for key in ("time", "state", "energy", "flow", "discrete", "inputs", "multipliers", "residual/position",
+                    "residual/velocity", "work", "power", "frames/tip"):
+            _replace(f, key, f[key][:0])
+    result = invoke(command, path, "-o", tmp_path / ("o.html" if command == "view" else "o.png"))
+    one_line_error(result, "holds no samples")
+
+
+@pytest.mark.parametrize("out, says", [("p.xyz", "unknown image type '.xyz'"), ("p", "no image type"),
+                                       ("p.pgf", "unknown image type '.pgf'")])
+def test_plot_to_an_unknown_image_type_is_refused_before_any_work(tmp_path, out, says):
+    path = synthetic_run(tmp_path)
+    result = invoke("plot", path, "-o", tmp_path / out)
+    one_line_error(result, "Invalid value for '-o' / '--out'", says, ".png, .svg or .pdf")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.h5"]
+
+
+# ---- 5. kinks that have no second derivative, axes that overflow, constants past a float -------------------
+
+SLIDER = """\
+name: slider
+parameters: {m: 1.0, g: 9.81, k: 1.0}
+coordinates:
+  x: {initial: 1.0}
+  y: {initial: 1.0}
+gravity: [0, -g, 0]
+frames:
+  - {name: sx, parent: world, prismatic: x, axis: x}
+  - {name: sy, parent: sx, prismatic: y, axis: y}
+  - {name: tip, parent: sy, translation: [0, -1, 0]}
+bodies:
+  - {name: mass, frame: tip, mass: m}
+"""
+
+
+def located(tmp_path, text, path, *fragments, derive=False):
+    """The one problem of `text` at `path`, at the line of its entry, holding every fragment."""
+    from tests.support.diagnostics import one_problem
+
+    d = one_problem(tmp_path, text, derive=derive)
+    assert d.path == path, str(d)
+    for fragment in fragments:
+        assert fragment in d.message, str(d)
+    return d
+
+
+@pytest.mark.parametrize("row, kink", [("abs(x) - y", "abs"), ("sign(x) - y", "sign"), ("'max(x, 0.5) - y'", "max"),
+                                       ("'min(x, y)'", "min"), ("abs(x*y) - 1", "abs"), ("abs(t) + x - y", "abs"),
+                                       ("abs(tip.x) - y", "abs")])
+def test_a_kink_in_a_holonomic_row_is_refused_at_its_line(tmp_path, row, kink):
+    text = SLIDER + f"constraints:\n  - {{name: line, holonomic: {row}}}\n"
+    d = located(tmp_path, text, "constraints[0].holonomic", "the constraint is not smooth", f"where {kink} of")
+    assert d.line == line_of(text, "name: line")
+
+
+def test_a_kink_of_a_parameter_in_a_holonomic_row_is_smooth(tmp_path):
+    (tmp_path / "m.yaml").write_text(SLIDER + "constraints:\n  - {name: line, holonomic: abs(m)*x - y}\n")
+    assert invoke("check", tmp_path / "m.yaml").exit_code == 0
+
+
+@pytest.mark.parametrize("old, new, path", [
+    ("translation: [0, -1, 0]", "translation: [abs(x), -1, 0]", "frames[2].translation[0]"),
+    ("translation: [0, -1, 0]", "translation: [sign(y), -1, 0]", "frames[2].translation[0]"),
+    ("translation: [0, -1, 0]", "translation: [0, -1, 0], rotation: {axis: z, angle: abs(t)}",
+     "frames[2].rotation.angle"),
+    ("translation: [0, -1, 0]", "translation: ['max(x, y)', -1, 0]", "frames[2].translation[0]"),
+])
+def test_a_kink_in_a_link_is_refused_at_its_line(tmp_path, old, new, path):
+    text = SLIDER.replace(old, new)
+    located(tmp_path, text, path, "the link is not smooth")
+
+
+@pytest.mark.parametrize("extra, path", [
+    ("potentials: [{name: v, energy: k*sign(x)}]", "potentials[0].energy"),
+    ("potentials: [{name: v, energy: k*sign(x)*x}]", "potentials[0].energy"),
+    ("springs: [{name: s, stiffness: k, length: sign(x) + y}]", "springs[0].length"),
+])
+def test_a_potential_or_spring_length_that_steps_is_refused_at_its_line(tmp_path, extra, path):
+    located(tmp_path, SLIDER + extra + "\n", path, "steps where sign() of x changes")
+
+
+@pytest.mark.parametrize("old, new, path, says", [
+    ("axis: x}", "axis: [1e308, 1e308, 0]}", None, None),
+    ("axis: x}", "axis: x, rotation: {quaternion: [1e308, 1e308, 0, 0]}}", "frames[0].rotation.quaternion",
+     "has norm 1.41421356237e+308, not 1"),
+    ("mass: m}", "mass: m, shape: {cylinder: {radius: 0.1, length: 1, axis: [1e308, 1e308, 0]}}}", None, None),
+])
+def test_huge_axes_are_normalised_without_overflow(tmp_path, old, new, path, says):
+    text = SLIDER.replace(old, new, 1)
+    if path is None:
+        (tmp_path / "m.yaml").write_text(text)
+        result = invoke("check", tmp_path / "m.yaml")
+        assert result.exit_code == 0, result.output
+    else:
+        d = located(tmp_path, text, path, says)
+        assert d.hint == "use the unit quaternion [0.707106781187, 0.707106781187, 0, 0]"
+
+
+@pytest.mark.parametrize("energy, big", [("x*1e308*10", "1.00e+309"), ("1e200*x**2*1e200", "1.00e+400"),
+                                         ("(1e308 + x)*10", "1.00e+309"), ("x/1e-320", "1.00e+320")])
+def test_constants_that_fold_past_a_float_are_refused_at_their_line(tmp_path, energy, big):
+    text = SLIDER + f"potentials: [{{name: v, energy: '{energy}'}}]\n"
+    d = located(tmp_path, text, "potentials[0].energy", f"the constant {big} that its numbers make together "
+                "overflows a float")
+    assert d.line == line_of(text, "potentials:")
+
+
+def test_a_priority_past_the_limit_is_refused_at_its_line(tmp_path):
+    text = (MODELS / "bouncing_ball.yaml").read_text().replace("    - name: bounce\n",
+                                                               "    - name: bounce\n      priority: 1e300\n")
+    d = located(tmp_path, text, "hybrid.jumps[0].priority", "greater than the maximum of 1000000")
+    assert d.line == line_of(text, "priority: 1e300")
+
+
+def test_a_derived_constant_past_a_float_names_the_model_not_the_module(tmp_path):
+    (tmp_path / "m.yaml").write_text(SLIDER.replace("k: 1.0}", "k: 1.0}").replace(
+        "name: slider", "name: big") + "springs: [{name: s, stiffness: 1e200, length: 1e200*x}]\n")
+    result = invoke("build", tmp_path / "m.yaml", "--build-dir", tmp_path / "build")
+    assert result.exit_code == 1, result.output
+    assert result.stderr.splitlines() == [
+        f"{tmp_path / 'm.yaml'}:1: <document>: a constant of the derived equations, 1.00e+600, overflows a float "
+        "(past 1.8e308); scale the model's units so that its products of masses, lengths, stiffnesses and gains "
+        "stay below 1e308", "1 problem found"]
+    assert "big.py" not in result.output
