@@ -351,3 +351,51 @@ def test_a_derived_constant_past_a_float_names_the_model_not_the_module(tmp_path
         "(past 1.8e308); scale the model's units so that its products of masses, lengths, stiffnesses and gains "
         "stay below 1e308", "1 problem found"]
     assert "big.py" not in result.output
+
+
+# ---- 5. an adaptive run that blows up keeps its samples and writes its files --------------------------------
+
+EXPLODES = """\
+name: explodes
+description: Free motion until t = 0.5 s, then a potential of stiffness k pushing the mass away.
+parameters: {k: 1e300}
+coordinates:
+  x: {initial: 0, velocity: 1}
+frames:
+  - {name: slider, parent: world, prismatic: x, axis: x}
+bodies:
+  - {name: mass, frame: slider, mass: 1}
+potentials:
+  - {name: push, energy: "-k*x**2*(1 + sign(t - 0.5))/4"}
+"""
+
+
+@pytest.fixture(scope="module")
+def explodes(tmp_path_factory, build_dir):
+    path = tmp_path_factory.mktemp("explodes") / "explodes.yaml"
+    path.write_text(EXPLODES)
+    return path
+
+
+@pytest.mark.parametrize("method", ["Radau", "BDF", "LSODA", "DOP853"])
+def test_an_adaptive_run_that_blows_up_keeps_its_samples_and_writes_its_files(explodes, build_dir, tmp_path,
+                                                                                method):
+    from andyc.runtime.run import read_h5
+
+    result = invoke("sim", explodes, "--method", method, "--t-end", 2, "--build-dir", build_dir, "-o",
+                    tmp_path / "r.h5", "-o", tmp_path / "r.csv")
+    assert result.exit_code == 1, result.output
+    assert "Traceback" not in result.output and "internal error" not in result.output and "warning" not in result.output
+    run = read_h5(tmp_path / "r.h5")
+    assert run.status.startswith(f"stopped: {method} failed at t = 0.5 s")
+    assert run.status.endswith("the 501 samples before it are kept")
+    assert len(run.time) == 501 and np.all(np.isfinite(run.state))
+    assert np.allclose(run.column("x"), run.time, atol=1e-9)       # x = t before the push
+    assert (tmp_path / "r.csv").read_text().count("\n") > 501
+
+
+def test_lsoda_stuck_at_a_discontinuity_stops_instead_of_stepping_forever(explodes, build_dir):
+    model = andyc.compile_model(explodes, build_dir)[0]
+    run = andyc.simulate(model, 2.0, method="LSODA", parameters={"k": 1e10}, progress=False)
+    assert run.status.startswith("stopped: LSODA failed at t = 0.5 s: 1000 steps in a row made no progress")
+    assert run.stats["steps"] < 10_000
