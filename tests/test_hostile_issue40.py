@@ -399,3 +399,25 @@ def test_lsoda_stuck_at_a_discontinuity_stops_instead_of_stepping_forever(explod
     run = andyc.simulate(model, 2.0, method="LSODA", parameters={"k": 1e10}, progress=False)
     assert run.status.startswith("stopped: LSODA failed at t = 0.5 s: 1000 steps in a row made no progress")
     assert run.stats["steps"] < 10_000
+
+
+# ---- 6. SIGHUP: like SIGINT and SIGTERM (tests/test_hostile_runs.py), unless the run was started under nohup ----
+
+def test_a_run_started_ignoring_sighup_goes_on_and_stops_on_sigterm(tmp_path, shipped_build):
+    from andyc.runtime.run import read_h5
+    from tests.test_hostile_runs import STARTED, wait_for
+
+    flag, out = tmp_path / "started", tmp_path / "run.h5"
+    (tmp_path / "started.py").write_text(STARTED.format(flag=str(flag)))
+    proc = subprocess.Popen([sys.executable, "-m", "andyc.cli", "sim", str(MODELS / "cart_pole.yaml"), "--t-end",
+                             "1e5", "--every", "100", "--controller", "started.py", "--out", str(out), "--build-dir",
+                             str(shipped_build)], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_IGN))   # nohup
+    wait_for(flag, proc)
+    proc.send_signal(signal.SIGHUP)
+    with pytest.raises(subprocess.TimeoutExpired):          # ignored: the run goes on (1e5 s of it)
+        proc.wait(timeout=2)
+    proc.send_signal(signal.SIGTERM)
+    stdout, stderr = proc.communicate(timeout=HANG)
+    assert proc.returncode == 143, stderr
+    assert read_h5(out).status.startswith("interrupted: SIGTERM received at t = ")

@@ -71,8 +71,8 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
     """Build FILE if needed, simulate it and write run files.
 
     The model's simulate: section gives the options not given here (then the defaults shown).
-    SIGINT (Ctrl-C) or SIGTERM stop the run and write the samples so far, with the status "interrupted";
-    the exit code is then 130 or 143."""
+    SIGINT (Ctrl-C), SIGTERM or SIGHUP stop the run and write the samples so far, with the status
+    "interrupted"; the exit code is then 130, 143 or 129."""
     from andyc.runtime.inputs import InputWarning
     from andyc.runtime.interrupts import Interrupts
     from andyc.runtime.run import RUN_SUFFIXES

@@ -1,11 +1,13 @@
-"""Stopping a run from outside: SIGINT, SIGTERM and a wall-clock limit, keeping what it logged.
+"""Stopping a run from outside: SIGINT, SIGTERM, SIGHUP and a wall-clock limit, keeping what it logged.
 
-While a run integrates, SIGINT and SIGTERM do not raise: a handler notes the
+While a run integrates, SIGINT, SIGTERM and SIGHUP (the terminal or the SSH session closed) do not raise: a
+handler notes the
 signal, and the run stops where its loop next returns to Python (the compiled
 loop does so after each block of steps, about every 0.25 s; the SciPy loop
 after each step), keeping its samples, with the status "interrupted: ...".
 The command line then writes them and exits with 128 + the signal's number
-(130 for SIGINT, 143 for SIGTERM), as shells do. A wall-clock limit stops the
+(130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP), as shells do. A signal the process was
+started ignoring (`nohup andyc sim ...` ignores SIGHUP) stays ignored. A wall-clock limit stops the
 run the same way, with the status "stopped: ...".
 
 Code that never returns (a compiled controller in an endless loop) cannot be
@@ -31,7 +33,7 @@ import time
 from contextlib import contextmanager
 
 GRACE = 3.0             # seconds a stop may take before the watchdog gives the run up
-SIGNALS = (signal.SIGINT, signal.SIGTERM)
+SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
 class Interrupts:
@@ -71,7 +73,7 @@ class Interrupts:
         if threading.current_thread() is not threading.main_thread():
             yield self
             return
-        previous = {s: signal.signal(s, self._note) for s in SIGNALS}
+        previous = {s: signal.signal(s, self._note) for s in SIGNALS if signal.getsignal(s) is not signal.SIG_IGN}
         reader, writer = socket.socketpair()
         reader.setblocking(False)
         writer.setblocking(False)
