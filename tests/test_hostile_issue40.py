@@ -421,3 +421,54 @@ def test_a_run_started_ignoring_sighup_goes_on_and_stops_on_sigterm(tmp_path, sh
     stdout, stderr = proc.communicate(timeout=HANG)
     assert proc.returncode == 143, stderr
     assert read_h5(out).status.startswith("interrupted: SIGTERM received at t = ")
+
+
+# ---- 7. an up-to-date build in a read-only folder runs ---------------------------------------------------------
+
+def read_only_commands(folder: Path, commands: list) -> list:
+    """Run each andyc command (a list of arguments) with `folder` read-only; a CompletedProcess each. Root, whom
+    permissions do not stop, gets a read-only bind mount in a mount namespace of its own (unshare); others a
+    folder without write permission."""
+    run = [sys.executable, "-m", "andyc.cli"]
+    if os.geteuid() != 0:
+        modes = {p: p.stat().st_mode for p in [folder, *folder.rglob("*")]}
+        for p in modes:
+            p.chmod(modes[p] & ~0o222)
+        try:
+            return [subprocess.run(run + list(map(str, c)), capture_output=True, text=True, timeout=HANG)
+                    for c in commands]
+        finally:
+            for p, mode in modes.items():
+                p.chmod(mode)
+    import shlex
+    import shutil
+
+    if shutil.which("unshare") is None or subprocess.run(["unshare", "-rm", "true"]).returncode != 0:
+        pytest.skip("no read-only folder for root here (unshare -rm is not allowed)")
+    out = []
+    for c in commands:
+        script = (f"mount --bind {shlex.quote(str(folder))} {shlex.quote(str(folder))} && mount -o remount,bind,ro "
+                  f"{shlex.quote(str(folder))} {shlex.quote(str(folder))} && exec {shlex.join(run + list(map(str, c)))}")
+        out.append(subprocess.run(["unshare", "-rm", "sh", "-c", script], capture_output=True, text=True,
+                                  timeout=HANG, env={**os.environ, "PYTHONPATH": str(Path(andyc.__file__).parents[1])}))
+    return out
+
+
+def test_an_up_to_date_read_only_build_simulates_and_tests(tmp_path):
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    model = folder / "pendulum.yaml"
+    model.write_text(PENDULUM.replace("name: double_pendulum", "name: ro_pendulum"))
+    build = folder / "build"
+    andyc.compile_model(model, build)
+    before = sorted((p.relative_to(folder), p.stat().st_mtime_ns) for p in folder.rglob("*"))
+    sim, test, again = read_only_commands(folder, [
+        ["sim", model, "--t-end", 0.1, "--build-dir", build, "-o", tmp_path / "run.h5"],
+        ["test", model, "--build-dir", build],
+        ["build", model, "--build-dir", build, "--force"]])
+    assert sim.returncode == 0, sim.stderr
+    assert (tmp_path / "run.h5").exists()
+    assert test.returncode == 0 and "2 checks in 1 model: all hold" in test.stdout, test.stderr
+    assert again.returncode == 2 and "Traceback" not in again.stderr          # a build that must write: refused
+    assert again.stderr.startswith("Error: ") and "cannot write" in again.stderr, again.stderr
+    assert sorted((p.relative_to(folder), p.stat().st_mtime_ns) for p in folder.rglob("*")) == before
