@@ -472,3 +472,230 @@ def test_an_up_to_date_read_only_build_simulates_and_tests(tmp_path):
     assert again.returncode == 2 and "Traceback" not in again.stderr          # a build that must write: refused
     assert again.stderr.startswith("Error: ") and "cannot write" in again.stderr, again.stderr
     assert sorted((p.relative_to(folder), p.stat().st_mtime_ns) for p in folder.rglob("*")) == before
+
+
+# ---- 9. the generated module checks its arguments' sizes -------------------------------------------------------
+
+@pytest.mark.parametrize("call, message", [
+    ("m.rhs(0.0, np.array([1.2, -0.5]))",
+     "rhs: wrong argument size for x, the state (q1, q2, q1_dot, q2_dot): expected 4, got 2"),
+    ("m.rhs(0.0, np.zeros(7))", "expected 4, got 7"),
+    ("m.rhs(0.0, np.zeros((4, 1)))", "expected 4, got (4, 1)"),
+    ("m.rhs(0.0, [[1, 2], [3]])", "got a ragged list"),
+    ("m.rhs(0.0, np.zeros(4), p=[1.0, 2.0])", "rhs: wrong argument size for p, the parameters (L1, L2, m1, m2, g): "
+                                              "expected 5, got 2"),
+    ("m.rhs(0.0, np.zeros(4), flow=3)", "rhs: flow = 3 is not the index of a flow: expected 0 to 0 (default)"),
+    ("m.rhs(0.0, np.zeros(4), None, None, None, True)", "is not the index of a flow"),
+    ("m.energy(0.0, np.zeros(4), u=[1.0])", "energy: wrong argument size for u, the inputs (none): expected 0, got 1"),
+    ("m.mass_matrix(0.0, np.zeros(3))", "mass_matrix: wrong argument size for x"),
+    ("m.generalized_force(0.0, np.zeros(5))", "generalized_force: wrong argument size for x"),
+    ("m.power(0.0, np.zeros(4), d=[1.0])", "power: wrong argument size for d, the discrete states (none)"),
+    ("m.frame_positions(0.0, np.zeros(4), out=np.zeros((2, 3)))",
+     "frame_positions: wrong argument size for out: expected (4, 3), got (2, 3)"),
+    ("m.frame_rotations(0.0, np.zeros(1))", "frame_rotations: wrong argument size for x"),
+    ("m.frame_poses(0.0, np.zeros(1))", "frame_poses: wrong argument size for x"),
+    ("m.multipliers(0.0, np.zeros(1))", "multipliers: wrong argument size for x"),
+    ("m.driven(0.0, np.zeros(1))", "driven: wrong argument size for x"),
+    ("m.guard(0, 0.0, np.zeros(4))", "guard: the model has no jump"),
+    ("m.enabled(0, 0.0, np.zeros(4))", "enabled: the model has no jump"),
+    ("m.constraints(0.0, np.zeros(4), m.INPUT_DEFAULTS, m.PARAMETER_DEFAULTS, m.DISCRETE_DEFAULTS, np.zeros(0), "
+     "np.zeros(1), np.zeros((0, 2)), np.zeros(0))", "constraints: wrong argument size for c: expected 0, got 1"),
+    ("m.signal_rates(0.0, np.zeros(4), m.INPUT_DEFAULTS, m.PARAMETER_DEFAULTS, m.DISCRETE_DEFAULTS, "
+     "np.zeros(4, dtype=np.float32))", "signal_rates: xdot is written into: give a writable, C-contiguous float64"),
+    ("m.signal_rates(0.0, np.zeros(4), m.INPUT_DEFAULTS, m.PARAMETER_DEFAULTS, m.DISCRETE_DEFAULTS, np.zeros(2))",
+     "signal_rates: wrong argument size for xdot"),
+    ("m.restitutions([1.0])", "restitutions: wrong argument size for p"),
+    ("m.flow_inputs(m.PARAMETER_DEFAULTS, np.zeros((3, 3)))", "flow_inputs: wrong argument size for U"),
+    ("m.energy_law(0.0, np.zeros(2))", "energy_law: wrong argument size for x"),
+    ("m.initial_state([1.0, 2.0])", "initial_state: wrong argument size for p"),
+    ("m.initial_discrete([1.0])", "initial_discrete: wrong argument size for p"),
+])
+def test_every_entry_point_of_the_generated_module_checks_sizes(compiled, call, message):
+    m = compiled("double_pendulum").module
+    with pytest.raises(ValueError) as info:
+        eval(call, {"m": m, "np": np})
+    assert message in str(info.value), str(info.value)
+
+
+def test_right_sizes_and_the_integrators_longer_state_still_work(compiled):
+    model = compiled("bouncing_ball")
+    m = model.module
+    x = m.initial_state()
+    assert np.array_equal(m.rhs(0.0, x), m.rhs.__wrapped__(0.0, x))
+    assert m.guard(0, 0.0, np.concatenate([x, np.zeros(m.NW)]), m.INPUT_DEFAULTS, m.PARAMETER_DEFAULTS,
+                   m.DISCRETE_DEFAULTS) == m.guard(np.int64(0), 0.0, list(x))
+    with pytest.raises(ValueError, match=r"guard: k = 1 is not the index of a jump: expected 0 to 0 \(bounce\)"):
+        m.guard(1, 0.0, x)
+
+
+# ---- 10. --timeout is a bound on each run's wall time, however short ------------------------------------------
+
+def test_a_short_timeout_stops_runs_that_would_finish_in_one_block(compiled):
+    from andyc.runtime.interrupts import Interrupts
+
+    model = compiled("double_pendulum")
+    for _ in range(3):          # (the first check may or may not come before the limit: either way, stopped)
+        run = andyc.simulate(model, 50.0, dt=1e-3, interrupts=Interrupts(0.001), progress=False)
+        assert run.status.startswith("stopped: the run took longer than its wall-clock limit of 0.001 s"), run.status
+        assert run.time[-1] < 50.0
+
+
+def test_the_block_budget_shrinks_to_what_is_left_of_the_limit():
+    from andyc.runtime.interrupts import Interrupts
+
+    assert Interrupts().budget(0.25) == 0.25
+    near = Interrupts(10.0)
+    near.start = time.monotonic() - 9.9
+    assert 0.0 < near.budget(0.25) <= 0.1
+    near.start = time.monotonic() - 20
+    assert near.budget(0.25) == 1e-4
+
+
+# ---- 2. and 10. sweeps: bounded waits for a scheduler, Ctrl-C, the summary ---------------------------------------
+
+def _serve(handler) -> tuple:
+    """A TCP server on loopback that gives each connection to handler(sock) in a thread; (port, close)."""
+    import socket
+    import threading
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    server.settimeout(0.2)
+    stop = threading.Event()
+    held = []
+
+    def loop():
+        while not stop.is_set():
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                continue
+            held.append(conn)
+            threading.Thread(target=handler, args=(conn,), daemon=True).start()
+
+    threading.Thread(target=loop, daemon=True).start()
+
+    def close():
+        stop.set()
+        for c in held:
+            c.close()
+        server.close()
+    return server.getsockname()[1], close
+
+
+def _http(conn):
+    """A plain HTTP server's side: it waits for a request line and headers that never come."""
+    try:
+        conn.recv(65536)
+    except OSError:
+        pass
+
+
+def _banner(conn):
+    """A service that speaks first, as SSH does (read as a Dask frame count: about 3e18 frames)."""
+    conn.sendall(b"SSH-2.0-OpenSSH_9.0\r\n" + b"\xff" * 64)
+
+
+def _sweep(*args, scheduler, tmp_path, shipped_build):
+    return invoke("sweep", MODELS / "double_pendulum.yaml", "--grid", "m1=1:2:2", "--t-end", 0.05, "--build-dir",
+                  shipped_build, "--scheduler", scheduler, "-o", tmp_path / "s.zarr", *args)
+
+
+@pytest.mark.parametrize("handler, says", [
+    (_http, "did not answer within 5 s (something else listens there)"),
+    (_banner, "is not a Dask scheduler (it begins b'SSH-2.0-')"),
+])
+def test_a_scheduler_address_where_something_else_listens_is_one_line_and_leaves_no_store(tmp_path, shipped_build,
+                                                                                          handler, says):
+    pytest.importorskip("distributed")
+    port, close = _serve(handler)
+    try:
+        result = _sweep(scheduler=f"tcp://127.0.0.1:{port}", tmp_path=tmp_path, shipped_build=shipped_build)
+    finally:
+        close()
+    assert result.exit_code == 1, result.output
+    assert result.output.strip().splitlines() == [result.output.strip()]
+    assert result.output.startswith(f"andyc: ") and says in result.output, result.output
+    assert "Traceback" not in result.output and not (tmp_path / "s.zarr").exists()
+
+
+@pytest.mark.parametrize("address, says", [
+    ("tcp://127.0.0.1:9", "Connection refused"),
+    ("garbage", "missing port number"),
+    ("http://127.0.0.1:1", "unknown address scheme 'http'"),
+])
+def test_a_bogus_scheduler_address_leaves_no_store(tmp_path, shipped_build, address, says):
+    pytest.importorskip("distributed")
+    result = _sweep(scheduler=address, tmp_path=tmp_path, shipped_build=shipped_build)
+    assert result.exit_code == 1 and says in result.output and "Traceback" not in result.output, result.output
+    assert not (tmp_path / "s.zarr").exists()
+
+
+def test_a_scheduler_without_workers_is_waited_for_a_bounded_time(tmp_path, shipped_build, monkeypatch):
+    import logging
+
+    distributed = pytest.importorskip("distributed")
+    from andyc.analysis.sweeps import run as R
+
+    monkeypatch.setattr(R, "WORKER_WAIT", 1.0)          # (60 s in use)
+    cluster = distributed.LocalCluster(n_workers=0, processes=True, dashboard_address=None,
+                                       silence_logs=logging.ERROR)
+    try:
+        address = cluster.scheduler_address
+        assert address.startswith("tcp://127.0.0.1:")
+        result = _sweep(scheduler=address, tmp_path=tmp_path, shipped_build=shipped_build)
+    finally:
+        cluster.close()
+    assert result.exit_code == 1, result.output
+    assert result.output.startswith(f"andyc: the Dask scheduler at {address} has no worker after 1 s of waiting")
+    assert f"start one there: `dask worker {address}`" in result.output
+    assert not (tmp_path / "s.zarr").exists()
+
+
+def _workers_of(pid: int) -> list:
+    """The process ids of the multiprocessing children (a LocalCluster's workers) of process pid."""
+    out = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+                cmd = (entry / "cmdline").read_bytes()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid and b"spawn_main" in cmd:
+                out.append(int(entry.name))
+    return out
+
+
+@pytest.mark.parametrize("when", ["as the workers start", "while they run"])
+def test_ctrl_c_stops_a_sweep_with_one_line_and_no_worker_tracebacks(tmp_path, shipped_build, when):
+    pytest.importorskip("distributed")
+    if not Path("/proc/self/stat").exists():
+        pytest.skip("needs /proc to find the workers")
+    # The terminal sends SIGINT to the whole foreground process group: the sweep, its workers, the tracker.
+    proc = subprocess.Popen([sys.executable, "-m", "andyc.cli", "sweep", str(MODELS / "double_pendulum.yaml"),
+                             "--grid", "m1=1:2:400", "--t-end", "200", "--batch", "1", "--workers", "2", "--build-dir",
+                             str(shipped_build), "-o", str(tmp_path / "s.zarr")], start_new_session=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + HANG
+    while len(_workers_of(proc.pid)) < 2:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "the workers did not start"
+        time.sleep(0.01)
+    workers = _workers_of(proc.pid)
+    if when == "while they run":
+        while not any((tmp_path / "s.zarr" / "outcome").glob("[0-9]*")):
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline, "no batch was written"
+            time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=HANG)
+    assert proc.returncode == 130, stderr
+    assert stderr.strip().splitlines()[-1] == "andyc: interrupted"
+    assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr and "Error" not in stderr, stderr
+    for pid in workers:                     # none left behind
+        deadline = time.monotonic() + HANG
+        while Path(f"/proc/{pid}").exists() and "Z" not in Path(f"/proc/{pid}/stat").read_text().split()[2]:
+            assert time.monotonic() < deadline, f"worker {pid} still runs"
+            time.sleep(0.05)

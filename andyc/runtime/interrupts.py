@@ -56,6 +56,13 @@ class Interrupts:
             return f"stopped: the run took longer than its wall-clock limit of {self.wall_limit:g} s"
         return None
 
+    def budget(self, seconds: float) -> float:
+        """`seconds`, or less when the wall-clock limit is nearer: how long a block of compiled steps may take
+        before the loop looks at reason() again (a run must not finish a block long past its limit)."""
+        if self.wall_limit is None:
+            return seconds
+        return max(min(seconds, self.wall_limit - (time.monotonic() - self.start)), 1e-4)
+
     @property
     def exit_code(self) -> int:
         """128 + the signal's number, as shells report a process a signal ended; 1 for the wall-clock limit."""
