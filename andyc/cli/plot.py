@@ -66,9 +66,9 @@ def plot(run_file, out, animate, fps, frames_max, signals, window, metric):
     if signals and not patterns:
         raise click.BadParameter("give at least one signal name or glob", param_hint="--signals")
     out = out or str(Path(run_file).with_suffix(".gif" if animate else ".png"))
+    check_output(out, [run_file], "plot")
     if not animate:
         check_image_type(out)
-    check_output(out, [run_file], "plot")
     if not animate and not patterns:
         check_output(sticks_path(out), [run_file], "plot")
     try:

@@ -163,8 +163,8 @@ def plot_store(store, out, variable) -> None:
     out = out or str(Path(store).with_suffix(".png"))
     from andyc.cli.plot import check_image_type
 
-    check_image_type(out)
     check_output(out, [], "plot")
+    check_image_type(out)
     axes = [(n, ds[n].values) for n in swept]
     outcomes = colours = None
     if "flag_meanings" in data.attrs:           # codes: the outcome, a basin's classes

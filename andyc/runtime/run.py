@@ -478,6 +478,16 @@ def read_run_file(path) -> Run:
     """read_h5 of a file a user names (andyc plot, andyc view, an expectation's reference): RunFileError, one
     line, for a file that is not HDF5, lacks a dataset or an attribute, or whose arrays disagree (a truncated
     or edited file), rather than whichever exception the plot would meet first."""
+    import os
+    import stat
+
+    try:
+        regular = stat.S_ISREG(os.stat(path).st_mode)
+    except OSError as exc:
+        raise RunFileError(f"{path}: cannot read it ({exc.strerror})") from None
+    if not regular:                         # a pipe would be waited on without end, a device read without end
+        raise RunFileError(f"{path}: this is a {'folder' if os.path.isdir(path) else 'special file'}, not a run "
+                           f"file; give the .h5 file andyc sim wrote")
     try:
         run = read_h5(path)
     except Exception as exc:                # h5py's, json's, numpy's errors vary with the damage
