@@ -54,7 +54,7 @@ def wait_for(path: Path, proc) -> None:
         time.sleep(0.05)
 
 
-@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143), (signal.SIGHUP, 129)])
 def test_a_signal_stops_the_run_and_keeps_its_samples(tmp_path, shipped_build, sig, code):
     flag, out = tmp_path / "started", tmp_path / "run.h5"
     (tmp_path / "started.py").write_text(STARTED.format(flag=str(flag)))

@@ -88,7 +88,7 @@ def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, 
         raise Refused("--basin and --continue: give one of them")
     if out is not None and not basin:
         check_output(out, [file], "cycle file")
-    check_folder(build_dir, [file])
+    check_folder(build_dir, [file], write=False)     # (an up-to-date build is only read)
     _refuse_contacts(file)
     model, _ = compiled(file, build_dir)
     if section not in model.jump_names:
