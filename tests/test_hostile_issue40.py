@@ -23,6 +23,7 @@ import pytest
 import andyc
 from tests.support import MODELS
 from tests.support.cli import HANG, andyc_cli, invoke
+from tests.support.processes import STARTED, wait_for
 from tests.support.diagnostics import LINE_FORMAT, line_of
 
 PENDULUM = (MODELS / "double_pendulum.yaml").read_text()
@@ -405,7 +406,6 @@ def test_lsoda_stuck_at_a_discontinuity_stops_instead_of_stepping_forever(explod
 
 def test_a_run_started_ignoring_sighup_goes_on_and_stops_on_sigterm(tmp_path, shipped_build):
     from andyc.runtime.run import read_h5
-    from tests.test_hostile_runs import STARTED, wait_for
 
     flag, out = tmp_path / "started", tmp_path / "run.h5"
     (tmp_path / "started.py").write_text(STARTED.format(flag=str(flag)))

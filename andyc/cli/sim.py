@@ -13,8 +13,9 @@ from andyc.cli.formats import Report, format_option
 from andyc.cli.values import (COUNT, NON_NEGATIVE, POSITIVE, TOLERANCE, Number, input_drives, parse_sets, split_sets,
                               stop_counts)
 from andyc.errors import InitialStateError, SimulationError, plural
+from andyc.limits import MAX_STEPS
 from andyc.outputs import check_folder, check_output
-from andyc.runtime.methods import MAX_STEPS, METHODS
+from andyc.runtime.methods import METHODS
 
 
 @click.command()

@@ -43,6 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from andyc.errors import SimulationError
+from andyc.limits import MAX_LOG_BYTES, MAX_STEPS
 from andyc.numerics.status import IDEAL
 from andyc.runtime.adaptive import run_adaptive
 from andyc.runtime.compiled import CompiledModel, compile_integrator, work
@@ -52,7 +53,7 @@ from andyc.runtime.fixed_step import MODE, run_fixed_step
 from andyc.runtime.initial import consistent_initial_state, initial_state, require_independent_rows
 from andyc.runtime.inputs import InputSource, input_source, inputs_at
 from andyc.runtime.interrupts import Interrupts
-from andyc.runtime.methods import ADAPTIVE, FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
+from andyc.runtime.methods import ADAPTIVE, FIXED_STEP, METHODS
 from andyc.runtime.options import Events, Init, Projection, TimeStepping
 from andyc.runtime.progress import Progress
 from andyc.runtime.run import Run, unit_quaternions

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 
-from andyc.runtime.methods import MAX_STEPS
+from andyc.limits import MAX_STEPS
 from andyc.spec.scope import Scope
 
 # andyc sim's options that a simulate: section may give, in the order of `andyc sim --help`.
