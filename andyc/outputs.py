@@ -41,8 +41,10 @@ def check_output(path, inputs=(), what: str = "output") -> Path:
     return path
 
 
-def check_folder(folder, inputs=()) -> Path:
-    """`folder`, after checking that it is a folder (or can be made one) that can be written in."""
+def check_folder(folder, inputs=(), write: bool = True) -> Path:
+    """`folder`, after checking that it is a folder (or can be made one) that can be written in (`write`:
+    False for a build folder, which an up-to-date build only reads: a write it needs fails where it is made,
+    with OutputError)."""
     folder = Path(folder)
     for source in inputs:
         if source is not None and _same_file(folder, Path(source)):
@@ -54,7 +56,7 @@ def check_folder(folder, inputs=()) -> Path:
         existing = existing.parent
     if existing.exists() and not existing.is_dir():
         raise OutputError(f"{folder}: {existing} is a file, not a folder; choose another folder")
-    if existing.exists() and not os.access(existing, os.W_OK | os.X_OK):
+    if write and existing.exists() and not os.access(existing, os.W_OK | os.X_OK):
         raise OutputError(f"{folder}: cannot write in {existing} (permission denied); choose a folder you can "
                           f"write in")
     return folder

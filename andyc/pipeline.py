@@ -19,7 +19,7 @@ import numpy as np
 
 from andyc.codegen.buildfiles import (BuildResult, build_key, equations_path, jumps_path, library_present, module_name,
                                      module_path, numerics_package, numerics_path, written_constant)
-from andyc.errors import plural
+from andyc.errors import Diagnostic, SpecError, plural
 from andyc.outputs import OutputError
 from andyc.spec.yamlpos import MAX_YAML_BYTES
 
@@ -122,7 +122,13 @@ def build(path, out_dir="build", force: bool = False) -> BuildResult:
         write_front(spec, out_dir, key)
         return BuildResult(spec.name, target, True, key, {"load": t_load}, jumps_path=jumps, jumps_kept=True)
     model = derive(spec)
-    result = generate(model, out_dir, force)
+    from andyc.codegen.printer import ConstantOverflow
+
+    try:
+        result = generate(model, out_dir, force)
+    except ConstantOverflow as exc:     # products of the model's numbers: a problem of the model, not a bug
+        raise SpecError([Diagnostic(spec.file, 1, "", str(exc), "scale the model's units so that its products of "
+                                    "masses, lengths, stiffnesses and gains stay below 1e308")]) from None
     result.timings = {"load": t_load, "derive": model.derive_seconds, **result.timings}
     return result
 

@@ -1,5 +1,5 @@
 """Microseconds per solve of the step's contact problem: the compiled andyc.numerics.contact_solver against its
-Python twin andyc.runtime.contact_problem, for n = 4, 8, 16, 32 spatial contacts (3 n rows), mu = 0.5 .. 0.8.
+Python twin andyc.independent.contact_problem, for n = 4, 8, 16, 32 spatial contacts (3 n rows), mu = 0.5 .. 0.8.
 
 Two systems. random: W = A M^-1 A^T of a random A (3n x nv, nv = 3n + 6: W positive definite) and a random SPD
 M, every contact approaching (w0_n = -1) with a random slip (normal, deviation 0.5): most slide, some stick,
@@ -28,7 +28,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from andyc.numerics import contact_solver as cs  # noqa: E402
-from andyc.runtime import contact_problem as cp  # noqa: E402
+from andyc.independent import contact_problem as cp  # noqa: E402
 
 
 def random_system(n: int, seed: int = 0):

@@ -265,6 +265,9 @@ def test_go1_feet_against_pinocchio(tmp_path, monkeypatch):
     """Go1 floating, its four foot spheres (r = 0.02) on a tilted ground with friction, its 12 joints' stops."""
     path, urdf = write_model(tmp_path, "go1", None, 'base: floating, collide: ["*_foot"], friction: 0.7, limits: true',
                              TILTED)
+    # (its calves start within their limits: a stop the robot starts beyond is left out, test_joint_limit_stops)
+    path.write_text(path.read_text() + "coordinates: {" + ", ".join(f"{leg}_calf_joint: {{initial: -1.5}}"
+                                                                   for leg in ("FR", "FL", "RR", "RL")) + "}\n")
     spec = rows_spec(path, monkeypatch)
     rows = Rows(spec)
     model = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer())
@@ -328,7 +331,7 @@ def test_planar_friction_and_ground_tangent(tmp_path, monkeypatch):
 def test_joint_limit_stops(tmp_path):
     urdf = tmp_path / "stops.urdf"
     urdf.write_text(STOPS)
-    (tmp_path / "on.yaml").write_text("urdf: {file: stops.urdf, limits: true}\n")
+    (tmp_path / "on.yaml").write_text("urdf: {file: stops.urdf, limits: true}\ncoordinates: {slide: {initial: 0.1}}\n")
     spec = andyc.load(tmp_path / "on.yaml")
     q = {c.name: c.q for c in spec.coordinates}
     rows = {c.name: c.rows[0] for c in spec.constraints}
@@ -347,6 +350,15 @@ def test_joint_limit_stops(tmp_path):
     assert "<joint><limit>" in next(str(w) for w in off.warnings if "not used by andyc" in str(w))
     (tmp_path / "locked.yaml").write_text("urdf: {file: stops.urdf, lock: {slide: 0.1}}\n")
     assert "slide_lower" not in {c.name for c in andyc.load(tmp_path / "locked.yaml").contacts}
+    # starting at 0, below its lower limit 0.05, the slide's lower stop is left out (it would start the run inside
+    # the limit's wall), with a warning at its <limit> naming the joint and the fix
+    (tmp_path / "beyond.yaml").write_text("urdf: {file: stops.urdf}\n")
+    beyond = andyc.load(tmp_path / "beyond.yaml")
+    assert {c.name for c in beyond.contacts} == set(rows) - {"slide_lower"}
+    warning = next(w for w in beyond.warnings if "beyond its lower limit" in w.message)
+    assert warning.line == line_of(STOPS, 'lower="0.05"') and warning.message == (
+        "joint 'slide' starts at 0, beyond its lower limit 0.05: its stop 'slide_lower' is left out")
+    assert warning.hint.startswith("give 'slide' an initial value within its limits to keep the stop")
 
 
 def test_limits_default_is_stops(tmp_path):
@@ -354,7 +366,7 @@ def test_limits_default_is_stops(tmp_path):
 
     urdf_file = tmp_path / "stops.urdf"
     urdf_file.write_text(STOPS)
-    (tmp_path / "plain.yaml").write_text("urdf: {file: stops.urdf}\n")
+    (tmp_path / "plain.yaml").write_text("urdf: {file: stops.urdf}\ncoordinates: {slide: {initial: 0.1}}\n")
     names = {c.name for c in andyc.load(tmp_path / "plain.yaml").contacts}
     assert names == ({"hinge_lower", "hinge_upper", "slide_lower", "slide_upper", "tilt_upper"}
                      if urdf.LIMITS_DEFAULT else set())

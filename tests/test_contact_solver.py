@@ -1,5 +1,5 @@
 """The compiled contact problem (andyc.numerics.contact_solver) against its pure-Python twin
-(andyc.runtime.contact_problem) on random problems, against closed forms, and against the problem's conditions
+(andyc.independent.contact_problem) on random problems, against closed forms, and against the problem's conditions
 themselves, checked here from the math (w = w0 + W P; bilateral rows w = 0; 0 <= w_n _|_ P_n >= 0; Coulomb's
 cone |P_t| <= mu P_n, no slip inside it, P_t = -mu P_n w_t / |w_t| on its edge)."""
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from andyc.numerics import contact_solver as cs
-from andyc.runtime import contact_problem as cp
+from andyc.independent import contact_problem as cp
 
 G, H = 9.81, 1e-3
 

@@ -19,17 +19,9 @@ import andyc
 from andyc.runtime.run import Run, read_h5
 from andyc.runtime.status import diverging_constraints
 from tests.support import MODELS
+from tests.support.processes import STARTED, wait_for
 
 HANG = 300          # seconds after which a command counts as hung (a hang detector, not a speed bound)
-
-# Runs as Python (Numba cannot compile open()): once the run has passed t = 1 ms, it says so in a file.
-STARTED = """\
-import os
-def control(t, x, d, p):
-    if t > 1e-3 and not os.path.exists({flag!r}):
-        open({flag!r}, "w").close()
-    return 0.0
-"""
 
 # Compiled by Numba, and never returns once t > 1 ms (the loop's test reads x, so it cannot be dropped).
 ENDLESS = """\
@@ -46,15 +38,7 @@ def start(args, cwd):
                             stderr=subprocess.PIPE, text=True)
 
 
-def wait_for(path: Path, proc) -> None:
-    deadline = time.monotonic() + HANG
-    while not path.exists():
-        assert proc.poll() is None, proc.communicate()
-        assert time.monotonic() < deadline, "the run did not start"
-        time.sleep(0.05)
-
-
-@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143), (signal.SIGHUP, 129)])
 def test_a_signal_stops_the_run_and_keeps_its_samples(tmp_path, shipped_build, sig, code):
     flag, out = tmp_path / "started", tmp_path / "run.h5"
     (tmp_path / "started.py").write_text(STARTED.format(flag=str(flag)))

@@ -14,25 +14,7 @@ from andyc.spec.display import display
 from andyc.spec.meshfiles import MAX_MESH_BYTES
 from tests.support.cli import invoke
 from tests.support.diagnostics import line_of, one_problem
-from tests.support.meshes import binary_stl
-
-PENDULUM = """\
-name: shaped
-parameters: {L: 0.7, m: 1.0, g: 9.81}
-coordinates: {q: {initial: 0.5}}
-gravity: [0, -g, 0]
-frames:
-  - {name: arm, parent: world, revolute: q,
-     shape: SHAPE}
-  - {name: tip, parent: arm, translation: [0, -L, 0]}
-bodies:
-  - {name: bob, frame: tip, mass: m}
-"""
-
-
-def _with(shape: str) -> str:
-    return PENDULUM.replace("SHAPE", shape)
-
+from tests.support.meshes import binary_stl, with_shape as _with
 
 SECRET = b"root:x:0:0:the secret a link must not leak\n" * 4
 STL = binary_stl([((0, 0, 0), (0.1, 0, 0), (0, 0.1, 0))])

@@ -1,5 +1,5 @@
 """The moreau method (andyc.runtime.timestepping): Moreau-Jean time-stepping against closed forms, and its
-contact problem (andyc.runtime.contact_problem) against the complementarity conditions themselves."""
+contact problem (andyc.numerics.contact_solver, and its Python twin andyc.independent.contact_problem) against the complementarity conditions themselves."""
 
 import math
 
@@ -8,7 +8,7 @@ import pytest
 
 import andyc
 from andyc.errors import SimulationError
-from andyc.runtime.contact_problem import (BILATERAL, NORMAL, OPEN, PLANAR, SLIDE, SLIP_NEG, SLIP_POS, SPATIAL, STICK,
+from andyc.independent.contact_problem import (BILATERAL, NORMAL, OPEN, PLANAR, SLIDE, SLIP_NEG, SLIP_POS, SPATIAL, STICK,
                                            Block, solve)
 from tests.support import MODELS
 from tests.support.references import RATIO, impact_times, sliding_reference, slope_coordinates
@@ -313,7 +313,7 @@ def test_cli_run_file_and_plot(shipped_build, tmp_path):
 
 
 def _check(W, w0, blocks, P, tol=1e-9):
-    """The step problem's conditions at P (andyc.runtime.contact_problem's docstring), to tol."""
+    """The step problem's conditions at P (andyc.independent.contact_problem's docstring), to tol."""
     w = w0 + W @ P
     for b in blocks:
         n = b.rows[0]

@@ -14,26 +14,8 @@ from andyc.runtime.run import read_h5
 from andyc.spec.display import display
 from andyc.spec.meaning import meaning_sha256
 from tests.support import MODELS, ROBOTS_DIR
-from tests.support.meshes import binary_stl
+from tests.support.meshes import binary_stl, with_shape as _with
 from tests.support.diagnostics import assert_at, line_of, load_text, one_problem
-
-PENDULUM = """\
-name: shaped
-parameters: {L: 0.7, m: 1.0, g: 9.81}
-coordinates: {q: {initial: 0.5}}
-gravity: [0, -g, 0]
-frames:
-  - {name: arm, parent: world, revolute: q,
-     shape: SHAPE}
-  - {name: tip, parent: arm, translation: [0, -L, 0]}
-bodies:
-  - {name: bob, frame: tip, mass: m, shape: {sphere: {radius: L/10}, colour: red}}
-"""
-
-
-def _with(shape: str) -> str:
-    return PENDULUM.replace("SHAPE", shape)
-
 
 def test_double_pendulum_shapes_are_its_yaml_at_the_defaults(compiled):
     """The shipped double pendulum: the links' boxes and the masses' spheres, as the file says (read with

@@ -318,7 +318,8 @@ def test_cli_check_a_urdf_from_a_package():
     assert result.exit_code == 0, result.stderr
     assert result.stdout.startswith(f"{urdf}: model 'ur5' is valid: 6 degrees of freedom (shoulder_pan_joint, "
                                     "shoulder_lift_joint, elbow_joint, wrist_1_joint, wrist_2_joint, wrist_3_joint)")
-    assert "8 <gazebo>, 8 <link><collision>, 6 <joint><limit>, 6 <transmission>" in result.stderr
+    assert ("8 <gazebo>, 8 <link><collision>, 6 <limit effort>, 6 <limit velocity>, 6 <transmission>"
+            in result.stderr)                   # (the limits' lower and upper are stops)
 
 
 def test_cli_check_yaml_with_urdf_and_overrides(tmp_path):
@@ -354,7 +355,10 @@ hybrid:
     assert ("model 'ur5_payload' is valid: 11 speeds (shoulder_pan_joint, shoulder_lift_joint, elbow_joint, "
             "wrist_1_joint, wrist_2_joint, base_link_vx, base_link_vy, base_link_vz, base_link_wx, base_link_wy, "
             "base_link_wz) less 3 constraint rows") in result.stdout
-    assert "hybrid: 2 flows (pinned (3 rows), loose (0 rows)), 2 jumps, 1 discrete state" in result.stdout
+    # (its 5 free joints' limits are 10 stops, beside the hand-written automaton: 20 jumps and 10 modes of theirs)
+    assert ("less 3 constraint rows (3 holonomic) in 1 constraint; 10 contacts (shoulder_pan_joint_lower, "
+            "shoulder_pan_joint_upper,") in result.stdout
+    assert "hybrid: 2 flows (pinned (3 rows), loose (0 rows)), 22 jumps, 11 discrete states" in result.stdout
     spec = andyc.load(tmp_path / "ur5_payload.yaml")
     assert float(spec.gravity[1].subs({spec.parameters["g"][0]: spec.parameters["g"][1]})) == -3.0
     assert [float(c.initial) for c in spec.coordinates if c.name == "elbow_joint"] == [0.5]

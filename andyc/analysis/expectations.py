@@ -177,15 +177,15 @@ def _states(check: Check, run, model, spec) -> tuple:
         p, u = model.parameters(run.parameters), run.input_values[0]
         target, what = dict(zip(run.state_names, model.closed_form(float(t), u, p))), "the closed form"
     else:
-        from andyc.runtime.run import read_h5
+        from andyc.runtime.run import RunFileError, read_run_file
 
         try:
-            reference = read_h5(check.data["reference"])
-        except Exception as exc:            # (not an HDF5 file, or not andyc's layout: h5py's errors vary)
-            return (False, f"the run file {check.data['reference']} cannot be read ({type(exc).__name__}: {exc})",
-                    "a run file written by andyc sim (.h5)")
-        if t > reference.time[-1]:
-            return False, f"the reference run ends at {reference.time[-1]:.6g} s", f"a reference sample at t = {t:g} s"
+            reference = read_run_file(check.data["reference"])
+        except RunFileError as exc:         # (not an HDF5 file, not andyc's layout, or damaged)
+            return False, f"the run file cannot be read: {exc}", "a run file written by andyc sim (.h5)"
+        if not len(reference.time) or t > reference.time[-1]:
+            end = f"ends at {reference.time[-1]:.6g} s" if len(reference.time) else "holds no samples"
+            return False, f"the reference run {end}", f"a reference sample at t = {t:g} s"
         missing = [n for n in run.state_names if n not in reference.state_names]
         if missing:
             return False, f"the reference run has no states {', '.join(missing)}", "a run of this model"

@@ -59,10 +59,18 @@ def initial_problems(model: SymbolicModel, init: str = "check", tol: float = 1e-
         values = values_at(model, [e for j, _ in jumps for e in (j.guard, j.enabled)], x, u, p, d)
         for k, (j, s) in enumerate(jumps):
             g, enabled = values[2 * k], values[2 * k + 1]
+            if not (np.isreal(g) and np.isfinite(np.real(g))):      # (sqrt of a negative, a division by zero)
+                what = f"the gap of contact '{spec.contacts[s.contact].name}'" if s.kind else f"the guard of jump '{j.name}'"
+                out.append(spec.source.diag(
+                    s.where + (() if s.kind else ("guard",)), f"{what} has no real value at the initial state "
+                    f"({g})", "write it so that it is real and finite at the initial values (a square root of a "
+                    "negative number, a division by zero?)"))
+                continue
+            g, enabled = float(np.real(g)), float(np.real(enabled)) if np.isreal(enabled) else -1.0
             past = g < -GUARD_ROUND_OFF if j.direction == FALLING else g > GUARD_ROUND_OFF
             if past and enabled >= 0 and np.isfinite(g) and s.kind == "impact":
                 out.append(spec.source.diag(
-                    s.where, f"contact '{spec.contacts[s.contact].name}' starts {-g:.3g} into its surface (its gap "
+                    s.where, f"contact '{spec.contacts[s.contact].name}' starts {-g:.3g} inside its surface (its gap "
                     f"is {g:.3g} at the initial state)", "fix the initial values so that the gap starts >= 0, or give "
                     "the model `simulate: {init: project}` to move the state onto the surface (the smallest change "
                     "in the mass-matrix metric)"))

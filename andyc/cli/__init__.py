@@ -19,8 +19,8 @@ command or family of commands, each a click command over the API:
     common.py     what the commands share: a refused request, a model's problems, a model derived or compiled
     values.py     the options' values, checked; --set's split into parameters and inputs
 
-Exit codes: 0 success, 1 an invalid model or a run that stopped, 2 usage, 130 / 143 a run interrupted by
-SIGINT / SIGTERM (its samples written), 70 a bug in andyc.
+Exit codes: 0 success, 1 an invalid model or a run that stopped, 2 usage, 130 / 143 / 129 a run interrupted
+by SIGINT / SIGTERM / SIGHUP (its samples written), 70 a bug in andyc.
 """
 
 from __future__ import annotations

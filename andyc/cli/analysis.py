@@ -42,7 +42,7 @@ def bench(file, methods, steps, tols, t_end, repeats, sets, reference, out_dir, 
     from andyc.analysis.workprecision import DEFAULT_TOLS, draw, sweep, write_csv
 
     check_folder(out_dir, [file])
-    check_folder(build_dir, [file])
+    check_folder(build_dir, [file], write=False)
     model = compiled(file, build_dir)[0]
     for suffix in (".csv", ".png", ".svg"):
         check_output(Path(out_dir) / f"{model.name}_work_precision{suffix}", [file], "work-precision file")
@@ -108,7 +108,7 @@ def stability(file, methods, steps, horizons, tol, blowup, residual_tol, gains, 
     if gains and scan_values:
         raise click.UsageError("give --gains or --scan, not both: a map has one second axis")
     check_folder(out_dir, [file])
-    check_folder(build_dir, [file])
+    check_folder(build_dir, [file], write=False)
     model = compiled(file, build_dir)[0]
     for horizon in horizons or (10.0,):
         for suffix in (".csv", ".png", ".svg"):

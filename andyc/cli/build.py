@@ -63,7 +63,7 @@ def check(files, fmt):
 def build(file, build_dir, force, fmt):
     """Derive the equations of motion of FILE and generate its module, DIR/<name>/<name>.py."""
     report = Report("build", fmt)
-    check_folder(build_dir, [file])
+    check_folder(build_dir, [file], write=False)     # (an up-to-date build is only read)
     model, result = compiled(file, build_dir, force, report)
     t = result.timings
     compile = (f"compile {t['compile']:.2f} s ({plural(result.compiled, 'function')} compiled)" if result.compiled

@@ -88,7 +88,8 @@ def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, 
         raise Refused("--basin and --continue: give one of them")
     if out is not None and not basin:
         check_output(out, [file], "cycle file")
-    check_folder(build_dir, [file])
+    check_folder(build_dir, [file], write=False)     # (an up-to-date build is only read)
+    _refuse_contacts(file)
     model, _ = compiled(file, build_dir)
     if section not in model.jump_names:
         raise click.BadParameter(f"{model.name} has no jump '{section}'; jumps: {', '.join(model.jump_names) or 'none'}",
@@ -128,6 +129,27 @@ def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, 
 
         run_basin(file, model, result, points, dict(steps=steps, tol=basin_tol, t_step=t_max, dt=dt,
                                                    event_tol=event_tol, fall=fall), store, workers, batch)
+
+
+def _refuse_contacts(file) -> None:
+    """Refused (before any build) for a model with contacts: the cycle's Newton method differentiates the flow and
+    the jumps (andyc.runtime.sensitivities), and a contact's impact, liftoff, stick and slip are decided by a
+    complementarity problem it does not differentiate."""
+    from andyc.cli.common import fail_spec
+    from andyc.errors import SpecError
+    from andyc.pipeline import load
+
+    try:
+        spec = load(file)
+    except SpecError as exc:
+        fail_spec(exc)
+    if spec.contacts:
+        line = spec.source.line(("contacts",))
+        raise Refused(f"{file}:{line}: contacts: andyc cycle follows a gait through hand-written jumps, whose "
+                      f"derivatives it takes; the impacts and stick-slip changes of contacts "
+                      f"({', '.join(c.name for c in spec.contacts[:3])}{', ...' if len(spec.contacts) > 3 else ''}) "
+                      "are decided by a complementarity problem it does not differentiate; write them as jumps of "
+                      "a hybrid: section to find the gait's cycle (models/compass_gait.yaml)")
 
 
 def _continue_range(text: str) -> tuple:

@@ -40,7 +40,7 @@ def plot(run_file, out, animate, fps, frames_max, signals, window, metric):
     map of a metric over its two swept names, or a line over one."""
     from andyc.plot.select import select_signals
     from andyc.plot.select import window as time_window
-    from andyc.runtime.run import read_h5
+    from andyc.runtime.run import RunFileError, read_run_file
 
     if Path(run_file).is_dir():             # a sweep's result store (andyc sweep)
         from andyc.cli.sweep import plot_store
@@ -67,13 +67,17 @@ def plot(run_file, out, animate, fps, frames_max, signals, window, metric):
         raise click.BadParameter("give at least one signal name or glob", param_hint="--signals")
     out = out or str(Path(run_file).with_suffix(".gif" if animate else ".png"))
     check_output(out, [run_file], "plot")
+    if not animate:
+        check_image_type(out)
     if not animate and not patterns:
         check_output(sticks_path(out), [run_file], "plot")
     try:
-        run = read_h5(run_file)
-    except (OSError, KeyError, ValueError) as exc:
-        raise click.BadParameter(f"{run_file}: not a run file that andyc sim wrote ({exc})",
-                                 param_hint="RUN_FILE") from None
+        run = read_run_file(run_file)
+    except RunFileError as exc:
+        raise click.BadParameter(str(exc), param_hint="RUN_FILE") from None
+    if not len(run.time):
+        raise click.BadParameter(f"{run_file}: the run of {run.model} holds no samples (its status: {run.status})",
+                                 param_hint="RUN_FILE")
     try:
         if window is not None:
             run = time_window(run, t0, t1)
@@ -102,6 +106,18 @@ def parse_window(text: str) -> tuple:
     if t0 is not None and t1 is not None and t0 > t1:
         raise click.BadParameter(f"'{text}': T0 is after T1", param_hint="--window")
     return t0, t1
+
+
+def check_image_type(out) -> None:
+    """click.BadParameter for -o OUT whose suffix names no image type matplotlib writes (before any work)."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    known = {k: v for k, v in FigureCanvasBase.get_supported_filetypes().items() if k != "pgf"}  # (needs LaTeX)
+    suffix = Path(out).suffix.lower().lstrip(".")
+    if suffix not in known:
+        others = ", ".join("." + k for k in known if k not in ("png", "svg", "pdf"))
+        raise click.BadParameter(f"{out}: " + (f"unknown image type '.{suffix}'" if suffix else "no image type")
+                                 + f"; end the name in .png, .svg or .pdf (or {others})", param_hint="'-o' / '--out'")
 
 
 def sticks_path(out) -> Path:

@@ -13,8 +13,9 @@ from andyc.cli.formats import Report, format_option
 from andyc.cli.values import (COUNT, NON_NEGATIVE, POSITIVE, TOLERANCE, Number, input_drives, parse_sets, split_sets,
                               stop_counts)
 from andyc.errors import InitialStateError, SimulationError, plural
+from andyc.limits import MAX_STEPS
 from andyc.outputs import check_folder, check_output
-from andyc.runtime.methods import MAX_STEPS, METHODS
+from andyc.runtime.methods import METHODS
 
 
 @click.command()
@@ -71,8 +72,8 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
     """Build FILE if needed, simulate it and write run files.
 
     The model's simulate: section gives the options not given here (then the defaults shown).
-    SIGINT (Ctrl-C) or SIGTERM stop the run and write the samples so far, with the status "interrupted";
-    the exit code is then 130 or 143."""
+    SIGINT (Ctrl-C), SIGTERM or SIGHUP stop the run and write the samples so far, with the status
+    "interrupted"; the exit code is then 130, 143 or 129."""
     from andyc.runtime.inputs import InputWarning
     from andyc.runtime.interrupts import Interrupts
     from andyc.runtime.run import RUN_SUFFIXES
@@ -87,7 +88,7 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
                                      f"the run file; the build folder is --build-dir)", param_hint="-o/--out")
         check_output(out, read, "run file")
     report = Report("sim", fmt)
-    check_folder(build_dir, read)
+    check_folder(build_dir, read, write=False)     # (an up-to-date build is only read)
     model, result = compiled(file, build_dir, report=report, integrator=False)
     given = model_options(click.get_current_context(), model.simulate)
     t_end, dt, method, every, init, init_tol = (given[k] for k in ("t_end", "dt", "method", "every", "init", "init_tol"))

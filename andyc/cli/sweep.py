@@ -161,7 +161,10 @@ def plot_store(store, out, variable) -> None:
         raise click.BadParameter(f"{store} sweeps {len(swept)} names; the plot draws one or two",
                                  param_hint="STORE")
     out = out or str(Path(store).with_suffix(".png"))
+    from andyc.cli.plot import check_image_type
+
     check_output(out, [], "plot")
+    check_image_type(out)
     axes = [(n, ds[n].values) for n in swept]
     outcomes = colours = None
     if "flag_meanings" in data.attrs:           # codes: the outcome, a basin's classes

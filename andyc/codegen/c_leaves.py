@@ -29,7 +29,7 @@ from pathlib import Path
 from sympy import S, Symbol, cos, default_sort_key, sin
 from sympy.printing.c import C99CodePrinter
 
-from andyc.codegen.printer import Unwrapped
+from andyc.codegen.printer import Unwrapped, finite_literal
 from andyc.numerics.layout import RETURNS
 
 # What the compiler is asked for: position-independent code for a shared library; no contraction of a*b + c
@@ -61,13 +61,13 @@ class _Printer(Unwrapped, C99CodePrinter):
     """C99 printer: every number a double literal (no integer division), unknown functions refused."""
 
     def _print_Rational(self, expr):
-        return repr(float(expr))
+        return finite_literal(expr)
 
     def _print_Integer(self, expr):
-        return repr(float(expr.p))
+        return finite_literal(expr)
 
     def _print_Float(self, expr):
-        return repr(float(expr))
+        return finite_literal(expr)
 
     def _print_Pow(self, expr):
         """Small integer powers as products, in the order of Numba's integer power (square and multiply),

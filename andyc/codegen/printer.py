@@ -8,6 +8,7 @@ replacements and the assignments so that each line uses only earlier ones.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import sympy as sp
@@ -23,15 +24,37 @@ class Unwrapped:
         return super()._handle_UnevaluatedExpr(expr) if expr.has(sp.re) else expr
 
 
+class ConstantOverflow(ValueError):
+    """A constant of the derived equations that no float holds (the product of a model's large numbers: a
+    stiffness of 1e200 on a length of 1e200 * x): the model's units need scaling. The pipeline turns it into
+    a problem of the model file."""
+
+
+def finite_literal(expr) -> str:
+    """repr of the float of a SymPy number; ConstantOverflow past 1.8e308."""
+    try:
+        value = float(expr)
+    except OverflowError:
+        value = math.inf
+    if not math.isfinite(value):
+        shown = str(sp.N(expr, 3)).lower()
+        raise ConstantOverflow(f"a constant of the derived equations, {shown}, overflows a float (past 1.8e308)")
+    return repr(value)
+
+
 class _Printer(Unwrapped, PythonCodePrinter):
     """Python printer for Numba: math.* calls, floats for rationals."""
 
     def _print_Rational(self, expr):
-        return repr(float(expr))
+        return finite_literal(expr)
 
     def _print_Integer(self, expr):
         # Numba types integer literals as int64; print larger ones as floats.
-        return str(expr.p) if abs(expr.p) < 2**53 else repr(float(expr))
+        return str(expr.p) if abs(expr.p) < 2**53 else finite_literal(expr)
+
+    def _print_Float(self, expr):
+        finite_literal(expr)
+        return super()._print_Float(expr)
 
 
 _PRINTER = _Printer({"fully_qualified_modules": True, "standard": "python3"})

@@ -1,6 +1,6 @@
 """The contact problem of one time step, or of a multi-contact impact, compiled: the impulses P over m rows.
 
-The same problem and answers as andyc.runtime.contact_problem (its pure-Python twin), in flat arrays so that a
+The same problem and answers as andyc.independent.contact_problem (its pure-Python twin), in flat arrays so that a
 compiled time-stepping loop can call it. With W = A M^-1 A^T over the rows and w0 their velocities without the
 impulses (plus e u_n on each normal row: Newton's law; Acary & Brogliato 2008, Numerical Methods for Nonsmooth
 Dynamical Systems, sec. 10.1):

@@ -32,7 +32,7 @@ from .active import select_rows
 from .dynamics import enabled_value, guard_value, in_mode, jump, multipliers, project, rhs_mode_into, slip_direction
 from .model import borrowed, call
 from .slipping import slip_unit
-from .status import (BAUMGARTE, DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, ON_ZERO,
+from .status import (BAUMGARTE, DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, ON_CONE, ON_ZERO,
                      OPEN_SIDE, REST_SPEED, RISING, SLIP_STOP)
 
 Options = namedtuple("Options", "mode project constrain e0 energy_tol event_tol")
@@ -252,15 +252,18 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
     for n in range(model.nj):
         if in_mode(model, n, flow, d):
             g0[n] = guard_value(model, w, n, t, x, u, p, d, flow)
-            # A contact leaving an impact (a bounce, or a rocking block's pivot corner lifted when the other
-            # strikes) starts with its gap a rounding from zero, either side. A rounding below zero, moving up,
-            # would hide its coming down again within the step (a block's late, short rocks), and one above would
-            # have locate try the step's start again and again: it starts on the open side, of no known size.
-            if model.jump_contact[n] >= 0 and abs(g0[n]) <= ON_ZERO * scale:
+            # A guard leaving its surface (a bounce, a rocking block's pivot corner lifted when the other strikes,
+            # a hand-written walker's foot after its strike) starts a rounding from zero, either side. A rounding
+            # past zero, moving away, would hide its coming back within the step (a block's late, short rocks: the
+            # run would pass through the surface unnoticed), and one before it would have locate try the step's
+            # start again and again: it starts on the open side, of no known size. (A guard of multipliers has no
+            # derived rate: not this.)
+            if (direction[n] != EITHER and not model.jump_multipliers[n]
+                    and abs(g0[n]) <= ON_ZERO * scale):
                 if not have_rate:
                     have_rate = rhs_mode_into(model, w, t, x, u, p, d, flow, w.xdot, opts.mode) == OK
-                if have_rate and call(model.guard_rate, (n, t, x, u, p, d, w.xdot)) > REST_SPEED:
-                    g0[n] = OPEN_SIDE
+                if have_rate and direction[n] * call(model.guard_rate, (n, t, x, u, p, d, w.xdot)) < -REST_SPEED:
+                    g0[n] = -direction[n] * OPEN_SIDE
     while i < i_end:
         t_next = t0 + (i + 1) * dt
         h = t_next - t
@@ -281,6 +284,8 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
                 if update_inputs(inputs, t_next, x1, p, d, flow, u, data) != OK:
                     return i, row, INPUT_FAILED, t, flow, -1
                 g1 = guard_value(model, w, n, t_next, x1, u, p, d, flow)
+                if model.jump_multipliers[n] and abs(g1) <= ON_CONE * force_scale(w.lam):
+                    continue        # (a force a rounding from its bound: no crossing yet; g0 keeps its side)
                 if crosses(direction[n], g0[n], g1):
                     tau, status = locate(model, w, opts, inputs, data, n, tol, t, h, x, u, p, d, flow, g0[n], g1, scale)
                     if status == OK:
@@ -319,6 +324,16 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
     return i, row, OK, t, flow, -1
 
 
+@jit(inline="always")
+def force_scale(lam):
+    """max(1, |lam|) over the multipliers that have a value (the others are NaN)."""
+    scale = 1.0
+    for r in range(lam.shape[0]):
+        if lam[r] == lam[r]:
+            scale = max(scale, abs(lam[r]))
+    return scale
+
+
 @jit(nogil=True)
 def instant(model, w, mode, inputs, data, t, x, p, d, flow):
     """The first jump (in priority order) out of `flow` that happens at once at (t, x), or -1.
@@ -329,8 +344,11 @@ def instant(model, w, mode, inputs, data, t, x, p, d, flow):
     after the bounce, does not. A contact's impact (JUMP_CONTACT) needs dg/dt < -REST_SPEED: a gap a
     rounding below zero, at rest to a rounding, right after its liftoff, is not closing. A slip's end
     (JUMP_CONTACT = SLIP_STOP) needs its slip speed to reverse faster than REST_SPEED (per second): a slip that
-    began at the edge of the friction cone starts with a rate that is a rounding from zero. w.u is left at the
-    inputs at (t, x); -2 when they fail.
+    began at the edge of the friction cone starts with a rate that is a rounding from zero. A guard that reads
+    multipliers (a normal force, the cone's edge mu lam_n +- lam_t) within ON_CONE of the largest force of zero is
+    on zero: the runtime chose the contacts' modes with a smaller tolerance (runtime.contact_modes.cone_state), and a
+    jump at once for a rounding would undo its choice, again and again (a stick and a slip in turn at one instant).
+    w.u is left at the inputs at (t, x); -2 when they fail.
     """
     u, xdot = w.u, w.xdot
     x, p, d = borrowed(x), borrowed(p), borrowed(d)
@@ -343,6 +361,8 @@ def instant(model, w, mode, inputs, data, t, x, p, d, flow):
             continue
         direction = model.jump_direction[k]
         g = guard_value(model, w, k, t, x, u, p, d, flow)
+        if model.jump_multipliers[k] and abs(g) <= ON_CONE * force_scale(w.lam):
+            g = 0.0         # (a force a rounding past its bound: the mode just chosen holds, see ON_CONE)
         if g != 0.0 and (direction == EITHER or (g > 0.0) != (direction == RISING)):
             continue
         if not have_rate:

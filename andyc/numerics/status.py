@@ -30,6 +30,8 @@ GROWTH_LIMIT = 1e3  # a step that grows the state past this factor of its larges
 RANK_TOL = 1e-8     # singular values below RANK_TOL * the largest count as zero (redundant rows, singular poses)
 REST_SPEED = 1e-9   # a contact approaching slower than this takes no impact; one this slow after an impact closes
 ON_ZERO = 1e-12     # a gap this close to zero (relative to the state's scale beyond 1) is on zero
+ON_CONE = 1e-10     # a guard of forces this close to zero (relative to the largest force beyond 1) is on zero, at
+#                     an instant (integrator.instant): more than the runtime's choice of modes allows (1e-12)
 OPEN_SIDE = float("inf")    # what a gap on zero that is opening starts a step with (integrator.advance,
 #                             runtime.adaptive): positive, of no known size, so that the root search bisects until
 #                             a trial finds it open (regula falsi from 0+ would try the step's start again and again)

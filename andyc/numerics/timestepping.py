@@ -7,7 +7,8 @@ theta in [1/2, 1]:
     q_{k+theta} = q_k + theta h v_k                                    (signals: sigma + theta h dsigma/dt)
     index set   I = {contact i : g_i(q_{k+theta}) + (1 - theta) h u_i <= TOUCHING}   (the gap predicted at the
                                                           step's end, u_i = A_i v_free + b_i at the free velocity
-                                                          v_free = v_k + h M^-1 G: gravity's pull included)
+                                                          v_free = v_k + h M^-1 G: gravity's pull included; for
+                                                          a contact closed in the last step min(u_i, 0), and KEEP)
     M (v_{k+1} - v_k) = h G(t_{k+theta}, q_{k+theta}, v_k) + A^T P     (M, G, A at the mid point)
     each contact in I:  0 <= u_n,k+1 + e min(u_n,k, 0)  _|_  P_n >= 0  (Newton's law at velocity level)
                         Coulomb on P_t: |P_t| <= mu P_n, the slip u_t,k+1 = 0 inside the cone,
@@ -17,7 +18,11 @@ theta in [1/2, 1]:
                                                                        v_{k+theta}; quaternions renormalized)
 
 with G everything but the inertia term (M dv/dt = G), A the rows' Jacobian and u = A v + b their velocity
-residuals. Newton's law restores e of an approaching speed only (min(u_n,k, 0)): a contact that enters the index
+residuals. A closed contact whose free velocity lifts it stays in the problem, which opens it (P_n = 0, u_n > 0)
+if the others let it rise: its free velocity is its own motion without any contact's impulse, and where several
+contacts hold one body it can rise while the body, held by the others, presses it down (a robot's heel, which its
+ankle motor spins up in free motion, while the toes' impulses turn the foot heel down: left out, it would sink for
+a step and land, every other step). Newton's law restores e of an approaching speed only (min(u_n,k, 0)): a contact that enters the index
 set already separating (a corner lifted, a ball rising out of its push-out) must not be allowed to sink at e times
 that speed. The step's contact problem, W = A M^-1 A^T over the rows, is contact_solver.solve's (nonlinear
 Gauss-Seidel, then the active set it finds solved exactly); each contact's state in the last step is its warm
@@ -219,10 +224,13 @@ def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
         nb += 1
     for i in range(nc):
         n = model.contact_rows[i]
-        near = KEEP if d[model.contact_mode[i]] != 0.0 else TOUCHING     # (hysteresis: see KEEP)
+        closed = d[model.contact_mode[i]] != 0.0
+        near = KEEP if closed else TOUCHING             # (hysteresis: see KEEP)
         u_free = S[model.s_cv, n]                       # (the normal speed at the free velocity: A v_free + b)
         for j in range(nv):
             u_free += S[model.s_a + n, j] * (a[j] - v[j])
+        if closed and u_free > 0.0:                     # (a closed contact's free rise is not counted: see the
+            u_free = 0.0                                #  module docstring)
         if S[model.s_phi, n] + (1.0 - theta) * h * u_free > near:       # the gap predicted at the step's end
             s.guess[i] = -1
             continue

@@ -34,6 +34,9 @@ class _Stopped(Exception):
     """A right-hand side or input evaluation inside the solver failed: args (t, status)."""
 
 
+STALLED_STEPS = 1000        # steps in a row that leave t where it was: the solver is stuck
+
+
 def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol, bar, jumps, interrupts, run_of):
     """Integrate from (0, x) to t_end with SciPy's `method`, logging the grid i dt_out. Returns (log, status,
     stats)."""
@@ -71,7 +74,7 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
         grid = np.append(grid, t_end)
     out_t, out_x, out_f, out_d = [0.0], [x.copy()], [flow], [d.copy()]
     out_u = [inputs(0.0, x).copy()]
-    row, steps, t = 1, 0, 0.0
+    row, steps, t, still = 1, 0, 0.0, 0
 
     def partial():
         n = min(map(len, (out_t, out_x, out_u, out_f, out_d)))
@@ -85,7 +88,8 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
         balance.add(x, inputs(t, x), d)
         while message is None and t < t_end:
             current[0] = flow
-            solver = scipy_method(method)(fun, t, x, t_end, rtol=rtol, atol=atol)
+            with np.errstate(all="ignore"):     # (its first step's estimate, from a right-hand side past a float)
+                solver = scipy_method(method)(fun, t, x, t_end, rtol=rtol, atol=atol)
             watched = [m for m in range(model.nj) if model.in_mode(m, flow, d)]
             g0 = {m: module.guard(m, t, x, inputs(t, x), p, d, flow) for m in watched}
             open_side(model, t, x[:nx], inputs(t, x), p, d, g0)     # a gap leaving an impact: on its open side
@@ -95,10 +99,23 @@ def run_adaptive(model, method, x, source, p, d, flow, t_end, dt_out, rtol, atol
                     message += at(solver.t)
                     break
                 t_old = solver.t
-                text = solver.step()
+                try:
+                    with np.errstate(all="ignore"):     # (a state that overflows is reported below, as such)
+                        text = solver.step()
+                except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                    # Radau's and BDF's Newton on a state past a float: "array must not contain infs or NaNs"
+                    message = solver_failed(method, solver.t, f"{type(exc).__name__}: {exc} (the solution "
+                                            "diverges, or the equations are not finite there)")
+                    break
                 steps += 1
                 if solver.status == "failed":
                     message = solver_failed(method, solver.t, text)
+                    break
+                still = still + 1 if solver.t <= t_old else 0
+                if still >= STALLED_STEPS:      # (LSODA at a discontinuity: steps of zero length, without end)
+                    message = solver_failed(method, solver.t, f"{STALLED_STEPS} steps in a row made no progress "
+                                            "(the equations are stiff or discontinuous there: try Radau, or a "
+                                            "fixed-step method)")
                     break
                 if not np.all(np.isfinite(solver.y)):
                     message = nonfinite(solver.t)

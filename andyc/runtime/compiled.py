@@ -291,5 +291,5 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
         integrator.crosses(0, 1.0, -1.0)
         integrator.illinois_trial(0.0, 1.0, 1.0, -1.0, 1.0)
         integrator.illinois_bracket(1.0, 0.0, 1.0, 1.0, -1.0, 0, 0.5, -0.5)
-        model.module.guard(0, 0.0, x, u, p, d)
-        model.module.enabled(0, 0.0, x, u, p, d)
+        for f in (model.module.guard, model.module.enabled):     # (compiled also for a model without jumps)
+            getattr(f, "__wrapped__", f)(0, 0.0, x, u, p, d)

@@ -24,6 +24,7 @@ TOUCHING = 1e-12        # a contact whose gap is at most this at the start, at r
 STICK, SLIP_POS, SLIP_NEG = 1, 2, 3     # a contact's modes beside open (0), as andyc.spec.contacts
 SLIP = 2                                # spatial friction: its one slipping mode
 MAX_ENUMERATED = 8      # contacts at rest whose drop sets _settle enumerates (2^n trials) when the first fails
+PULL_TOL = 1e-12        # a closed contact's normal force below minus this (of the largest, beyond 1) pulls
 
 
 def friction_coefficients(model, p) -> np.ndarray:
@@ -139,7 +140,9 @@ def _drop_pulling(model, t, x, u, p, d, flow: int, states: list) -> list:
     while any(states):
         lam = model.module.multipliers(t, x, u, p, with_states(model, d, states), flow)
         force, worst = min((lam[r], i) for i, r in enumerate(rows) if states[i])
-        if force < 0.0:
+        # (a force a rounding below zero is zero: two balls leaving together at no force stay closed, to part
+        # where their force falls through zero, not to strike again and again a gap a rounding from zero)
+        if force < -PULL_TOL * max(1.0, max(abs(lam[r]) for i, r in enumerate(rows) if states[i])):
             if states[worst] > STICK:
                 _painleve(model, t, x, u, p, d, worst, states[worst], mu[worst])
             states[worst] = 0

@@ -20,7 +20,7 @@ and none is processed before another, so no sequence is invented. With few touch
 MAX_CASES cases) it is solved by enumerating the active sets, smallest first, each a least-squares solve of W
 over its rows (redundant rows allowed; W is positive semi-definite), the first that satisfies every
 inequality taken; with more (a robot's feet, a box's corners), by the time-stepping method's solver
-(andyc.runtime.contact_problem: Gauss-Seidel over the contacts, then the active set it finds solved exactly),
+(andyc_numerics' contact_solver: Gauss-Seidel over the contacts, then the active set it finds solved exactly),
 whose problem this is with the step's free velocity replaced by the speeds before the impact.
 
 An open contact approaching slower than REST_SPEED (andyc.numerics.status) takes no impact (nor does the
@@ -60,12 +60,12 @@ slips on against lam_t (its direction into the discrete states that keep it); a 
 
 from __future__ import annotations
 
+import importlib
 import math
 from itertools import product
 
 import numpy as np
 
-from andyc.runtime import contact_problem
 from andyc.runtime.contact_modes import (SLIP_NEG, SLIP_POS, STICK, TOUCHING, cone_state, friction_coefficients,
                                          initial_mode, set_direction, settle, slip_state, spatial_cone_state, stuck,
                                          terms, with_states)
@@ -106,7 +106,7 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool, fired: int = 
     Minv = np.linalg.inv(M)
     choices = [range(3) if spatial[i] else range(4) if stick[i] >= 0 else range(2) for i in touching]
     if math.prod(len(ch) for ch in choices) > MAX_CASES:
-        dv, after = _impulses_many(touching, rows, stick, spatial, bilateral, mu, e, c, A, Minv)
+        dv, after = _impulses_many(model, touching, rows, stick, spatial, bilateral, mu, e, c, A, Minv)
     else:
         dv, after = _impulses_enumerated(model, t, touching, choices, rows, stick, spatial, bilateral, mu, e, c, A,
                                          Minv, tol)
@@ -195,29 +195,35 @@ def _holds(i, o, r, t_row, spatial, mu, e, c, after, impulse, slide, tol, ptol) 
     return True
 
 
-def _impulses_many(touching, rows, stick, spatial, bilateral, mu, e, c, A, Minv):
+def _impulses_many(model, touching, rows, stick, spatial, bilateral, mu, e, c, A, Minv):
     """(dv, the rows' speeds after) of an impact with more touching contacts than enumeration serves: the
-    time-stepping method's contact problem with w0 the speeds before, (1 + e) c- on each normal row (Newton's law
-    c+ + e c- >= 0), c- on the tangent and bilateral rows (andyc.runtime.contact_problem)."""
-    R, blocks, w0 = list(bilateral), [contact_problem.Block(contact_problem.BILATERAL, (k,))
-                                      for k in range(len(bilateral))], [c[r] for r in bilateral]
+    time-stepping method's contact problem (andyc_numerics' contact_solver) with w0 the speeds before, (1 + e) c- on
+    each normal row (Newton's law c+ + e c- >= 0), c- on the tangent and bilateral rows."""
+    solver = importlib.import_module(f"{model.numerics.__name__}.contact_solver")
+    R, kinds, first, mus, w0 = list(bilateral), [solver.BILATERAL] * len(bilateral), list(range(len(bilateral))), \
+        [0.0] * len(bilateral), [c[r] for r in bilateral]
     for i in touching:
-        n = len(R)
+        first.append(len(R))
         w0.append((1.0 + e[i]) * c[rows[i]])
         R.append(rows[i])
+        mus.append(float(mu[i]) if stick[i] >= 0 else 0.0)
         if spatial[i]:
-            blocks.append(contact_problem.Block(contact_problem.SPATIAL, (n, n + 1, n + 2), float(mu[i])))
+            kinds.append(solver.SPATIAL)
             R += [stick[i], stick[i] + 1]
             w0 += [c[stick[i]], c[stick[i] + 1]]
         elif stick[i] >= 0:
-            blocks.append(contact_problem.Block(contact_problem.PLANAR, (n, n + 1), float(mu[i])))
+            kinds.append(solver.PLANAR)
             R.append(stick[i])
             w0.append(c[stick[i]])
         else:
-            blocks.append(contact_problem.Block(contact_problem.NORMAL, (n,)))
+            kinds.append(solver.NORMAL)
     X = Minv @ A[R].T
-    solution = contact_problem.solve(A[R] @ X, np.array(w0), blocks)
-    dv = X @ solution.P
+    nb, m = len(kinds), len(R)
+    P = np.zeros(m)
+    solver.solve(np.ascontiguousarray(A[R] @ X), np.array(w0), np.array(kinds, dtype=np.int64),
+                 np.array(first, dtype=np.int64), np.array(mus), np.full(nb, solver.NONE, dtype=np.int64),
+                 np.zeros((nb, 2)), P, np.zeros(solver.work_shape(m)))
+    dv = X @ P
     return dv, c + A @ dv
 
 
@@ -273,8 +279,8 @@ def resolve_stop(model, t, x, u, p, d, k: int, flow: int) -> None:
     nq, nv = model.nq, model.nv
     M, _, c, A = terms(model, t, x, u, p, d)
     states, stick, tangents = model.contact_states(d), model.contact_stick_rows, model.tangents
-    stopping = [model.jump_kinds[k][1]] + [i for i, s in enumerate(states) if s > STICK and tangents[i] == 1
-                                           and abs(c[stick[i]]) <= REST_SPEED]
+    stopping = [model.jump_kinds[k][1]] + [i for i, s in enumerate(states) if s > STICK
+                                           and np.linalg.norm(c[stick[i]:stick[i] + tangents[i]]) <= REST_SPEED]
     for i in stopping:
         states[i] = STICK
     model.set_contact_states(d, states)

@@ -95,7 +95,8 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
             e0 = law_offset(model, flow, balance.add(x, w.u, d))
         elif i > i0:
             elapsed = time.perf_counter() - tic
-            chunk = int(min(max(chunk * 0.25 / max(elapsed, 1e-6) * (i_end - i0) / (i - i0), 1000), 10_000_000))
+            target = interrupts.budget(0.25)       # (a quarter of a second, or what is left of --timeout)
+            chunk = int(min(max(chunk * target / max(elapsed, 1e-6) * (i_end - i0) / (i - i0), 1000), 10_000_000))
         bar(t)
     if status != OK:
         why = failure(model, source, status, t, d, p)

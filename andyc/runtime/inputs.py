@@ -275,14 +275,23 @@ def _run_inputs(model, expressions: dict, tables: dict, held: list):
     return module.run_inputs
 
 
+MAX_TABLE_BYTES = 256 * 2**20       # an input's table is read whole, into Python lists: bounded
+
+
 def read_table(path: Path, name: str, t_end: float | None) -> Table:
     """A CSV table of an input: a header row, a time column `t` or `time`, one row per time, in increasing time.
 
     Stops at the first problem with FILE:LINE: a missing or non-numeric value (a gap), a time that does
     not increase, or a table that does not cover the run (0 .. t_end).
     """
-    if not path.is_file():
+    if not path.exists():
         raise SimulationError(f"{path}: no such file (the table of input {name})")
+    if not path.is_file():                  # a pipe would be waited on, a device read without end
+        raise SimulationError(f"{path}: is a {'folder' if path.is_dir() else 'special file'}, not a CSV table (the "
+                              f"table of input {name}); give a regular file")
+    if path.stat().st_size > MAX_TABLE_BYTES:
+        raise SimulationError(f"{path}: {path.stat().st_size / 2**20:.0f} MB, past andyc's limit of "
+                              f"{MAX_TABLE_BYTES // 2**20} MB for the table of input {name}; give a shorter table")
     try:
         with open(path, newline="", encoding="utf-8") as fh:
             rows = [(n, row) for n, row in enumerate(csv.reader(fh), start=1)
@@ -343,8 +352,11 @@ def load_controller(path: Path, model, p) -> Controller:
     """Import `control(t, x, d, p)` from the file, call it once as Python at the initial state (to name the
     file and line of any problem before the run), and compile it with Numba when it can be."""
     path = path.resolve()
-    if not path.is_file():
+    if not path.exists():
         raise SimulationError(f"{path}: no such file (--controller)")
+    if not path.is_file():
+        raise SimulationError(f"{path}: is a {'folder' if path.is_dir() else 'special file'}, not a Python file "
+                              f"(--controller); give a regular file")
     mod_name = f"andyc_controller_{abs(hash(str(path))):x}"
     spec = importlib.util.spec_from_file_location(mod_name, path)
     module = importlib.util.module_from_spec(spec)

@@ -1,11 +1,13 @@
-"""Stopping a run from outside: SIGINT, SIGTERM and a wall-clock limit, keeping what it logged.
+"""Stopping a run from outside: SIGINT, SIGTERM, SIGHUP and a wall-clock limit, keeping what it logged.
 
-While a run integrates, SIGINT and SIGTERM do not raise: a handler notes the
+While a run integrates, SIGINT, SIGTERM and SIGHUP (the terminal or the SSH session closed) do not raise: a
+handler notes the
 signal, and the run stops where its loop next returns to Python (the compiled
 loop does so after each block of steps, about every 0.25 s; the SciPy loop
 after each step), keeping its samples, with the status "interrupted: ...".
 The command line then writes them and exits with 128 + the signal's number
-(130 for SIGINT, 143 for SIGTERM), as shells do. A wall-clock limit stops the
+(130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP), as shells do. A signal the process was
+started ignoring (`nohup andyc sim ...` ignores SIGHUP) stays ignored. A wall-clock limit stops the
 run the same way, with the status "stopped: ...".
 
 Code that never returns (a compiled controller in an endless loop) cannot be
@@ -31,7 +33,7 @@ import time
 from contextlib import contextmanager
 
 GRACE = 3.0             # seconds a stop may take before the watchdog gives the run up
-SIGNALS = (signal.SIGINT, signal.SIGTERM)
+SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
 class Interrupts:
@@ -54,6 +56,13 @@ class Interrupts:
             return f"stopped: the run took longer than its wall-clock limit of {self.wall_limit:g} s"
         return None
 
+    def budget(self, seconds: float) -> float:
+        """`seconds`, or less when the wall-clock limit is nearer: how long a block of compiled steps may take
+        before the loop looks at reason() again (a run must not finish a block long past its limit)."""
+        if self.wall_limit is None:
+            return seconds
+        return max(min(seconds, self.wall_limit - (time.monotonic() - self.start)), 1e-4)
+
     @property
     def exit_code(self) -> int:
         """128 + the signal's number, as shells report a process a signal ended; 1 for the wall-clock limit."""
@@ -71,7 +80,7 @@ class Interrupts:
         if threading.current_thread() is not threading.main_thread():
             yield self
             return
-        previous = {s: signal.signal(s, self._note) for s in SIGNALS}
+        previous = {s: signal.signal(s, self._note) for s in SIGNALS if signal.getsignal(s) is not signal.SIG_IGN}
         reader, writer = socket.socketpair()
         reader.setblocking(False)
         writer.setblocking(False)

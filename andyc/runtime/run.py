@@ -11,6 +11,7 @@ import numpy as np
 
 import andyc
 from andyc.errors import plural, printable
+from andyc.numerics.status import SLIP_TINY
 from andyc.outputs import write_atomic
 from andyc.runtime.status import drift, largest_residual
 from andyc.spec.meshfiles import read_mesh
@@ -168,7 +169,8 @@ class Run:
     @property
     def friction_forces(self) -> np.ndarray:
         """(N, contacts) each contact's friction force along +tangent (the direction of positive slip): its stick
-        row's multiplier while it sticks, -mu lam_n slipping forwards, +mu lam_n backwards; 0 open or frictionless."""
+        row's multiplier while it sticks, -mu lam_n slipping forwards, +mu lam_n backwards; 0 open or frictionless.
+        A moreau run's, after sample 0: the steps' mean tangential impulse P_t / dt, in every closed mode."""
         return self._friction(0)
 
     @property
@@ -189,9 +191,12 @@ class Run:
                 known = f"{self.contact_names[i]}_slip_dir_1"
                 if known in self.discrete_names:        # a slip from rest, or a step that held it: the run's
                     k = self.discrete_names.index(known)
-                    own = (size > 0) & (self.discrete[:, k + 2] == 0)
-                    direction = np.where(own[:, None], slip / np.where(size > 0, size, 1.0)[:, None],
-                                         self.discrete[:, k:k + 2])
+                    # (as numerics.slipping.slip_unit: the run's direction where |s| <= SLIP_TINY or held, else
+                    # s / |s| turned towards it)
+                    ref = self.discrete[:, k:k + 2]
+                    own = (size > SLIP_TINY) & (self.discrete[:, k + 2] == 0)
+                    sigma = np.where(np.sum(slip * ref, axis=1) < 0.0, -1.0, 1.0)
+                    direction = np.where(own[:, None], slip * (sigma / np.where(size > 0, size, 1.0))[:, None], ref)
                 else:
                     direction = slip / np.where(size > 0, size, 1.0)[:, None]
                 out[:, i] = np.where(modes[:, i] == 1, self.multipliers[:, row + j], 0.0)
@@ -203,6 +208,12 @@ class Run:
             out[:, i] = np.where(modes[:, i] == 1, self.multipliers[:, row], 0.0)
             out[:, i] += np.where(modes[:, i] == 2, -mu * normal[:, i], 0.0) + np.where(modes[:, i] == 3,
                                                                                          mu * normal[:, i], 0.0)
+        if self.method == "moreau":
+            # after sample 0 (the initial modes' ideal multipliers), the steps' mean tangential impulses P_t / dt,
+            # logged in the stick rows whatever the contact's mode (a slip at rest, a slide: the step's own force)
+            for i, row in enumerate(self.contact_stick_rows):
+                if row >= 0 and j < self.contact_tangents[i]:
+                    out[1:, i] = np.where(modes[1:, i] > 0, np.nan_to_num(self.multipliers[1:, row + j]), 0.0)
         return out
 
     @property
@@ -477,3 +488,94 @@ def write_events_csv(run: Run, path: Path) -> None:
                       run.flow_names[ev["from_flow"][r]], run.flow_names[ev["to_flow"][r]]]
             values += [repr(float(v)) for v in ev["state_after"][r]] + [repr(float(v)) for v in ev["discrete_after"][r]]
             fh.write(",".join(values) + "\n")
+
+
+class RunFileError(ValueError):
+    """A file that is not a run file of andyc sim's, or one damaged since: one line that says what."""
+
+
+def read_run_file(path) -> Run:
+    """read_h5 of a file a user names (andyc plot, andyc view, an expectation's reference): RunFileError, one
+    line, for a file that is not HDF5, lacks a dataset or an attribute, or whose arrays disagree (a truncated
+    or edited file), rather than whichever exception the plot would meet first."""
+    import os
+    import stat
+
+    try:
+        regular = stat.S_ISREG(os.stat(path).st_mode)
+    except OSError as exc:
+        raise RunFileError(f"{path}: cannot read it ({exc.strerror})") from None
+    if not regular:                         # a pipe would be waited on without end, a device read without end
+        raise RunFileError(f"{path}: this is a {'folder' if os.path.isdir(path) else 'special file'}, not a run "
+                           f"file; give the .h5 file andyc sim wrote")
+    try:
+        run = read_h5(path)
+    except Exception as exc:                # h5py's, json's, numpy's errors vary with the damage
+        raise RunFileError(f"{path}: not a run file that andyc sim wrote ({printable(str(exc)) or type(exc).__name__})"
+                           ) from None
+    problem = run_problem(run)
+    if problem:
+        raise RunFileError(f"{path}: a damaged run file ({problem}); write it again with andyc sim")
+    run.status = printable(run.status)
+    return run
+
+
+def run_problem(run: Run) -> str:
+    """What is inconsistent in a Run read back, or '': each array's shape against the time's and the names',
+    finite increasing times, the names printable text (they reach titles, the terminal and pages)."""
+    def names(value) -> bool:
+        return isinstance(value, list) and all(isinstance(v, str) and v.isprintable() for v in value)
+
+    n = run.time.shape[0] if isinstance(run.time, np.ndarray) and run.time.ndim == 1 else -1
+    if n < 0 or run.time.dtype.kind not in "fiu":
+        return "time is not a list of numbers"
+    if not np.all(np.isfinite(run.time)) or np.any(np.diff(run.time) < 0):
+        return "its times are not finite and increasing"
+    for what, value in (("model", [run.model]), ("state names", run.state_names), ("flow names", run.flow_names),
+                        ("jump names", run.jump_names), ("discrete names", run.discrete_names),
+                        ("input names", run.input_names), ("multiplier names", run.multiplier_names),
+                        ("work names", run.work_names), ("contact names", run.contact_names),
+                        ("frames", list(run.frames)), ("frame parents", list(run.frame_parents.values())
+                                                       if isinstance(run.frame_parents, dict) else None)):
+        if not names(value):
+            return f"its {what} are not a list of printable names"
+    if not run.flow_names:
+        return "it names no flow"
+    for what, value in (("parameters", run.parameters), ("inputs", run.inputs), ("display", run.display),
+                        ("stats", run.stats)):
+        if not isinstance(value, dict):
+            return f"its {what} are not a mapping"
+    columns = {"state": (run.state, len(run.state_names)), "discrete": (run.discrete, len(run.discrete_names)),
+               "inputs": (run.input_values, len(run.input_names)),
+               "multipliers": (run.multipliers, len(run.multiplier_names)),
+               "residual/velocity": (run.residual_velocity, len(run.multiplier_names)),
+               "residual/position": (run.residual_position, None), "work": (run.work, len(run.work_names)),
+               "power": (run.power, len(run.work_names)), "slip speeds": (run.slip_speeds, len(run.contact_names)),
+               "slip speeds 2": (run.slip_speeds_2, len(run.contact_names)),
+               **{f"frames/{k}": (v, 3) for k, v in run.frames.items()},
+               **{f"frame_rotations/{k}": (v, 4) for k, v in run.frame_rotations.items()}}
+    for what, (value, width) in columns.items():
+        if not isinstance(value, np.ndarray) or value.ndim != 2 or value.dtype.kind not in "fiu" \
+                or value.shape[0] != n or (width is not None and value.shape[1] != width):
+            return (f"{what} has the shape {getattr(value, 'shape', '?')}, not ({n}, "
+                    f"{'*' if width is None else width}) for {n} samples")
+    for what, value in (("energy", run.energy), ("flow", run.flow)):
+        if not isinstance(value, np.ndarray) or value.shape != (n,) or value.dtype.kind not in "fiu":
+            return f"{what} has the shape {getattr(value, 'shape', '?')}, not ({n},)"
+    if n and (run.flow.min() < 0 or run.flow.max() >= max(len(run.flow_names), 1) and not run.contact_names):
+        return "its flow indices are outside its flows"
+    if not (0 <= run.nq and 0 <= run.nv and run.nq + run.nv <= len(run.state_names)):
+        return f"nq = {run.nq} and nv = {run.nv} do not fit its {len(run.state_names)} states"
+    if len(run.residual_position[0] if n else []) > len(run.multiplier_names):
+        return "residual/position has more rows than multipliers"
+    if any(not isinstance(r, int) or not -1 <= r < len(run.multiplier_names)
+           for r in list(run.contact_rows) + list(run.contact_stick_rows)):
+        return "its contacts name rows outside its multipliers"
+    if not (len(run.contact_rows) == len(run.contact_stick_rows) == len(run.contact_mu)
+            == len(run.contact_tangents) == len(run.contact_names)):
+        return "its contacts' lists disagree in length"
+    events = run.events
+    k = len(events["time"])
+    if any(len(events[key]) != k for key in ("jump", "from_flow", "to_flow", "state_before", "state_after")):
+        return "its events' columns disagree in length"
+    return ""

@@ -43,16 +43,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from andyc.errors import SimulationError
+from andyc.limits import MAX_LOG_BYTES, MAX_STEPS
 from andyc.numerics.status import IDEAL
 from andyc.runtime.adaptive import run_adaptive
 from andyc.runtime.compiled import CompiledModel, compile_integrator, work
-from andyc.runtime.contacts import friction_coefficients, initial_mode, slip_speeds
+from andyc.runtime.contacts import TOUCHING, friction_coefficients, initial_mode, slip_speeds
 from andyc.runtime.events import EventLog
 from andyc.runtime.fixed_step import MODE, run_fixed_step
 from andyc.runtime.initial import consistent_initial_state, initial_state, require_independent_rows
 from andyc.runtime.inputs import InputSource, input_source, inputs_at
 from andyc.runtime.interrupts import Interrupts
-from andyc.runtime.methods import ADAPTIVE, FIXED_STEP, MAX_LOG_BYTES, MAX_STEPS, METHODS
+from andyc.runtime.methods import ADAPTIVE, FIXED_STEP, METHODS
 from andyc.runtime.options import Events, Init, Projection, TimeStepping
 from andyc.runtime.progress import Progress
 from andyc.runtime.run import Run, unit_quaternions
@@ -107,6 +108,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
         raise SimulationError(f"need t_end > 0, dt > 0 and every >= 1, got t_end={t_end}, dt={dt}, every={every}")
     _check_size(model, t_end, dt, every)
     p = model.parameters(parameters)
+    _check_coefficients(model, p, parameters)
     source = input_source(model, p, inputs, controller, t_end)
     x, d, flow = initial_state(model, p, x0, d0, flow0)
     jumps = EventLog(model, events)
@@ -116,7 +118,10 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     u = inputs_at(model, source, 0.0, x, p, d, flow)
     if d0 is None and model.contact_names:      # contacts touching at rest start closed
         initial_mode(model, 0.0, x, u, p, d, flow)
+        sunk = _close_sunk(model, x, u, p, d)   # (a contact that starts inside its surface: see _close_sunk)
     initial = consistent_initial_state(model, x, u, p, d, flow, init) if model.nc else {}
+    if d0 is None and model.contact_names and sunk:
+        initial_mode(model, 0.0, x, u, p, d, flow)
     if method in ("lagrange", "baumgarte") and model.nc:
         require_independent_rows(model, method, x, u, p, d, flow)
     if projection.energy_correction:
@@ -287,6 +292,48 @@ class _Assembly:
                    contact_rows=list(model.contact_rows), contact_stick_rows=list(model.contact_stick_rows),
                    contact_mu=list(friction_coefficients(model, p)) if model.contact_names else [],
                    slip_speeds=slip, slip_speeds_2=slip_2, contact_tangents=model.tangents)
+
+
+def _close_sunk(model: CompiledModel, x, u, p, d) -> bool:
+    """Close (mode 1, into d) every open contact whose gap starts below zero (beyond TOUCHING, a rounding: a foot
+    leaving the ground at the start): its impact would never come (its guard
+    is past zero), and the body would fall through. Closed, its row is checked like any active row by the initial
+    state's check (consistent_initial_state: refused past init.tol, with the contact's line; moved onto the surface
+    with init 'project'; kept with 'as-is'), as `andyc check` refuses it. Returns whether any was."""
+    phi = np.empty(model.nh)
+    model.module.constraints(0.0, x, u, p, d, phi, np.empty(model.nc), np.empty((model.nc, model.nv)),
+                             np.empty(model.nc))
+    bad = [i for i, r in enumerate(model.contact_rows) if not np.isfinite(phi[r])]
+    if bad:
+        line, path = model.constraint_where[model.contact_rows[bad[0]]]
+        raise SimulationError(f"{model.source}:{line}: {path}: the gap of contact '{model.contact_names[bad[0]]}' is "
+                              f"{phi[model.contact_rows[bad[0]]]} at the initial state; write it so that it is real "
+                              "and finite there (a square root of a negative number, a division by zero?)")
+    states = model.contact_states(d)
+    sunk = [i for i, r in enumerate(model.contact_rows) if states[i] == 0 and phi[r] < -TOUCHING]
+    for i in sunk:
+        states[i] = 1
+    model.set_contact_states(d, states)
+    return bool(sunk)
+
+
+def _check_coefficients(model: CompiledModel, p, given: dict | None) -> None:
+    """The coefficients the model file checks at its defaults (andyc.spec.hybrid.restitution,
+    andyc.spec.contacts.friction_coefficient), checked again at the run's parameters: a restitution in [0, 1] (more
+    would add energy at every impact), a friction coefficient >= 0. SimulationError naming the contact or jump and
+    the parameters given."""
+    if not model.nj:
+        return
+    values = model.module.restitutions(p)
+    at = ", ".join(f"{k} = {float(v):g}" for k, v in (given or {}).items()) or "the defaults"
+    for k, (kind, i) in enumerate(model.jump_kinds):
+        owner = f"contact '{model.contact_names[i]}'" if kind else f"jump '{model.jump_names[k]}'"
+        if kind == "stop" and not values[k] >= 0.0:
+            raise SimulationError(f"{owner}: its friction coefficient is {values[k]:g} at {at}, negative; give "
+                                  "Coulomb's coefficient mu >= 0")
+        if (kind == "impact" or (not kind and model.module.IMPACT_NROWS[k] > 0)) and not 0.0 <= values[k] <= 1.0:
+            raise SimulationError(f"{owner}: its coefficient of restitution is {values[k]:g} at {at}, outside "
+                                  "[0, 1]; give 0 (plastic) to 1 (elastic): more would add energy at every impact")
 
 
 def _check_size(model: CompiledModel, t_end: float, dt: float, every: int) -> None:

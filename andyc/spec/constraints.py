@@ -166,6 +166,16 @@ def _constraint(where: tuple, c: dict, scope: Scope, quantities: FrameQuantities
                 scope.report.error(path, f"the constraint {text!r} does not depend on the coordinates or any frame "
                                    "position", "a holonomic constraint is Gamma(t, q) = 0; use coordinates or F.x, "
                                    "F.y, F.z")
+        elif holonomic and key != "gap":          # (a contact's gap: andyc.spec.contacts' rules)
+            kinks = sorted({str(f.func).lower() for f in sp.preorder_traversal(value)
+                            if isinstance(f, _KINKS) and f.free_symbols & (coordinates | {TIME})})
+            if kinks:
+                scope.report.error(path, f"in {text!r}: the constraint is not smooth: its derivatives jump where "
+                                   f"{' or '.join(kinks)} of a coordinate or of t switches branch, and the row is "
+                                   "differentiated twice along the motion", "write a smooth row (square both sides, "
+                                   "e.g. x**2 - y**2 for abs(x) - y), or keep one branch and end the flow with a "
+                                   "guard where it would switch")
+                parsed[j] = None
         if not holonomic:
             if key == "slip":                       # a contact's slip speed: linear in the speeds
                 if not free & velocities:
@@ -242,7 +252,8 @@ def _nonholonomic_row(value: sp.Expr, text: str, path: tuple, velocities: set, s
     return "nonlinear"
 
 
-# Functions of the speeds whose derivative jumps: a row using them has a discontinuous Jacobian.
+# Functions whose derivative jumps: a row using them of the speeds (nonholonomic), of the coordinates or of t
+# (holonomic) has a discontinuous Jacobian, or one with no derivative where it switches (DiracDelta).
 _KINKS = (sp.Abs, sp.sign, sp.Min, sp.Max)
 
 

@@ -44,7 +44,25 @@ def build_elements(data: dict, scope: Scope, urdf_bodies: int = 0) -> Elements:
     potentials = [Potential(x["name"], scope.expr(x["energy"], ("potentials", i, "energy"), scope.kinematic,
                                                   "potentials use parameters, coordinates and t"),
                             ("potentials", i)) for i, x in enumerate(data.get("potentials") or [])]
+    for p in potentials:
+        _no_step(p.energy, p.where + ("energy",), "potential energy", scope)
+    for s in springs:
+        if s.length is not None:
+            _no_step(s.length, s.where + ("length",), "spring length", scope)
     return Elements(bodies, loads, actuators, dampers, springs, potentials, offset_frames)
+
+
+def _no_step(value, path: tuple, what: str, scope: Scope) -> None:
+    """Report a potential energy or a spring length that steps with a coordinate (sign() of it): its force,
+    the derivative by the coordinates, is an impulse at the step (DiracDelta), which no code computes."""
+    if not value.has(sp.sign):
+        return
+    coordinates = {c.q: c.name for c in scope.coordinates}
+    stepping = sorted(name for q, name in coordinates.items() if value.diff(q).has(sp.DiracDelta))
+    if stepping:
+        scope.report.error(path, f"the {what} steps where sign() of {', '.join(stepping)} changes: its force "
+                           "(the derivative by the coordinates) is infinite there", "write a continuous "
+                           f"{what} (abs(x) for sign(x)*x; a smooth step such as tanh(x/eps) for sign(x))")
 
 
 def _offset_frame(owner: str, frame: str, offset, where, scope: Scope, offset_frames: list) -> str:

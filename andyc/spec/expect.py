@@ -24,6 +24,7 @@ from pathlib import Path
 
 from andyc.spec.expressions import TIME
 from andyc.spec.scope import Scope
+from andyc.spec.simulate import DEFAULT_DT, check_steps, finite_numbers
 
 # The run options an expectation may give (the rest of simulate:'s are about logging and stopping).
 RUN_OPTIONS = ("t_end", "dt", "method", "init", "init_tol", "rtol", "atol", "energy_correction", "event_tol",
@@ -50,9 +51,18 @@ class Expectation:
     checks: tuple               # of Check
 
 
-def build_expect(given: list | None, scope: Scope, constraints: list, jumps: list, closed_form: dict) -> list:
-    """The expectations, their names checked and expressions parsed; [] without an expect: section."""
-    return [_expectation(i, entry, scope, constraints, jumps, closed_form) for i, entry in enumerate(given or [])]
+def build_expect(given: list | None, scope: Scope, constraints: list, jumps: list, closed_form: dict,
+                 simulate: dict | None = None) -> list:
+    """The expectations, their names checked and expressions parsed, every number finite; [] without an
+    expect: section. `simulate`: the model's simulate: section (a run's dt when the entry gives none)."""
+    out = []
+    for i, entry in enumerate(given or []):
+        if not finite_numbers(entry, ("expect", i), scope.report):
+            continue
+        check_steps(entry["t_end"], entry.get("dt", (simulate or {}).get("dt", DEFAULT_DT)),
+                    ("expect", i, "t_end"), scope.report)
+        out.append(_expectation(i, entry, scope, constraints, jumps, closed_form))
+    return out
 
 
 def _expectation(i: int, entry: dict, scope: Scope, constraints: list, jumps: list,

@@ -185,7 +185,21 @@ def parse(text, names: dict[str, sp.Symbol], allow_time: bool = True, dotted=Non
         raise ExpressionError(f"cannot parse {shown(text)}: {exc.msg} {where}",
                               "check the brackets and operators (allowed: + - * / ** and the functions "
                               + ", ".join(sorted(FUNCTIONS)) + ")") from None
-    return _SympyBuilder(text, names, allow_time, dotted).expression(tree)
+    value = _SympyBuilder(text, names, allow_time, dotted).expression(tree)
+    for n in value.atoms(sp.Number):        # SymPy folds constant factors: x*1e308*10 is 1e309*x
+        if n.is_finite and not _fits(n):
+            big = str(sp.N(n, 3)).lower()
+            raise ExpressionError(f"in {shown(text)}: the constant {big} that its numbers make together overflows a "
+                                  f"float (past 1.8e308)", "write numbers of a size a float holds")
+    return value
+
+
+def _fits(n: sp.Number) -> bool:
+    """n as a float is finite."""
+    try:
+        return math.isfinite(float(n))
+    except OverflowError:
+        return False
 
 
 class _SympyBuilder:

@@ -15,6 +15,7 @@ import math
 
 import sympy as sp
 
+from andyc.spec.expressions import TIME
 from andyc.spec.model import Frame, Nonholonomic, Rotate, Signal, Translate
 from andyc.spec.scope import Scope
 from andyc.spec.suggest import did_you_mean
@@ -70,7 +71,8 @@ def _frame(i: int, f: dict, scope: Scope, signals: list) -> Frame:
     ctx = "link expressions use parameters, coordinates and t"
     steps = []
     if "translation" in f:
-        steps.append(Translate(scope.vector(f["translation"], where + ("translation",), scope.kinematic, ctx)))
+        steps.append(Translate(sp.Matrix([_link_expr(v, where + ("translation", k), scope, ctx)
+                                          for k, v in enumerate(f["translation"])])))
     if "rotation" in f:
         steps += _rotation(f["rotation"], where + ("rotation",), scope)
     joints = [k for k in JOINTS if k in f]
@@ -81,13 +83,13 @@ def _frame(i: int, f: dict, scope: Scope, signals: list) -> Frame:
         scope.report.error(where + ("axis",), "'axis' belongs to a revolute or prismatic joint",
                            "add 'revolute: <coordinate>' or remove 'axis'")
     if "dh" in f:
-        d_, theta, a, alpha = (scope.expr(x, where + ("dh", k), scope.kinematic, ctx) for k, x in enumerate(f["dh"]))
+        d_, theta, a, alpha = (_link_expr(x, where + ("dh", k), scope, ctx) for k, x in enumerate(f["dh"]))
         steps += [Rotate(sp.Matrix([0, 0, 1]), theta), Translate(sp.Matrix([a, 0, d_])),
                   Rotate(sp.Matrix([1, 0, 0]), alpha)]
     for kind in ("revolute", "prismatic"):
         if kind in f:
             axis = _axis(f.get("axis", "z"), where + ("axis",), scope)
-            value = scope.expr(f[kind], where + (kind,), scope.kinematic, ctx)
+            value = _link_expr(f[kind], where + (kind,), scope, ctx)
             steps.append(Rotate(axis, value) if kind == "revolute" else Translate(axis * value))
     # A zero offset or angle (a joint at its origin, written out) is no step: the kinematics stay shorter.
     steps = [s for s in steps if not (isinstance(s, Translate) and s.vector == sp.zeros(3, 1))
@@ -98,13 +100,30 @@ def _frame(i: int, f: dict, scope: Scope, signals: list) -> Frame:
     return Frame(f["name"], f["parent"], tuple(steps), where, joint=joints[0] if len(joints) == 1 else "fixed")
 
 
+def _link_expr(value, path: tuple, scope: Scope, ctx: str) -> sp.Expr:
+    """A link's offset or angle: an expression of parameters, coordinates and t, smooth in the coordinates and
+    t (the kinematics are differentiated twice along the motion: abs, sign, min or max of them would give
+    derivatives that jump, or none, where they switch)."""
+    e = scope.expr(value, path, scope.kinematic, ctx)
+    moving = {c.q for c in scope.coordinates} | {TIME}
+    kinks = sorted({str(f.func).lower() for f in sp.preorder_traversal(e)
+                    if isinstance(f, (sp.Abs, sp.sign, sp.Min, sp.Max)) and f.free_symbols & moving})
+    if kinks:
+        scope.report.error(path, f"in {value!r}: the link is not smooth: its speeds and accelerations jump where "
+                           f"{' or '.join(kinks)} of a coordinate or of t switches branch", "write a smooth "
+                           "expression (e.g. sqrt(x**2 + eps**2) for abs(x), tanh(x/eps) for sign(x)), or keep one "
+                           "branch and end the flow with a guard where it would switch")
+        return sp.Integer(0)
+    return e
+
+
 def _rotation(r: dict, where, scope: Scope) -> list:
     ctx = "rotation angles use parameters, coordinates and t"
     if "axis" in r:
         return [Rotate(_axis(r["axis"], where + ("axis",), scope),
-                       scope.expr(r["angle"], where + ("angle",), scope.kinematic, ctx))]
+                       _link_expr(r["angle"], where + ("angle",), scope, ctx))]
     if "rpy" in r:
-        roll, pitch, yaw = (scope.expr(x, where + ("rpy", k), scope.kinematic, ctx) for k, x in enumerate(r["rpy"]))
+        roll, pitch, yaw = (_link_expr(x, where + ("rpy", k), scope, ctx) for k, x in enumerate(r["rpy"]))
         # R = Rz(yaw) Ry(pitch) Rx(roll): applied left to right as z, then y, then x.
         return [Rotate(sp.Matrix([0, 0, 1]), yaw), Rotate(sp.Matrix([0, 1, 0]), pitch),
                 Rotate(sp.Matrix([1, 0, 0]), roll)]
@@ -122,7 +141,7 @@ def _axis(value, where, scope: Scope) -> sp.Matrix:
     if not all(math.isfinite(float(x)) for x in vec):
         scope.report.error(where, f"the axis {vec} is not finite", "give a direction such as [0, 0, 1] or z")
         return sp.Matrix([0, 0, 1])
-    norm = math.sqrt(sum(float(x) ** 2 for x in vec))
+    norm = math.hypot(*(float(x) for x in vec))     # (no overflow: [1e308, 1e308, 0] has a norm)
     if norm < 1e-12:
         scope.report.error(where, "the axis is zero", "give a direction such as [0, 0, 1] or z")
         return sp.Matrix([0, 0, 1])
@@ -147,7 +166,7 @@ def _quaternion(values, where, scope: Scope) -> list:
     if len(scope.report.problems) > before:     # a bad entry is reported already
         return identity
     nums = [float(e) for e in exprs]
-    norm = math.sqrt(sum(c * c for c in nums))
+    norm = math.hypot(*nums)                # (no overflow for huge entries)
     if abs(norm - 1.0) > 1e-9:
         unit = ", ".join(f"{c / norm:.12g}" for c in nums) if norm > 0 else "1, 0, 0, 0"
         scope.report.error(where, f"quaternion [{', '.join(f'{c:g}' for c in nums)}] has norm {norm:.12g}, not 1",

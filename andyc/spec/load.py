@@ -123,7 +123,7 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
     check_nonlinear_impacts(constraints, jumps, contacts, scope)
     closed_form = build_closed_form(data.get("closed_form"), jumps, scope, input_expressions)
     simulate = build_simulate(data.get("simulate"), scope, jumps)
-    expect = build_expect(data.get("expect"), scope, constraints, jumps, closed_form)
+    expect = build_expect(data.get("expect"), scope, constraints, jumps, closed_form, simulate)
     conserves = bool(data.get("conserves_energy", False))
     if conserves:
         check_conservative(elements, constraints, frames, data.get("constraints") or [], scope)

@@ -33,6 +33,8 @@ class MeshRefused(ValueError):
 def checked_mesh(path: Path, roots) -> tuple[Path, str]:
     """(the resolved path, its format) of a mesh file that keeps the rule above; MeshRefused otherwise.
     `roots` are folders (they are resolved too)."""
+    if "\0" in str(path):                     # (no file system's name holds one; os calls raise ValueError)
+        raise MeshRefused("has a NUL character in its name, which no file's name can hold")
     try:
         resolved = Path(path).resolve(strict=True)
     except (OSError, RuntimeError):           # missing, or a loop of links
@@ -59,7 +61,7 @@ def read_mesh(file: str) -> bytes | None:
     The file is opened without following a link at its last component, and read no further than the
     limit, so a file swapped since the check still cannot leak a device or another file's bytes."""
     path = Path(file)
-    if MESH_FORMATS.get(path.suffix.lower()) is None:
+    if "\0" in str(file) or MESH_FORMATS.get(path.suffix.lower()) is None:
         return None
     try:
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))

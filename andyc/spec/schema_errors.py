@@ -116,7 +116,8 @@ def _explain_one_of(error, path) -> list[tuple]:
 # How a JSON type is called in a message: 'expected a mapping, got ...'.
 _JSON_TYPE_WORDS = {"object": "a mapping", "array": "a list", "string": "a name or text", "number": "a number",
                     "boolean": "true or false", "integer": "a whole number"}
-_TYPE_HINTS = {"object": "write 'key: value' entries, or {} for none", "array": "write a list such as [0, 0, 1]",
+_TYPE_HINTS = {"object": "write 'key: value' entries, or {} for none",
+               "array": "write a list: entries '- item', one a line, or [a, b, ...]",
                "string": "write a name", "number": "write a number such as 1.5",
                "boolean": "write true or false", "integer": "write a whole number"}
 # A list of fixed length, by its field: what its entries are.

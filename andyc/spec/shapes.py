@@ -153,7 +153,7 @@ def _positive(value, where, scope: Scope, zero: bool = False) -> float | None:
 
 def _unit_axis(value, where, scope: Scope) -> list:
     vec = [float(v) for v in (AXES[value] if isinstance(value, str) else value)]
-    norm = math.sqrt(sum(v * v for v in vec))
+    norm = math.hypot(*vec)                 # (no overflow for huge entries)
     if not (math.isfinite(norm) and norm > 1e-12):
         scope.report.error(where, f"the axis {value} is not a direction", "give x, y, z, -x, ... or three numbers")
         return [0.0, 0.0, 1.0]

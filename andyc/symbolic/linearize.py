@@ -60,6 +60,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import math
+
 import numpy as np
 import sympy as sp
 
@@ -190,7 +192,15 @@ def values_at(model: SymbolicModel, exprs: list, x, u, p, d=(), t: float = 0.0) 
     """The values of expressions of the model's symbols (intermediates too) at one point, exactly as the
     linearization evaluates them (x, u, p, d ordered as in linearize)."""
     point = _Point(model, model.intermediates_of(exprs), _point_values(model, x, u, p, d, t), [])
-    return np.array([point.evaluate(e)[0] for e in exprs])
+    return np.array([_real(point, e) for e in exprs])
+
+
+def _real(point: _Point, expr) -> float:
+    """expr's value at the point, NaN where it has no real value (a square root of a negative number)."""
+    try:
+        return point.evaluate(expr)[0]
+    except TypeError:           # (SymPy: "Cannot convert complex to float")
+        return math.nan
 
 
 def linearize(model: SymbolicModel, x, u, p, d=(), t: float = 0.0, flow: int | None = None,

@@ -14,14 +14,18 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import io
 import math
+import os
 import re
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 MAX_POINTS = 10_000_000
+MAX_CSV_BYTES = 256 * 2**20     # a points file of MAX_POINTS rows of a few names; read whole, so bounded
 DISTRIBUTIONS = ("normal(MU,SIGMA)", "uniform(A,B)")
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _DIST = re.compile(r"^\s*(normal|uniform)\s*\(\s*([^,()]+?)\s*,\s*([^,()]+?)\s*\)\s*$")
@@ -82,7 +86,7 @@ def check_names(names, model) -> None:
 def grid(specs, option: str = "--grid") -> Points:
     """The full grid of ('NAME=A:B:N', ...): N values from A to B (both included) per name; `option` names
     the option in messages."""
-    names, axes = [], []
+    names, ranges = [], []
     for text in specs:
         name, sep, rest = text.partition("=")
         parts = rest.split(":")
@@ -91,16 +95,20 @@ def grid(specs, option: str = "--grid") -> Points:
         low, high = _number(parts[0], text, option), _number(parts[1], text, option)
         count = parts[2].strip()
         if not count.lstrip("-").isdigit():
-            raise PointsError(f"{option} '{text}': the count '{count}' is not a whole number")
+            raise PointsError(f"{option} '{text[:80]}': the count '{count[:30]}' is not a whole number")
+        if len(count) > 12:                 # (int() of thousands of digits is refused, or slow)
+            raise PointsError(f"{option} '{text[:80]}': the count {count[:20]}... is past the limit of "
+                              f"{MAX_POINTS:.0e} points; sweep fewer")
         if int(count) < 1:
             raise PointsError(f"{option} '{text}': an empty range ({count} values); give a count of at least 1")
         if int(count) > 1 and low == high:
             raise PointsError(f"{option} '{text}': an empty range (from {low:g} to {high:g}); give two different "
                               f"ends, or a count of 1")
         names.append(name.strip())
-        axes.append(np.linspace(low, high, int(count)))
-    shape = tuple(len(a) for a in axes)
-    _check_count(math.prod(shape))
+        ranges.append((low, high, int(count)))
+    shape = tuple(n for _, _, n in ranges)
+    _check_count(math.prod(shape), option)  # from the counts, before any value is made
+    axes = [np.linspace(low, high, n) for low, high, n in ranges]
     mesh = np.meshgrid(*axes, indexing="ij")
     values = np.stack([m.ravel() for m in mesh], axis=1) if axes else np.zeros((0, 0))
     return Points("grid", tuple(names), values, shape, tuple(axes))
@@ -135,9 +143,9 @@ def from_csv(path) -> Points:
     """The rows of a CSV file: a header of names, then one point a row, every value a finite number."""
     path = Path(path)
     try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            rows = [(k, row) for k, row in enumerate(csv.reader(fh), start=1)
-                    if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
+        text = read_points_text(path)
+        rows = [(k, row) for k, row in enumerate(csv.reader(io.StringIO(text, newline="")), start=1)
+                if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
     except FileNotFoundError:
         raise PointsError(f"{path}: no such file (--points)") from None
     except (UnicodeDecodeError, csv.Error, OSError) as exc:
@@ -166,6 +174,27 @@ def from_csv(path) -> Points:
     return Points("points", tuple(names), values, (len(values),))
 
 
+def read_points_text(path: Path) -> str:
+    """The text of a points file: a regular file (a pipe or a device such as /dev/zero would be read without
+    end) of at most MAX_CSV_BYTES, checked by its size on disk and again while reading (a file that grows)."""
+    info = os.stat(path)
+    if not stat.S_ISREG(info.st_mode):
+        raise PointsError(f"{path}:1: this is a {'folder' if stat.S_ISDIR(info.st_mode) else 'special file'}, "
+                          f"not a CSV file; give --points a regular file (a header of names, one point a row)")
+    too_large = f"{path}:1: the file has more than {MAX_CSV_BYTES // 2**20} MB, past andyc's limit for --points; " \
+                f"sweep fewer points (at most {MAX_POINTS:.0e}), or split the file"
+    if info.st_size > MAX_CSV_BYTES:
+        raise PointsError(too_large)
+    # (O_NONBLOCK: a file replaced by a pipe between the two looks does not block the open)
+    with open(os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)), "rb") as fh:
+        if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
+            raise PointsError(f"{path}:1: this is a special file, not a CSV file; give --points a regular file")
+        raw = fh.read(MAX_CSV_BYTES + 1)
+    if len(raw) > MAX_CSV_BYTES:
+        raise PointsError(too_large)
+    return raw.decode("utf-8")
+
+
 def _number(text: str, item: str, option: str) -> float:
     try:
         value = float(text)
@@ -176,6 +205,7 @@ def _number(text: str, item: str, option: str) -> float:
     return value
 
 
-def _check_count(n: int) -> None:
+def _check_count(n: int, option: str = "") -> None:
     if n > MAX_POINTS:
-        raise PointsError(f"{n} points, past the limit of {MAX_POINTS:.0e}; sweep fewer")
+        raise PointsError(f"{option + ': ' if option else ''}{n} points, past the limit of {MAX_POINTS:.0e}; "
+                          f"sweep fewer")

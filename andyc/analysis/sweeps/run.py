@@ -16,6 +16,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import shutil
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,7 +27,8 @@ from andyc.analysis.sweeps.worker import Settings, run_batch
 from andyc.runtime.progress import Progress
 from andyc.runtime.status import OUTCOMES
 
-CONNECT_TIMEOUT = 5.0       # seconds to reach a scheduler before giving up
+CONNECT_TIMEOUT = 5.0       # seconds to reach a scheduler (and for it to answer) before giving up
+WORKER_WAIT = 60.0          # seconds to wait for a scheduler's first worker before giving up
 MAX_BATCH = 256
 TASKS_PER_WORKER = 8
 
@@ -46,13 +48,16 @@ class Summary:
     workers: int = 0
     batches: int = 0
     pids: set = field(default_factory=set)              # the worker processes that ran batches
+    lost: int = 0                                       # workers of the start gone by the end (died, killed)
 
     def text(self) -> str:
         counts = ", ".join(f"{k} {v}" for k, v in self.outcomes.items() if v)
         if not self.computed:
             return f"{self.store}: {self.points} points, all in the store already (nothing to compute): {counts}"
+        lost = f", {self.lost} of them lost during the sweep" if self.lost else ""
         return (f"{self.store}: {self.points} points ({self.computed} computed now in {self.batches} batches on "
-                f"{self.workers} workers, {self.already} already in the store): {counts}")
+                f"{self.workers} worker{'s' if self.workers != 1 else ''}{lost}, {self.already} already in the "
+                f"store): {counts}")
 
 
 def batch_size(todo: int, workers: int, batch: int | None = None) -> int:
@@ -75,14 +80,25 @@ def run_sweep(model, points: Points, settings: Settings, store_path, *, client=N
     store.check_names(points, settings)
     for name, text in settings.metrics:         # refused here, before any cluster starts
         compile_metric(name, text, model)
+    if client is None and scheduler is not None:
+        probe_scheduler(scheduler)          # before the store is made: a bad address leaves no folder behind
+    created = not os.path.exists(store_path)
     done = store.open_store(store_path, model, points, settings, inputs)
     todo = np.flatnonzero(~done)
     summary = Summary(str(store_path), points.n, 0, int(done.sum()))
     if len(todo):
-        with _cluster(client, scheduler, workers) as connected:
-            summary.workers = len(connected.scheduler_info(n_workers=-1)["workers"]) or workers or 1
-            _run(connected, model, points, settings, store_path, todo, batch_size(len(todo), summary.workers, batch),
-                 progress, summary)
+        try:
+            with _cluster(client, scheduler, workers) as connected:
+                present = set(connected.scheduler_info(n_workers=-1)["workers"])
+                summary.workers = len(present) or workers or 1
+                _run(connected, model, points, settings, store_path, todo,
+                     batch_size(len(todo), summary.workers, batch), progress, summary)
+                summary.lost = len(present - set(connected.scheduler_info(n_workers=-1)["workers"]))
+        except SweepError:
+            if created and not summary.computed:        # the store this call made holds nothing: no trace left
+                shutil.rmtree(store_path, ignore_errors=True)
+            raise
+        summary.workers = len(summary.pids) or summary.workers      # the processes that ran (with a replaced one)
     outcome = _outcomes(store_path)
     summary.outcomes = {name: int(np.count_nonzero(outcome == code)) for code, name in OUTCOMES.items() if code}
     return summary
@@ -109,6 +125,74 @@ def _run(client, model, points, settings, store_path, todo, size, progress, summ
         finally:
             for future in futures:
                 future.cancel()
+
+
+def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> dict:
+    """Ask the Dask scheduler at `address` who it is, every wait bounded by `timeout` (dask's own connect waits
+    for the peer's handshake without end: a plain HTTP server on the port hangs it); its identity, or
+    SweepError saying what is at the address."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def identity():
+        comm = await asyncio.wait_for(connect(address, timeout=timeout), 2 * timeout)   # (its own message first)
+        try:
+            await asyncio.wait_for(comm.write({"op": "identity", "reply": True}), timeout)
+            return await asyncio.wait_for(comm.read(), timeout)
+        finally:
+            comm.abort()
+
+    hint = f"check the address (tcp://HOST:8786) and that `dask scheduler` runs there"
+    try:
+        asyncio.get_running_loop()
+        return {}                   # (called from a running event loop: Client's own connect, unprobed)
+    except RuntimeError:
+        pass
+    _first_bytes(address, timeout, hint)
+    try:
+        reply = asyncio.run(identity())
+    except (asyncio.TimeoutError, TimeoutError):
+        raise SweepError(f"the Dask scheduler at {address} did not answer within {timeout:g} s (something else "
+                         f"listens there, or nothing does); {hint}") from None
+    except (OSError, ValueError, TypeError, KeyError) as exc:
+        raise SweepError(f"cannot reach the Dask scheduler at {address} within {timeout:g} s ({_reason(exc)}); "
+                         f"{hint}") from None
+    except Exception as exc:         # a peer that is not Dask: its bytes are no Dask message
+        raise SweepError(f"what answers at {address} is not a Dask scheduler ({type(exc).__name__}); {hint}") from None
+    if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
+        raise SweepError(f"what answers at {address} is not a Dask scheduler (it says it is "
+                         f"{reply.get('type') if isinstance(reply, dict) else type(reply).__name__!r}); {hint}")
+    return reply
+
+
+def _first_bytes(address: str, timeout: float, hint: str) -> None:
+    """For a tcp:// address: SweepError unless what listens there begins as a Dask peer does, with a handshake
+    of a few frames (its first 8 bytes, the frame count). Dask's reader would otherwise allocate what any
+    service's first bytes announce (an SSH banner read as a frame count: exabytes)."""
+    import socket
+
+    if not address.startswith("tcp://"):
+        return
+    from distributed.comm.addressing import parse_host_port
+
+    try:
+        host, port = parse_host_port(address[len("tcp://"):])
+        with socket.create_connection((host, port), timeout=timeout) as sock:
+            sock.settimeout(timeout)
+            head = b""
+            while len(head) < 8:
+                more = sock.recv(8 - len(head))
+                if not more:
+                    raise ConnectionError("the connection was closed")
+                head += more
+    except (TimeoutError, socket.timeout):
+        raise SweepError(f"the Dask scheduler at {address} did not answer within {timeout:g} s (something else "
+                         f"listens there); {hint}") from None
+    except (OSError, ValueError) as exc:
+        raise SweepError(f"cannot reach the Dask scheduler at {address} ({_reason(exc)}); {hint}") from None
+    if not 0 < int.from_bytes(head, "little") < 1000:
+        raise SweepError(f"what answers at {address} is not a Dask scheduler (it begins {head!r}); {hint}")
 
 
 def _reason(exc: BaseException) -> str:
@@ -141,20 +225,99 @@ class _cluster:
                                  f"({_reason(exc)}); check the address (tcp://HOST:8786) and that `dask scheduler` "
                                  f"runs there") from None
             self.made.append(client)
+            if not client.scheduler_info(n_workers=-1)["workers"]:
+                try:
+                    client.wait_for_workers(1, timeout=WORKER_WAIT)
+                except (TimeoutError, OSError) as exc:
+                    client.close()
+                    self.made.remove(client)
+                    raise SweepError(f"the Dask scheduler at {self.scheduler} has no worker after {WORKER_WAIT:g} s "
+                                     f"of waiting ({_reason(exc)}); start one there: `dask worker {self.scheduler}` "
+                                     f"(andyc installed, the build folder at the same path)") from None
             return client
         logger = logging.getLogger("distributed")     # its INFO lines, as workers start and stop: quiet
         self.made.append(_Level(logger, logger.level))
         logger.setLevel(logging.ERROR)
-        cluster = LocalCluster(n_workers=self.workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                               dashboard_address=":0", silence_logs=logging.ERROR)
-        self.made.insert(0, cluster)
-        client = Client(cluster, set_as_default=False)
-        self.made.insert(0, client)
+        self.made.append(_WorkersWithoutSigint())    # Ctrl-C reaches andyc, which closes the workers
+        try:
+            with _sigint_held():        # (a Ctrl-C while the cluster starts comes once it is whole: closed then)
+                cluster = LocalCluster(n_workers=self.workers or os.cpu_count() or 1, threads_per_worker=1,
+                                       processes=True, dashboard_address=":0", silence_logs=logging.ERROR)
+                self.made.insert(0, cluster)
+                client = Client(cluster, set_as_default=False)
+                self.made.insert(0, client)
+        except BaseException:           # (nothing left running)
+            self.__exit__()
+            raise
         return client
 
     def __exit__(self, *exc):
-        for thing in self.made:         # the client, the cluster, then the logger's level as it was
-            thing.close()
+        # Closing: a comm the other side closed first (CommClosedError) is logged with its traceback by
+        # distributed, tornado or asyncio; the sweep's results are written by then, so that is no news.
+        quiet = [_Level(logging.getLogger(n), logging.getLogger(n).level) for n in ("distributed", "tornado",
+                                                                                     "asyncio")]
+        for level in quiet:
+            level.logger.setLevel(logging.CRITICAL)
+        try:
+            with _sigint_held():        # a second Ctrl-C waits for the workers to be closed, not cut it short
+                for thing in self.made:     # the client, the cluster, ...
+                    if not isinstance(thing, _Level):
+                        try:
+                            thing.close()
+                        except Exception:   # (a worker gone already: closing it is done)
+                            pass
+        finally:
+            for level in quiet + [t for t in self.made if isinstance(t, _Level)]:   # ... the loggers as they were
+                level.close()
+            self.made = []
+
+
+class _sigint_held:
+    """SIGINT blocked in the main thread for the block, then unblocked: one that came meanwhile is delivered
+    then, as KeyboardInterrupt. Elsewhere than the main thread, or without signal masks, nothing."""
+
+    def __enter__(self):
+        import signal
+        import threading
+
+        self.before = None
+        if hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread():
+            self.before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        return self
+
+    def __exit__(self, *exc):
+        import signal
+
+        if self.before is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, self.before)
+
+
+class _WorkersWithoutSigint:
+    """While it is open, the processes multiprocessing spawns (a LocalCluster's workers, also those its nannies
+    start again) start with SIGINT blocked, a mask they keep across exec: the terminal's Ctrl-C, sent to the
+    whole process group, reaches andyc only, which closes the cluster, instead of printing each worker's
+    KeyboardInterrupt traceback. (Blocked in the spawning thread around the spawn only; andyc's own threads are
+    left as they are.)"""
+
+    def __init__(self):
+        import multiprocessing.util as util
+        import signal
+
+        self.util, self.original = util, util.spawnv_passfds
+        if not hasattr(signal, "pthread_sigmask"):
+            return
+
+        def spawn(path, args, passfds, _original=self.original):
+            before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+            try:
+                return _original(path, args, passfds)
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+        util.spawnv_passfds = spawn
+
+    def close(self) -> None:
+        self.util.spawnv_passfds = self.original
 
 
 @dataclass

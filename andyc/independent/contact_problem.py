@@ -1,4 +1,6 @@
-"""The contact problem of one time step (andyc.runtime.timestepping): impulses P over the index set's rows.
+"""The contact problem of one time step, in Python: the twin of andyc.numerics.contact_solver (which the runtime
+runs, compiled), kept as an independent implementation for its tests and benchmarks (tests/test_contact_solver.py,
+bench/contact_solver.py): impulses P over the index set's rows.
 
 With W = A M^-1 A^T over the rows (the model's bilateral rows, each contact's gap row and, with planar friction,
 its stick row) and w0 the rows' velocity residuals at the free velocity, plus e_i u_n,k on each normal row

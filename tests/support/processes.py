@@ -1,0 +1,25 @@
+"""Runs started as child processes that a test then signals: a controller that says when the run is under way,
+and the wait for it."""
+
+import time
+from pathlib import Path
+
+HANG = 300          # seconds after which a run counts as not started (a hang detector, not a speed bound)
+
+# Runs as Python (Numba cannot compile open()): once the run has passed t = 1 ms, it says so in a file.
+STARTED = """\
+import os
+def control(t, x, d, p):
+    if t > 1e-3 and not os.path.exists({flag!r}):
+        open({flag!r}, "w").close()
+    return 0.0
+"""
+
+
+def wait_for(path: Path, proc) -> None:
+    """Wait until the child `proc` has written `path`; fail with its output if it ended first."""
+    deadline = time.monotonic() + HANG
+    while not path.exists():
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "the run did not start"
+        time.sleep(0.05)
