@@ -1,10 +1,11 @@
 """Unitree's Go1 on its four frictional feet (issue 38, item 1): models/go1.yaml, example-robot-data's URDF on a
 floating base, its four foot spheres colliding with the ground (mu = 0.8), joint limits as stops, a PD motor on
-each joint; time-stepping (Moreau-Jean, dt = 1e-3).
+each joint; time-stepping (Moreau-Jean, dt = 1e-3), and event-driven (projection) for standing.
 
 - It stands 10 s on four feet: no foot below the ground by more than 1e-4 m, the base height drifting less than
   1 mm over the last 9 s, the normal forces summing to m g (m from the URDF's own masses, read here from its XML)
-  to 1e-6, every foot's friction force inside its cone, the feet sticking.
+  to 1e-6, every foot's friction force inside its cone, the feet sticking. Event-driven, the feet stay on the
+  ground to 1e-9 m.
 - With trot = 1 (an open-loop trot: diagonal pairs swinging their thighs and lifting their feet in turn) it moves
   forward without falling and with no foot below the ground by more than 1e-4 m.
 """
@@ -74,3 +75,19 @@ def test_go1_trots_forward(go1):
     feet = [run.contact_names.index(f"{f}_foot_sphere") for f in FEET]
     modes = run.contact_modes[:, feet]
     assert np.any(modes == 0, axis=0).all() and np.any(modes > 0, axis=0).all()   # each foot lifts and lands
+
+
+def test_go1_stands_ten_seconds_event_driven(go1):
+    """Event-driven (projection: RK4 with the closed feet's rows as constraints, projected back to them after
+    each step): the feet held on the ground to 1e-9 m, and the standing figures of time-stepping."""
+    run = andyc.simulate(go1, 10.0, dt=1e-3, method="projection", every=10, frames=[f"{f}_foot" for f in FEET],
+                         progress=False)
+    feet = [run.contact_names.index(f"{f}_foot_sphere") for f in FEET]
+    assert run.finished and np.all(run.contact_modes[:, feet] > 0)
+    assert np.abs(foot_bottoms(run)).max() < 1e-9                    # on the ground, neither below nor above
+    z, late = run.column("base_z"), run.time >= 1.0
+    assert abs(z[-1] - z[late][0]) < 1e-3 and np.ptp(z[late]) < 1e-3
+    assert abs(run.normal_forces[-1, feet].sum() / (urdf_mass() * G) - 1.0) < 1e-6
+    normal = run.normal_forces[1:, feet]
+    tangential = np.hypot(run.friction_forces[1:, feet], run.friction_forces_2[1:, feet])
+    assert np.all(normal > 0) and np.all(tangential <= MU * normal * (1 + 1e-9))

@@ -20,7 +20,10 @@ content (compiler.py), wherever the copy sits.
     active.py      the rows active at an instant: the flow's own and the closed contacts' (modes in d)
     dynamics.py    the right-hand side of a flow, the multipliers, projection and the impact map
     slipping.py    a slipping contact's forces: friction in the normal row, the non-symmetric solve
-    contact_solver.py  the contact problem of a time step or an impact: impulses by Gauss-Seidel, then exact
+    contact_solver.py  the contact problem of a time step or an impact: impulses by Gauss-Seidel, then an
+                   exact polish of the active set found
+    dense_solves.py    the polish's dense solves: Cholesky, pivoted Cholesky, pivoted QR least squares
+    timestepping.py    Moreau-Jean's time-stepping: one step's impulses from the contact problem
     integrator.py  RK4 with event location, the hybrid step, evaluations over a run's log
     inputs.py      input callbacks: the model's and the run's, held values, tables
     api.py         the generated module's Python functions (rhs, mass_matrix, energy, ...)

@@ -18,16 +18,13 @@ does, nonlinear Gauss-Seidel over the blocks, each block's local problem solved 
 either way; a spatial slide's direction by the secant method, else a scan of the circle and bisection), then a
 polish: the states found (open, stick, slip +/-, a spatial slide with its direction) fix an active set whose
 linear equations are solved in the least-norm least-squares sense (redundant rows allowed: a box flat on four
-corners has 12 rows on 6 speeds; without a slide and of full rank, by Cholesky) and checked against every condition; a checked answer is exact to rounding,
-one that fails leaves the Gauss-Seidel answer (verified False). The states passed in are tried first (the warm
+corners has 12 rows on 6 speeds; andyc.numerics.dense_solves) and checked against every condition; a checked
+answer is exact to rounding, one that fails leaves the Gauss-Seidel answer (verified False). The states passed in are tried first (the warm
 start: a resting or sliding contact keeps its state, and the step costs one polish, no sweep). Beyond the
 Python twin: where the active set's rows are dependent and the least-norm solution fails a check, the solution
 closest to the Gauss-Seidel answer (or to the warm start's impulses) is tried too (_polish).
 
-The polish's least squares: Householder QR with column pivoting (Businger & Golub 1965), the rank where a pivot
-falls below RANK_EPS of the first, then the complete orthogonal decomposition (R11 R12 -> T 0 by reflectors from
-the right, as LAPACK's xTZRZF) for the least-norm solution: np.linalg.lstsq's answer, written out so that no
-call allocates (np.linalg's do, in Numba). The only memory is the caller's `work` (work_shape(m) float64s).
+No call allocates: the only memory is the caller's `work` (work_shape(m) float64s).
 """
 
 import math
@@ -35,6 +32,7 @@ import math
 import numpy as np
 
 from .compiler import jit
+from .dense_solves import cholesky_solve, dot, psd_least_norm, qr_factor, qr_solution
 
 BILATERAL, NORMAL, PLANAR, SPATIAL = 0, 1, 2, 3     # a block's kind (its size: max(kind, 1) rows)
 OPEN, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3        # a block's state (bilateral blocks: STICK)
@@ -44,16 +42,12 @@ SCAN = 36           # spatial sliding: the slip directions tried around the circ
 SWEEPS = 500        # Gauss-Seidel sweeps at most (the polish makes the answer exact when it verifies)
 SWEEP_TOL = 1e-15   # ... until no impulse changes by more than this, relative to the largest
 VECTORS = 12        # work's rows before the reduced system's
-RANK_EPS = 1e-12    # least squares: a pivot below this times the first is rounding (a dependent column)
-CHOLESKY_EPS = 1e-8     # the polish's Cholesky (no slide): each pivot above this times its diagonal entry, else
-PSD_EPS = 1e-10         # ... with diagonal pivoting, where a pivot at most this times the first is rounding
-TOL3Z = math.sqrt(np.finfo(np.float64).eps)     # pivoting: a column norm updated past this cancellation is recomputed
 
 
 @jit
 def work_shape(m):
     """The shape of `work` for problems of up to m rows: twelve vectors, the polish's reduced system, then the
-    Gram matrix of its pivoted Cholesky (_psd_least_norm)."""
+    Gram matrix of its pivoted Cholesky (psd_least_norm)."""
     return 2 * m + VECTORS, m
 
 
@@ -111,9 +105,9 @@ def _sweep(W, w0, kind, first, mu, P):
     for k in range(kind.shape[0]):
         f, s = first[k], max(kind[k], 1)
         # the block's velocities without its own impulses (summed without them: no cancellation)
-        u1 = w0[f] + _dot(W[f], P, 0, f) + _dot(W[f], P, f + s, m)
-        u2 = w0[f + 1] + _dot(W[f + 1], P, 0, f) + _dot(W[f + 1], P, f + s, m) if s > 1 else 0.0
-        u3 = w0[f + 2] + _dot(W[f + 2], P, 0, f) + _dot(W[f + 2], P, f + s, m) if s > 2 else 0.0
+        u1 = w0[f] + dot(W[f], P, 0, f) + dot(W[f], P, f + s, m)
+        u2 = w0[f + 1] + dot(W[f + 1], P, 0, f) + dot(W[f + 1], P, f + s, m) if s > 1 else 0.0
+        u3 = w0[f + 2] + dot(W[f + 2], P, 0, f) + dot(W[f + 2], P, f + s, m) if s > 2 else 0.0
         o1, o2, o3 = P[f], P[f + 1] if s > 1 else 0.0, P[f + 2] if s > 2 else 0.0
         _local(W, f, kind[k], mu[k], u1, u2, u3, P)
         change = max(change, abs(P[f] - o1))
@@ -297,7 +291,7 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
     spatial: c = -mu d); its equation is w_r = 0. Without a slide the system is W over the rows, symmetric
     positive semidefinite: its least-norm solution by Cholesky first, a fraction of the QR's cost (a robot standing
     on its feet: every step), with diagonal pivoting where plain Cholesky meets a pivot near zero (dependent rows:
-    a box resting on four corners, _psd_least_norm); should that answer fail a condition, the QR's as ever."""
+    a box resting on four corners, psd_least_norm); should that answer fail a condition, the QR's as ever."""
     m = w0.shape[0]
     cand, w, b, y, z, vn1, vn2, tau = work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7]
     c1, c2, rows, perm = work[8], work[9], work[10], work[11]   # (rows, perm: integers, as floats)
@@ -323,29 +317,29 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
     if symmetric:                           # no slide: K = W over the rows, symmetric: K^+ b by Cholesky first
         for i in range(n):
             y[i] = b[i]
-        solved = _cholesky_solve(K, y, n)
+        solved = cholesky_solve(K, y, n)
         if not solved:                      # (dependent rows, or near it: a box resting on four corners)
             _system(W, w0, rows, c1, c2, n, K, b)
             for i in range(n):
                 y[i] = b[i]
-            solved = _psd_least_norm(K, y, n, perm, z, vn1, work[VECTORS + m:])
+            solved = psd_least_norm(K, y, n, perm, z, vn1, work[VECTORS + m:])
         if solved:
             for i in range(m):
                 cand[i] = 0.0
             for j in range(n):
                 cand[int(rows[j])] = y[j]
             for i in range(m):
-                w[i] = w0[i] + _dot(W[i], cand, 0, m)
+                w[i] = w0[i] + dot(W[i], cand, 0, m)
             if _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v):
                 return True
         _system(W, w0, rows, c1, c2, n, K, b)          # (the factor, or a part of it, took K's place)
-    rank = _factor(K, b, n, vn1, vn2, tau, perm, y, z)
+    rank = qr_factor(K, b, n, vn1, vn2, tau, perm, y, z)
     for closest in (False, True):
         if closest and rank == n:           # (a unique solution: nothing else to try)
             break
         for j in range(n):                  # (P's coefficients: column j is P's only one with a 1 at rows[j])
             vn1[j] = P[int(rows[j])]
-        _solution(K, b, y, n, rank, tau, perm, vn1, closest, z)
+        qr_solution(K, b, y, n, rank, tau, perm, vn1, closest, z)
         for i in range(m):
             cand[i] = 0.0
         for j in range(n):
@@ -356,7 +350,7 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
             if c2[j] != 0.0:
                 cand[r + 2] += c2[j] * y[j]
         for i in range(m):
-            w[i] = w0[i] + _dot(W[i], cand, 0, m)
+            w[i] = w0[i] + dot(W[i], cand, 0, m)
         if _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v):
             return True
     return False
@@ -377,132 +371,6 @@ def _system(W, w0, rows, c1, c2, n, K, b):
             if c2[j] != 0.0:
                 v += c2[j] * W[q, r + 2]
             K[i, j] = v
-
-
-@jit
-def _cholesky_solve(K, y, n):
-    """y[:n] <- K^-1 y for K[:n, :n] symmetric positive definite (its lower triangle read), by Cholesky in place
-    (K's lower triangle <- L, K = L L^T); False where a pivot is not above CHOLESKY_EPS times its diagonal entry:
-    K singular or near it (dependent rows: the least squares of _factor decide), y then undefined."""
-    for j in range(n):
-        d = K[j, j]
-        for k in range(j):
-            d -= K[j, k] * K[j, k]
-        if not d > CHOLESKY_EPS * K[j, j]:
-            return False
-        ljj = math.sqrt(d)
-        K[j, j] = ljj
-        for i in range(j + 1, n):
-            s = K[i, j]
-            for k in range(j):
-                s -= K[i, k] * K[j, k]
-            K[i, j] = s / ljj
-    for i in range(n):                      # L z = y
-        s = y[i]
-        for k in range(i):
-            s -= K[i, k] * y[k]
-        y[i] = s / K[i, i]
-    for i in range(n - 1, -1, -1):          # L^T y = z
-        s = y[i]
-        for k in range(i + 1, n):
-            s -= K[k, i] * y[k]
-        y[i] = s / K[i, i]
-    return True
-
-
-@jit
-def _psd_least_norm(K, y, n, perm, t, u, G):
-    """y[:n] <- K^+ y, the least-norm least-squares solution of K x = y, for K[:n, :n] symmetric positive
-    semidefinite (both triangles read, and overwritten), by Cholesky with diagonal pivoting (LAPACK's xPSTRF):
-    Pi K Pi^T = L L^T with L (n, r) lower trapezoidal, r the pivots above PSD_EPS times the first (the rest is
-    rounding: dependent rows); then x = Pi^T L (L^T L)^-2 L^T Pi y, K^+ for that factor (full rank: L^-T L^-1 at
-    once). perm, t, u (n,) and G (at least r x r): scratch. False where no pivot is positive, or L^T L is not
-    positive definite (the caller's QR decides then); the answer is the caller's to check."""
-    for i in range(n):
-        perm[i] = i
-    r, first = n, 0.0
-    for j in range(n):
-        p = j
-        for i in range(j + 1, n):
-            if K[i, i] > K[p, p]:
-                p = i
-        if j == 0:
-            first = K[p, p]
-            if not first > 0.0:
-                return False
-        if not K[p, p] > PSD_EPS * first:
-            r = j
-            break
-        if p != j:                          # rows and columns j and p swapped (the factor's columns with them)
-            for i in range(n):
-                K[j, i], K[p, i] = K[p, i], K[j, i]
-            for i in range(n):
-                K[i, j], K[i, p] = K[i, p], K[i, j]
-            perm[j], perm[p] = perm[p], perm[j]
-        ljj = math.sqrt(K[j, j])
-        K[j, j] = ljj
-        for i in range(j + 1, n):
-            K[i, j] /= ljj
-        for i in range(j + 1, n):           # the Schur complement, both triangles
-            lij = K[i, j]
-            for k in range(j + 1, i + 1):
-                K[i, k] -= lij * K[k, j]
-                K[k, i] = K[i, k]
-    for i in range(n):                      # t = Pi y
-        t[i] = y[int(perm[i])]
-    if r == n:
-        for i in range(n):                  # L L^T x = t
-            s = t[i]
-            for k in range(i):
-                s -= K[i, k] * t[k]
-            t[i] = s / K[i, i]
-        for i in range(n - 1, -1, -1):
-            s = t[i]
-            for k in range(i + 1, n):
-                s -= K[k, i] * t[k]
-            t[i] = s / K[i, i]
-    else:
-        for a in range(r):                  # u = L^T t, G = L^T L (its lower triangle)
-            s = 0.0
-            for i in range(a, n):
-                s += K[i, a] * t[i]
-            u[a] = s
-            for c in range(a + 1):
-                s = 0.0
-                for i in range(a, n):
-                    s += K[i, a] * K[i, c]
-                G[a, c] = s
-        for j in range(r):                  # G = R R^T, then u <- G^-1 G^-1 u
-            d = G[j, j]
-            for k in range(j):
-                d -= G[j, k] * G[j, k]
-            if not d > 0.0:
-                return False
-            G[j, j] = math.sqrt(d)
-            for i in range(j + 1, r):
-                s = G[i, j]
-                for k in range(j):
-                    s -= G[i, k] * G[j, k]
-                G[i, j] = s / G[j, j]
-        for _ in range(2):
-            for i in range(r):
-                s = u[i]
-                for k in range(i):
-                    s -= G[i, k] * u[k]
-                u[i] = s / G[i, i]
-            for i in range(r - 1, -1, -1):
-                s = u[i]
-                for k in range(i + 1, r):
-                    s -= G[k, i] * u[k]
-                u[i] = s / G[i, i]
-        for i in range(n):                  # t = L u
-            s = 0.0
-            for k in range(min(i + 1, r)):
-                s += K[i, k] * u[k]
-            t[i] = s
-    for i in range(n):                      # x = Pi^T t
-        y[int(perm[i])] = t[i]
-    return True
 
 
 @jit
@@ -542,146 +410,3 @@ def _holds(kind, first, mu, state, direction, P, w, rows, n, tol_v):
             return False
     return True
 
-
-@jit
-def _dot(x, y, lo, hi):
-    """The sum of x[i] y[i] over lo .. hi - 1, in four interleaved sums: four chains of dependent additions rather
-    than one, a few times faster (Numba keeps the order of floating-point additions, so it cannot do this)."""
-    s0 = s1 = s2 = s3 = 0.0
-    i = lo
-    while i + 4 <= hi:
-        s0 += x[i] * y[i]
-        s1 += x[i + 1] * y[i + 1]
-        s2 += x[i + 2] * y[i + 2]
-        s3 += x[i + 3] * y[i + 3]
-        i += 4
-    while i < hi:
-        s0 += x[i] * y[i]
-        i += 1
-    return (s0 + s1) + (s2 + s3)
-
-
-@jit
-def _reflector(x, lo, hi, at):
-    """The Householder reflector H = I - tau v v^T with H x = (beta, 0, ..) over the entries `at`, lo .. hi - 1 of
-    the row x (LAPACK's xLARFG): v's tail is left in x[lo:hi] (its head is 1), beta in x[at]; returns tau."""
-    alpha = x[at]
-    tail = _dot(x, x, lo, hi)
-    if tail == 0.0:
-        return 0.0
-    beta = -math.copysign(math.sqrt(alpha * alpha + tail), alpha)
-    scale = 1.0 / (alpha - beta)
-    for i in range(lo, hi):
-        x[i] *= scale
-    x[at] = beta
-    return (beta - alpha) / beta
-
-
-@jit
-def _reflect(v, x, lo, hi, at, tau):
-    """x <- H x for the reflector _reflector left in v (its head at `at`, tail lo .. hi - 1)."""
-    s = tau * (x[at] + _dot(v, x, lo, hi))
-    x[at] -= s
-    for i in range(lo, hi):
-        x[i] -= s * v[i]
-
-
-@jit
-def _factor(K, b, n, vn1, vn2, tau, perm, v, s):
-    """The complete orthogonal decomposition K Pi = Q [T 0; 0 0] Z of K[:n, :n], in place; b[:r] <- T^-1 (Q^T
-    b)[:r]; returns the rank r. Householder QR with column pivoting, stopped where the largest column left is
-    below RANK_EPS |R_00| (the rest of R is rounding: dependent columns); then [R11 R12] = [T 0] Z by r
-    reflectors from the right, each on coordinates l and r .. n - 1 (bottom row first, as LAPACK's xLATRZ),
-    their tails left in K[l, r:n], their tau in tau[l]. v, s: scratch."""
-    for j in range(n):
-        perm[j] = j
-        vn1[j] = 0.0
-    for i in range(n):
-        for j in range(n):
-            vn1[j] += K[i, j] * K[i, j]
-    for j in range(n):
-        vn1[j] = vn2[j] = math.sqrt(vn1[j])
-    r, top = n, 0.0
-    for k in range(n):
-        p = k
-        for j in range(k + 1, n):
-            if vn1[j] > vn1[p]:
-                p = j
-        if p != k:
-            for i in range(n):
-                K[i, k], K[i, p] = K[i, p], K[i, k]
-            perm[k], perm[p] = perm[p], perm[k]
-            vn1[k], vn1[p], vn2[k], vn2[p] = vn1[p], vn1[k], vn2[p], vn2[k]
-        for i in range(k, n):               # (column k, contiguous; its norm afresh: the updated one lost digits)
-            v[i] = K[i, k]
-        pivot = math.sqrt(_dot(v, v, k, n))
-        top = pivot if k == 0 else top
-        if not pivot > RANK_EPS * top:
-            r = k
-            break
-        t = _reflector(v, k + 1, n, k)
-        K[k, k] = v[k]
-        if t != 0.0:                        # the later columns j: K[k:, j] -= t v (v . K[k:, j]), row by row
-            _update(K, v, s, k, n, t)
-            _reflect(v, b, k + 1, n, k, t)
-        for j in range(k + 1, n):           # the columns' norms below row k, updated (LAPACK's xLAQP2)
-            if vn1[j] != 0.0:
-                q = abs(K[k, j]) / vn1[j]
-                q = max(0.0, (1.0 - q) * (1.0 + q))
-                if q * (vn1[j] / vn2[j]) ** 2 <= TOL3Z:
-                    q = 0.0
-                    for i in range(k + 1, n):
-                        q += K[i, j] * K[i, j]
-                    vn1[j] = vn2[j] = math.sqrt(q)
-                else:
-                    vn1[j] *= math.sqrt(q)
-    for l in range(r - 1, -1, -1):          # [R11 R12] -> [T 0] (no reflector where the rank is full)
-        if r == n:
-            break
-        t = tau[l] = _reflector(K[l], r, n, l)
-        if t != 0.0:
-            for p in range(l):
-                _reflect(K[l], K[p], r, n, l, t)
-    for l in range(r - 1, -1, -1):          # T^-1 (Q^T b)[:r]
-        b[l] = (b[l] - _dot(K[l], b, l + 1, r)) / K[l, l]
-    return r
-
-
-@jit
-def _update(K, v, s, k, n, t):
-    """K[k:n, k + 1:n] <- H K[k:n, k + 1:n], H = I - t v v^T (v[k] = 1, its tail in v[k + 1:n]): s = t v^T K, then
-    K -= v s, both row by row over views indexed from 0, which LLVM vectorizes (indices it cannot prove
-    non-negative carry Numba's wraparound test, which keeps it from that: 3x slower)."""
-    sk, Kk = s[k + 1:n], K[k, k + 1:n]
-    for j in range(n - k - 1):
-        sk[j] = Kk[j]
-    for i in range(k + 1, n):
-        Ki, vi = K[i, k + 1:n], v[i]
-        for j in range(n - k - 1):
-            sk[j] += vi * Ki[j]
-    for j in range(n - k - 1):
-        sk[j] *= t
-        Kk[j] -= sk[j]
-    for i in range(k + 1, n):
-        Ki, vi = K[i, k + 1:n], v[i]
-        for j in range(n - k - 1):
-            Ki[j] -= vi * sk[j]
-
-
-@jit
-def _solution(K, q, y, n, r, tau, perm, ref, closest, z):
-    """y[:n] <- Pi Z^T (q[:r], f) of _factor's K Pi = Q [T 0; 0 0] Z, q[:r] = T^-1 (Q^T b)[:r]: a least-squares
-    solution of K y = b: the least-norm one (f = 0), or with `closest`, the one closest to ref (f = (Z Pi^T ref)[r:],
-    its part along K's null space). z: scratch."""
-    for j in range(n):
-        z[j] = ref[int(perm[j])] if closest else 0.0
-    if closest and r < n:
-        for l in range(r - 1, -1, -1):      # Z z = H_0 .. H_r-1 z
-            _reflect(K[l], z, r, n, l, tau[l])
-    for j in range(r):
-        z[j] = q[j]
-    if r < n:
-        for l in range(r):                  # Z^T z = H_r-1 .. H_0 z
-            _reflect(K[l], z, r, n, l, tau[l])
-    for j in range(n):
-        y[int(perm[j])] = z[j]
