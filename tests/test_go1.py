@@ -65,9 +65,14 @@ def test_go1_stands_ten_seconds_on_four_feet(go1, standing):
     assert np.nanmax(slips[1:]) < 1e-4 and np.nanmax(slips[run.time > 5.0]) < 1e-10
 
 
-def test_go1_trots_forward(go1):
-    run = andyc.simulate(go1, 5.0, dt=1e-3, method="moreau", every=10, parameters={"trot": 1.0},
-                         frames=[f"{f}_foot" for f in FEET], progress=False)
+@pytest.fixture(scope="module")
+def trotting(go1):
+    return andyc.simulate(go1, 5.0, dt=1e-3, method="moreau", every=10, parameters={"trot": 1.0},
+                          frames=[f"{f}_foot" for f in FEET], progress=False)
+
+
+def test_go1_trots_forward(trotting):
+    run = trotting
     x, z = run.column("base_x"), run.column("base_z")
     assert run.finished and x[-1] - x[0] > 1.0                     # (measured: 2.0 m in 5 s, 0.4 m/s)
     assert z.min() > 0.2                                            # it does not fall (standing: 0.276 m)
@@ -91,3 +96,29 @@ def test_go1_stands_ten_seconds_event_driven(go1):
     normal = run.normal_forces[1:, feet]
     tangential = np.hypot(run.friction_forces[1:, feet], run.friction_forces_2[1:, feet])
     assert np.all(normal > 0) and np.all(tangential <= MU * normal * (1 + 1e-9))
+
+
+@pytest.fixture(scope="module")
+def trotting_event_driven(go1):
+    return andyc.simulate(go1, 5.0, dt=1e-3, method="projection", every=10, parameters={"trot": 1.0},
+                          frames=[f"{f}_foot" for f in FEET], progress=False)
+
+
+def test_go1_trots_event_driven_as_it_does_time_stepping(trotting_event_driven, trotting):
+    """Event-driven, the feet's landings are impacts (the touching feet's impulses solved together, a spatial
+    slide's direction found by the contact solver) and their liftoffs and slips events: the trot goes as far as
+    time-stepping's (both are first order in the step where the feet land), and no foot sinks further than
+    time-stepping's bound."""
+    run = trotting_event_driven
+    x, z = run.column("base_x"), run.column("base_z")
+    assert run.finished and x[-1] - x[0] > 1.0 and z.min() > 0.2
+    assert foot_bottoms(run).min() > -1e-4
+    ahead = trotting.column("base_x")
+    assert abs((x[-1] - x[0]) - (ahead[-1] - ahead[0])) < 0.05 * (ahead[-1] - ahead[0])
+
+
+@pytest.mark.xfail(strict=True, reason="a foot lifting off at zero speed whose gap then falls (RL at t = 3.627 s, "
+                   "after its slip and stop) starts its impact guard on zero, where no crossing is seen: it sinks "
+                   "6.2e-5 m for 5 ms before rising (issue 38 report)")
+def test_go1_trots_event_driven_with_its_feet_on_the_ground(trotting_event_driven):
+    assert foot_bottoms(trotting_event_driven).min() > -1e-9

@@ -108,8 +108,11 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool, fired: int = 
     if math.prod(len(ch) for ch in choices) > MAX_CASES:
         dv, after = _impulses_many(model, touching, rows, stick, spatial, bilateral, mu, e, c, A, Minv)
     else:
-        dv, after = _impulses_enumerated(model, t, touching, choices, rows, stick, spatial, bilateral, mu, e, c, A,
-                                         Minv, tol)
+        found = _impulses_enumerated(model, touching, choices, rows, stick, spatial, bilateral, mu, e, c, A, Minv,
+                                     tol)
+        # (a spatial slide is enumerated along one direction, _slide_direction; where the impulse turns it, no
+        # case holds, and the solver that finds the slide's direction takes the impact)
+        dv, after = found or _impulses_many(model, touching, rows, stick, spatial, bilateral, mu, e, c, A, Minv)
     x[nq:nq + nv] += dv
     if plastic:
         _at_rest(model, t, x, u, p, d, flow, [rows[i] for i in touching] + bilateral
@@ -127,9 +130,9 @@ def resolve_impact(model, t, x, u, p, d, flow: int, plastic: bool, fired: int = 
     settle(model, t, x, u, p, d, flow, states)
 
 
-def _impulses_enumerated(model, t, touching, choices, rows, stick, spatial, bilateral, mu, e, c, A, Minv, tol):
+def _impulses_enumerated(model, touching, choices, rows, stick, spatial, bilateral, mu, e, c, A, Minv, tol):
     """(dv, the rows' speeds after) of the impact, its active sets enumerated, fewest impulses first (module
-    docstring)."""
+    docstring); None where no case holds."""
     # Impulses are checked against the impulse that changes a touching contact's speed by tol (tol / W_ii, W =
     # A M^-1 A^T), not against tol itself: so the choice does not depend on the units of mass (a walker with every
     # mass scaled by 0.1 moves as before, and takes the same impacts).
@@ -172,8 +175,7 @@ def _impulses_enumerated(model, t, touching, choices, rows, stick, spatial, bila
         if all(_holds(i, o, rows[i], stick[i], spatial[i], mu[i], e[i], c, after, impulse, slide, tol, ptol)
                for i, o in zip(touching, case)):
             return dv, after
-    # (W is positive semi-definite: a solution exists; this is a safeguard)
-    raise FloatingPointError(f"no consistent contact impulses at t = {t}")
+    return None
 
 
 def _holds(i, o, r, t_row, spatial, mu, e, c, after, impulse, slide, tol, ptol) -> bool:
