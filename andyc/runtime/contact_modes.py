@@ -24,6 +24,7 @@ TOUCHING = 1e-12        # a contact whose gap is at most this at the start, at r
 STICK, SLIP_POS, SLIP_NEG = 1, 2, 3     # a contact's modes beside open (0), as andyc.spec.contacts
 SLIP = 2                                # spatial friction: its one slipping mode
 MAX_ENUMERATED = 8      # contacts at rest whose drop sets _settle enumerates (2^n trials) when the first fails
+LEAVE_TOL = 1e-6        # a contact just lifted off whose gap accelerates closed by more than this (relative) falls back
 PULL_TOL = 1e-12        # a closed contact's normal force below minus this (of the largest, beyond 1) pulls
 
 
@@ -131,6 +132,15 @@ def settle(model, t, x, u, p, d, flow: int, states: list) -> None:
     model.set_contact_states(d, mode)
 
 
+def leaves(model, t, x, u, p, d, flow: int, i: int) -> bool:
+    """Whether contact i, open in d at its liftoff (its normal force through zero), leaves: its gap does not
+    accelerate closed in the modes of d. (Where its friction held a force as its normal force fell, the open
+    contact can fall back: the modes of that instant are then chosen again, as initial_mode chooses.) The
+    liftoff is located to the event tolerance, where the normal force is a rounding from zero either way, and so
+    is the open gap's acceleration: LEAVE_TOL of the largest term is taken for zero."""
+    return _complementary(model, t, x, u, p, d, flow, list(model.contact_states(d)), [i], rel=LEAVE_TOL)
+
+
 def _drop_pulling(model, t, x, u, p, d, flow: int, states: list) -> list:
     """The contacts' modes less those whose normal force is negative, the most negative first, one at a time;
     each sticking one then sticking or slipping by its cone (initial_mode)."""
@@ -156,9 +166,10 @@ def _drop_pulling(model, t, x, u, p, d, flow: int, states: list) -> list:
     return states
 
 
-def _complementary(model, t, x, u, p, d, flow: int, states: list, dropped, pushing: bool = False) -> bool:
+def _complementary(model, t, x, u, p, d, flow: int, states: list, dropped, pushing: bool = False,
+                   rel: float = 1e-10) -> bool:
     """In the modes `states`, no dropped contact's gap accelerates closed (A_i dv/dt + kappa_i >= -tol) and, with
-    `pushing`, every closed contact pushes (its normal force >= -tol); tol is 1e-10 of the largest term."""
+    `pushing`, every closed contact pushes (its normal force >= -tol); tol is `rel` of the largest term."""
     trial = with_states(model, d, states)
     nq, nv = model.nq, model.nv
     phi, c, A, kappa = np.empty(model.nh), np.empty(model.nc), np.empty((model.nc, nv)), np.empty(model.nc)
@@ -170,7 +181,7 @@ def _complementary(model, t, x, u, p, d, flow: int, states: list, dropped, pushi
         return False
     rows = model.contact_rows
     accel = [A[rows[i]] @ vdot + kappa[rows[i]] for i in dropped]
-    scale = 1e-10 * max([1.0, float(np.max(np.abs(vdot)))] + [abs(a) for a in accel])
+    scale = rel * max([1.0, float(np.max(np.abs(vdot)))] + [abs(a) for a in accel])
     if any(a < -scale for a in accel):
         return False
     return not pushing or all(lam[r] >= -1e-10 * max(1.0, float(np.max(np.abs(lam)))) for i, r in enumerate(rows)

@@ -67,11 +67,11 @@ from itertools import product
 import numpy as np
 
 from andyc.runtime.contact_modes import (SLIP_NEG, SLIP_POS, STICK, TOUCHING, cone_state, friction_coefficients,
-                                         initial_mode, set_direction, settle, slip_state, spatial_cone_state, stuck,
-                                         terms, with_states)
+                                         initial_mode, leaves, set_direction, settle, slip_state, spatial_cone_state,
+                                         stuck, terms, with_states)
 from andyc.numerics.status import ON_ZERO, OPEN_SIDE, REST_SPEED
 
-__all__ = ["resolve_impact", "resolve_stop", "start_slip", "initial_mode", "friction_coefficients", "open_side",
+__all__ = ["resolve_impact", "resolve_liftoff", "resolve_stop", "start_slip", "initial_mode", "friction_coefficients", "open_side",
            "slip_speeds", "TOUCHING"]
 
 SIMULTANEOUS = 1e-9     # s: an open contact takes part when its gap closes within this time at its speed
@@ -270,6 +270,15 @@ def start_slip(model, t, x, u, p, d, k: int, flow: int) -> None:
     t1 = model.contact_stick_rows[i]
     if np.hypot(*lam[t1:t1 + 2]) > 0.0:
         set_direction(model, d, i, -lam[t1:t1 + 2])
+
+
+def resolve_liftoff(model, t, x, u, p, d, k: int, flow: int) -> None:
+    """After jump k, a contact's liftoff (its normal force through zero; the reset left it open): where its gap
+    would then accelerate closed at once, it has not left, and the modes of the contacts touching at rest are
+    chosen again as a run's start chooses them (initial_mode: the closed ones push, the open ones leave). A gap on
+    zero at zero speed falling would otherwise go unseen by the impact guard (it starts on zero: no crossing)."""
+    if not leaves(model, t, x, u, p, d, flow, model.jump_kinds[k][1]):
+        initial_mode(model, t, x, u, p, d, flow)
 
 
 def resolve_stop(model, t, x, u, p, d, k: int, flow: int) -> None:

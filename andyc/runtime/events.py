@@ -15,7 +15,7 @@ import numpy as np
 
 from andyc.errors import SimulationError
 from andyc.numerics.status import OK
-from andyc.runtime.contacts import resolve_impact, resolve_stop, start_slip
+from andyc.runtime.contacts import resolve_impact, resolve_liftoff, resolve_stop, start_slip
 from andyc.runtime.inputs import USER_ERRORS, InputSource, raised
 from andyc.runtime.options import Events
 from andyc.runtime.status import ZENO, at, in_jump
@@ -130,7 +130,7 @@ def finish_jump(model, k, t, x_before, x, u, p, d, source: int, flow: int,
                 jumps: EventLog) -> tuple[int, str | None]:
     """After jump k's resets and impact map (compiled) at t, from flow `source` into `flow` (x, d in place; u the
     inputs just before it): a contact's impact (andyc.runtime.contacts, plastic once the impact times accumulate),
-    a slip's end or start, the user's function, the record. Returns (the flow it lands in, a stop message or
+    a liftoff that does not leave, a slip's end or start, the user's function, the record. Returns (the flow it lands in, a stop message or
     None)."""
     kind = model.jump_kinds[k][0] if model.jump_kinds else ""
     if kind == "impact":
@@ -144,6 +144,11 @@ def finish_jump(model, k, t, x_before, x, u, p, d, source: int, flow: int,
             resolve_stop(model, t, x, u, p, d, k, flow)
         except (FloatingPointError, np.linalg.LinAlgError) as exc:
             return flow, f"stopped: contact stick in jump '{model.jump_names[k]}': {exc}" + at(t)
+    elif kind == "liftoff":
+        try:
+            resolve_liftoff(model, t, x, u, p, d, k, flow)
+        except (FloatingPointError, np.linalg.LinAlgError, SimulationError) as exc:
+            return flow, f"stopped: contact liftoff in jump '{model.jump_names[k]}': {exc}" + at(t)
     elif kind == "slip" and model.tangents[model.jump_kinds[k][1]] == 2:
         start_slip(model, t, x, u, p, d, k, flow)   # spatial friction: the slip starts against the sticking force
     message = user_jump(model, k, t, x, u, p, d) or jumps.record(t, k, x_before, x, d, source, flow)
