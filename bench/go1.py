@@ -29,7 +29,7 @@ the ratios within a round):
     python bench/go1.py                         everything (a few minutes once Go1 is built; its first build takes
                                                 about 6 minutes on a loaded 2-core machine)
     python bench/go1.py --only speed --rounds 9
-    python bench/go1.py --only accuracy|speed|scaling|profile    (profile: bench/go1_profile.py's stages)
+    python bench/go1.py --only accuracy|speed|scaling
 """
 
 from __future__ import annotations
@@ -458,7 +458,7 @@ def machine() -> str:
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--only", choices=("accuracy", "speed", "scaling", "profile"), action="append")
+    ap.add_argument("--only", choices=("accuracy", "speed", "scaling"), action="append")
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--seconds", type=float, default=1.0, help="simulated seconds per timed round")
     ap.add_argument("--build-dir", default=None, help="where andyc builds Go1 and the boxes (default: a temporary "
@@ -481,9 +481,6 @@ def main(argv=None) -> None:
             speed(model, rounds=a.rounds, seconds=a.seconds)
         if "scaling" in only:
             scaling(build, Path(tmp), tuple(a.boxes), rounds=a.rounds, seconds=a.seconds)
-        if "profile" in only:
-            from go1_profile import report
-            report(model)
 
 
 if __name__ == "__main__":
