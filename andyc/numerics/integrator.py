@@ -338,7 +338,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
                     status = jump(model, w, best, t, x, u, p, d)
                     target = model.jump_target[best]
                     return i, row, status, t, flow if target < 0 else target, best
-            x[:] = x1
+            copy(x, x1)
             for j in range(model.nx):
                 scale = max(scale, abs(x[j]))
         t = t_next
@@ -347,13 +347,21 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
             if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
                 return i, row, INPUT_FAILED, t, flow, -1
             log.t[row] = t
-            log.x[row] = x
-            log.u[row] = u
+            copy(log.x[row], x)
+            copy(log.u[row], u)
             log.flow[row] = flow
-            log.d[row] = d
+            copy(log.d[row], d)
             row += 1
             counts[2] = row
     return i, row, OK, t, flow, -1
+
+
+@jit(inline="always")
+def copy(dst, src):
+    """dst[:] = src, of one length, element by element: Numba's slice assignment carries a shape check whose error
+    message (string formatting) compiles for about a second on a fresh install."""
+    for j in range(src.shape[0]):
+        dst[j] = src[j]
 
 
 @jit(inline="always")
