@@ -327,8 +327,26 @@ def write_markdown(results: list, animations: dict, speed_text: str, seconds: fl
     out += ["## Animations", ""]
     for name, fig in animations.items():
         out += [f"![{name}]({fig.as_posix()})", ""]
+    out += kept_sections(path)
     out += ["## Speed, and everything else `make bench` printed", "", "```", speed_text.strip(), "```", ""]
     path.write_text("\n".join(out))
+
+
+KEPT = ("First run",)      # sections of docs/BENCHMARKS.md measured by their own scripts (bench/first_run.sh)
+
+
+def kept_sections(path: Path) -> list:
+    """The lines of the KEPT sections of the file at path as it stands, to write again: this run does not measure
+    them."""
+    if not path.exists():
+        return []
+    out, keep = [], False
+    for line in path.read_text().splitlines():
+        if line.startswith("## "):
+            keep = line[3:].strip() in KEPT
+        if keep:
+            out.append(line)
+    return out + ([""] if out and out[-1] else [])
 
 
 def _cores() -> int:

@@ -81,8 +81,9 @@ def compiled(file, out_dir, force: bool = False, report=None, integrator: bool =
     from andyc.codegen.buildfiles import numerics_compiled
 
     if sys.stderr.isatty() and not numerics_compiled():
-        click.echo("andyc: compiling the integrator every model shares, once for this installation (about a "
-                   "minute; a new model then compiles in seconds) ...", err=True)
+        click.echo("andyc: compiling the integrator every model shares, once for this installation (seconds "
+                   "for a model without constraints, jumps or contacts, about a minute with them; a new model then "
+                   "compiles in seconds) ...", err=True)
     try:
         return andyc.compile_model(file, out_dir, force, integrator)
     except SpecError as exc:

@@ -28,14 +28,36 @@ def rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode):
     dv/dt = a + M^-1 A^T lam with a = M^-1 G and A the rows active in the flow with the contacts' modes in d
     (active.select_rows, into w); `mode` says how lam is found (see constraint_force).
     """
-    nq, nv = model.nq, model.nv
     M, G, S = w.M, w.G, w.S
     if select_rows(model, w, flow, d) > 0:
         status = whitened_equations(model, t, x, u, p, d, M, G, S)
         if status == OK:
             status = constraint_force(model, w, p, d, mode, M, G, S)
             upper(model, M, G)
-    elif model.nb > 0:                  # a by the articulated-body algorithm (Featherstone 2008), no M
+    else:
+        status = free_acceleration(model, t, x, u, p, d, M, G)
+    if status != OK:
+        return status
+    return state_rates(model, t, x, u, p, d, G, xdot)
+
+
+@jit
+def rhs_free_into(model, w, t, x, u, p, d, xdot):
+    """rhs_mode_into of a model without constraint rows (NC = 0: no flow selects any, whatever its mode and d), with
+    the same operations in the same order; so an integrator of such a model compiles without the constrained
+    solves (integrator.advance's `free`)."""
+    M, G = w.M, w.G
+    status = free_acceleration(model, t, x, u, p, d, M, G)
+    if status != OK:
+        return status
+    return state_rates(model, t, x, u, p, d, G, xdot)
+
+
+@jit(inline="always")
+def free_acceleration(model, t, x, u, p, d, M, G):
+    """G[:NV] <- a = M^-1 G at (t, x), no constraint force; a status."""
+    nv = model.nv
+    if model.nb > 0:                    # a by the articulated-body algorithm (Featherstone 2008), no M
         call(model.forward_dynamics, (t, x, u, p, d, M, G))
         status = OK
         for i in range(nv):             # (a singular articulated inertia divides by zero)
@@ -52,8 +74,13 @@ def rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode):
         if status == OK:                # a = M^-1 G (ANDY eq. 8)
             solve_lower(M, G, nv)
             solve_upper(M, G, nv)
-    if status != OK:
-        return status
+    return status
+
+
+@jit(inline="always")
+def state_rates(model, t, x, u, p, d, G, xdot):
+    """xdot = (v[:NQ], a = G[:NV], the signals' rates); OK."""
+    nq, nv = model.nq, model.nv
     for i in range(nq):
         xdot[i] = x[nq + i]
     for i in range(nv):

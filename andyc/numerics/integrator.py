@@ -29,7 +29,8 @@ from collections import namedtuple
 
 from .compiler import jit
 from .active import select_rows
-from .dynamics import enabled_value, guard_value, in_mode, jump, multipliers, project, rhs_mode_into, slip_direction
+from .dynamics import (enabled_value, guard_value, in_mode, jump, multipliers, project, rhs_free_into, rhs_mode_into,
+                       slip_direction)
 from .model import borrowed, call
 from .slipping import slip_unit
 from .status import (BAUMGARTE, DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, ON_CONE, ON_ZERO,
@@ -61,6 +62,16 @@ def update_inputs(inputs, t, x, p, d, flow, u, data):
 
 
 @jit(inline="always")
+def element_powers(model, w, t, x, u, p, d, xdot):
+    """xdot[NX:NX + NW] = the elements' powers (stage_powers without rows: all of it where NC = 0)."""
+    nx, nv = model.nx, model.nv
+    G = w.G
+    for i in range(model.nw):           # (the leaf writes the elements' slots only: the others stay 0 in G)
+        xdot[nx + i] = G[nv + i]
+    call(model.drive_power, (t, x, u, p, d, xdot))      # (reads dv/dt in xdot: after rhs_mode_into)
+
+
+@jit(inline="always")
 def stage_powers(model, w, t, x, u, p, d, flow, xdot, mode):
     """xdot[NX:NX + NW] = the power of each work slot at (t, x) (andyc/symbolic/work.py), right after
     rhs_mode_into in `flow` with `mode`: the elements' from the dynamics leaf (it wrote them after G), each working
@@ -74,10 +85,8 @@ def stage_powers(model, w, t, x, u, p, d, flow, xdot, mode):
     nx, nv, nq = model.nx, model.nv, model.nq
     if model.nw == 0:
         return
-    G, S = w.G, w.S
-    for i in range(model.nw):           # (the leaf writes the elements' slots only: the others stay 0 in G)
-        xdot[nx + i] = G[nv + i]
-    call(model.drive_power, (t, x, u, p, d, xdot))      # (reads dv/dt in xdot: after rhs_mode_into)
+    element_powers(model, w, t, x, u, p, d, xdot)
+    S = w.S
     for r in range(w.nactive[0]):          # (the rows rhs_mode_into selected)
         row = w.active[0, r]
         slot = model.row_work[row]
@@ -113,8 +122,9 @@ def stage_powers(model, w, t, x, u, p, d, flow, xdot, mode):
 
 
 @jit
-def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale):
-    """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status.
+def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale, full=True):
+    """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status. `full`: as
+    advance's (not None: no rows, no projection; the step compiles without them).
 
     x is the state (NX) followed by the work of each slot (NW, andyc/symbolic/work.py): their rates are the
     powers (stage_powers), so the work is RK4's own quadrature of the power along the step's stages, and the
@@ -135,10 +145,16 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale):
             xt[j] = x[j] if s == 0 else x[j] + c * h * k[s - 1, j]
         if update_inputs(inputs, t + c * h, xt, p, d, flow, u, data) != OK:
             return INPUT_FAILED
-        status = rhs_mode_into(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
+        if full is not None:
+            status = rhs_mode_into(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
+        else:
+            status = rhs_free_into(model, w, t + c * h, xt, u, p, d, k[s])
         if status != OK:
             return status
-        stage_powers(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
+        if full is not None:
+            stage_powers(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
+        elif model.nw > 0:
+            element_powers(model, w, t + c * h, xt, u, p, d, k[s])
     total = 0.0
     grown = 0.0
     for j in range(nx):
@@ -150,6 +166,8 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale):
         return NONFINITE
     if grown > GROWTH_LIMIT * scale:
         return DIVERGED
+    if full is None:
+        return OK
     if opts.project:
         if update_inputs(inputs, t + h, out, p, d, flow, u, data) != OK:
             return INPUT_FAILED
@@ -226,7 +244,7 @@ def locate(model, w, opts, inputs, data, jump_index, tol, t, h, x, u, p, d, flow
 
 
 @jit(nogil=True)
-def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, every, log, row):
+def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, every, log, row, full=True):
     """Integrate from time t (on step i: t0 + i dt <= t < t0 + (i + 1) dt) to the grid point i_end,
     stopping early at a jump or a failure. x, d, w.g0 and the log are updated in place; every
     `every`-th grid point is logged at log[row] (log.u: the inputs there, w.u the latest inputs).
@@ -236,6 +254,13 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
 
     Returns (i, row, status, t, flow, jump): jump is the index of the jump applied at t (w.x_event
     holds the state just before it), or -1.
+
+    full: True (the default), or None for the free variant, for a model without constraint rows, jumps or
+    contacts (NC = NJ = 0) run without projection (not opts.project; opts.mode then changes nothing): the same
+    steps, operation for operation, but Numba compiles it without the constrained solves, projection, event
+    location and jumps, its branches on `full is not None` pruned at compile time as those on `inputs` (Numba
+    prunes on an argument that is None, not on a boolean's value). andyc.runtime.compiled.free_run says when a
+    run takes it.
     """
     u, g0, x1, xb, x_event, counts = w.u, w.g0, w.x1, w.xb, w.x_event, w.counts
     direction, priority = model.jump_direction, model.jump_priority
@@ -248,65 +273,72 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
         scale = max(scale, abs(x[j]))
     if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
         return i, row, INPUT_FAILED, t, flow, -1
-    have_rate = False
-    for n in range(model.nj):
-        if in_mode(model, n, flow, d):
-            g0[n] = guard_value(model, w, n, t, x, u, p, d, flow)
-            # A guard leaving its surface (a bounce, a rocking block's pivot corner lifted when the other strikes,
-            # a hand-written walker's foot after its strike) starts a rounding from zero, either side. A rounding
-            # past zero, moving away, would hide its coming back within the step (a block's late, short rocks: the
-            # run would pass through the surface unnoticed), and one before it would have locate try the step's
-            # start again and again: it starts on the open side, of no known size. (A guard of multipliers has no
-            # derived rate: not this.)
-            if (direction[n] != EITHER and not model.jump_multipliers[n]
-                    and abs(g0[n]) <= ON_ZERO * scale):
-                if not have_rate:
-                    have_rate = rhs_mode_into(model, w, t, x, u, p, d, flow, w.xdot, opts.mode) == OK
-                if have_rate and direction[n] * call(model.guard_rate, (n, t, x, u, p, d, w.xdot)) < -REST_SPEED:
-                    g0[n] = -direction[n] * OPEN_SIDE
+    if full is not None:                # (the guards at the start)
+        have_rate = False
+        for n in range(model.nj):
+            if in_mode(model, n, flow, d):
+                g0[n] = guard_value(model, w, n, t, x, u, p, d, flow)
+                # A guard leaving its surface (a bounce, a rocking block's pivot corner lifted when the other strikes,
+                # a hand-written walker's foot after its strike) starts a rounding from zero, either side. A rounding
+                # past zero, moving away, would hide its coming back within the step (a block's late, short rocks: the
+                # run would pass through the surface unnoticed), and one before it would have locate try the step's
+                # start again and again: it starts on the open side, of no known size. (A guard of multipliers has no
+                # derived rate: not this.)
+                if (direction[n] != EITHER and not model.jump_multipliers[n]
+                        and abs(g0[n]) <= ON_ZERO * scale):
+                    if not have_rate:
+                        have_rate = rhs_mode_into(model, w, t, x, u, p, d, flow, w.xdot, opts.mode) == OK
+                    if have_rate and direction[n] * call(model.guard_rate, (n, t, x, u, p, d, w.xdot)) < -REST_SPEED:
+                        g0[n] = -direction[n] * OPEN_SIDE
     while i < i_end:
         t_next = t0 + (i + 1) * dt
         h = t_next - t
         if h > 1e-14 * max(1.0, abs(t_next)):
             counts[0] += 1
-            if slip_direction(model, w, t, x, u, p, d, flow, h, opts.mode):  # a spatial slip's direction, held?
-                for n in range(model.nj):
-                    if model.jump_contact[n] == SLIP_STOP and in_mode(model, n, flow, d):
-                        g0[n] = guard_value(model, w, n, t, x, u, p, d, flow)
-            status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale)
+            if full is not None:
+                if slip_direction(model, w, t, x, u, p, d, flow, h, opts.mode):  # a spatial slip's direction, held?
+                    for n in range(model.nj):
+                        if model.jump_contact[n] == SLIP_STOP and in_mode(model, n, flow, d):
+                            g0[n] = guard_value(model, w, n, t, x, u, p, d, flow)
+            if full is not None:
+                status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale)
+            else:
+                status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale, None)
             if status != OK:
                 return i, row, status, t, flow, -1
-            best, best_tau = -1, h
-            tol = opts.event_tol * max(1.0, abs(t))
-            for n in range(model.nj):
-                if not in_mode(model, n, flow, d):
-                    continue
-                if update_inputs(inputs, t_next, x1, p, d, flow, u, data) != OK:
-                    return i, row, INPUT_FAILED, t, flow, -1
-                g1 = guard_value(model, w, n, t_next, x1, u, p, d, flow)
-                if model.jump_multipliers[n] and abs(g1) <= ON_CONE * force_scale(w.lam):
-                    continue        # (a force a rounding from its bound: no crossing yet; g0 keeps its side)
-                if crosses(direction[n], g0[n], g1):
-                    tau, status = locate(model, w, opts, inputs, data, n, tol, t, h, x, u, p, d, flow, g0[n], g1, scale)
-                    if status == OK:
-                        status = update_inputs(inputs, t + tau, xb, p, d, flow, u, data)
-                    if status != OK:
-                        return i, row, status, t, flow, -1
-                    earlier = tau < best_tau - tol or (best >= 0 and tau <= best_tau + tol
-                                                        and priority[n] < priority[best])
-                    if (best < 0 or earlier) and enabled_value(model, w, n, t + tau, xb, u, p, d, flow) >= 0.0:
-                        best, best_tau = n, tau
-                        x_event[:] = xb
-                g0[n] = g1
-            if best >= 0:
-                x[:] = x_event
-                t = t + best_tau
-                if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
-                    return i, row, INPUT_FAILED, t, flow, -1
-                status = jump(model, w, best, t, x, u, p, d)
-                target = model.jump_target[best]
-                return i, row, status, t, flow if target < 0 else target, best
-            x[:] = x1
+            if full is not None:
+                best, best_tau = -1, h
+                tol = opts.event_tol * max(1.0, abs(t))
+                for n in range(model.nj):
+                    if not in_mode(model, n, flow, d):
+                        continue
+                    if update_inputs(inputs, t_next, x1, p, d, flow, u, data) != OK:
+                        return i, row, INPUT_FAILED, t, flow, -1
+                    g1 = guard_value(model, w, n, t_next, x1, u, p, d, flow)
+                    if model.jump_multipliers[n] and abs(g1) <= ON_CONE * force_scale(w.lam):
+                        continue        # (a force a rounding from its bound: no crossing yet; g0 keeps its side)
+                    if crosses(direction[n], g0[n], g1):
+                        tau, status = locate(model, w, opts, inputs, data, n, tol, t, h, x, u, p, d, flow, g0[n], g1,
+                                             scale)
+                        if status == OK:
+                            status = update_inputs(inputs, t + tau, xb, p, d, flow, u, data)
+                        if status != OK:
+                            return i, row, status, t, flow, -1
+                        earlier = tau < best_tau - tol or (best >= 0 and tau <= best_tau + tol
+                                                            and priority[n] < priority[best])
+                        if (best < 0 or earlier) and enabled_value(model, w, n, t + tau, xb, u, p, d, flow) >= 0.0:
+                            best, best_tau = n, tau
+                            x_event[:] = xb
+                    g0[n] = g1
+                if best >= 0:
+                    x[:] = x_event
+                    t = t + best_tau
+                    if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
+                        return i, row, INPUT_FAILED, t, flow, -1
+                    status = jump(model, w, best, t, x, u, p, d)
+                    target = model.jump_target[best]
+                    return i, row, status, t, flow if target < 0 else target, best
+            copy(x, x1)
             for j in range(model.nx):
                 scale = max(scale, abs(x[j]))
         t = t_next
@@ -315,13 +347,21 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
             if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
                 return i, row, INPUT_FAILED, t, flow, -1
             log.t[row] = t
-            log.x[row] = x
-            log.u[row] = u
+            copy(log.x[row], x)
+            copy(log.u[row], u)
             log.flow[row] = flow
-            log.d[row] = d
+            copy(log.d[row], d)
             row += 1
             counts[2] = row
     return i, row, OK, t, flow, -1
+
+
+@jit(inline="always")
+def copy(dst, src):
+    """dst[:] = src, of one length, element by element: Numba's slice assignment carries a shape check whose error
+    message (string formatting) compiles for about a second on a fresh install."""
+    for j in range(src.shape[0]):
+        dst[j] = src[j]
 
 
 @jit(inline="always")

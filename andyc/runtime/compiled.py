@@ -230,14 +230,38 @@ def sample_run(model: CompiledModel):
     return p, u.copy(), model.initial_state(p), model.initial_discrete(p), model.initial_flow, work(model)
 
 
+def projects(model: CompiledModel, method: str, projection) -> bool:
+    """Whether a fixed-step run of `method` projects after each step (integrator.Options.project): the projection
+    method's constraint corrections, the energy correction, or the quaternions' norms (projection: a resolved
+    andyc.runtime.options.Projection)."""
+    constrain = method == "projection" and model.nc > 0
+    return constrain or bool(projection.energy_correction) or (projection.normalize and bool(model.quaternions))
+
+
+def free_model(model: CompiledModel) -> bool:
+    """Whether the model has no constraint rows, jumps or contacts: what the integrator's free variant needs."""
+    return model.nc == 0 and model.nj == 0 and not model.contact_names
+
+
+def free_run(model: CompiledModel, method: str, projection) -> bool:
+    """Whether a run of `method` takes the integrator's free variant (andyc_numerics' integrator.advance with
+    full=None): a fixed-step method, a model without rows, jumps or contacts, no projection. Its steps are the
+    full integrator's, operation for operation; Numba compiles it without the constrained solves, projection,
+    event location and jumps, which a fresh installation's first run would otherwise wait for."""
+    return method in FIXED_STEP and free_model(model) and not projects(model, method, projection)
+
+
 def compile_integrator(model: CompiledModel, function=None, data=None, method: str | None = None,
-                       frames: bool = True) -> None:
+                       frames: bool = True, free: bool = False) -> None:
     """Compile what a run calls (or load it from Numba's cache) with the argument types simulate() passes: the
     integrator (a block of no steps, one-sample logs), the hybrid step, the log evaluations, and the
     right-hand side, guards and jumps that the adaptive methods call from Python. With an input function
     (and its data), the integrator's variant that calls it. With a method, only what a run of that method
     calls on this model (no guards without jumps, no constraint code without rows, no frames unless logged):
-    each function loaded from the cache costs a warm `andyc sim` up to 40 ms. Without one, everything, as
+    each function loaded from the cache costs a warm `andyc sim` up to 40 ms. free (free_run): the integrator's
+    free variant instead of the full one, so that a first run of a model without rows, jumps or contacts never
+    compiles what it would not call. Without a method, everything (the free variant too where the model takes
+    it), as
     `andyc build` does, so that no later run compiles. simulate() calls this before it starts its clock, so a
     run's wall time never includes compilation; once compiled for one model, the algorithms load from the
     cache for every other."""
@@ -251,8 +275,12 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
                          d[None, :].copy())
     if fixed:
         opts = integrator.options(IDEAL, False, False, 0.0, -1.0, 1e-12)
-        integrator.advance(m, w.ref, opts, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1,
-                           log, 1)
+        if free or (every and free_model(model)):
+            integrator.advance(m, w.ref, opts, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1,
+                               log, 1, None)
+        if not free:
+            integrator.advance(m, w.ref, opts, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1,
+                               log, 1)
     if (every or method in TIME_STEPPING) and model.contact_names:
         stepping = model.stepping
         s = stepping.new_scratch(model.nq, model.nv, model.nx, model.nw, model.nc, model.nd, len(model.contact_names))

@@ -46,7 +46,7 @@ from andyc.errors import SimulationError
 from andyc.limits import MAX_LOG_BYTES, MAX_STEPS
 from andyc.numerics.status import IDEAL
 from andyc.runtime.adaptive import run_adaptive
-from andyc.runtime.compiled import CompiledModel, compile_integrator, work
+from andyc.runtime.compiled import CompiledModel, compile_integrator, free_run, work
 from andyc.runtime.contacts import TOUCHING, friction_coefficients, initial_mode, slip_speeds
 from andyc.runtime.events import EventLog
 from andyc.runtime.fixed_step import MODE, run_fixed_step
@@ -113,8 +113,9 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     x, d, flow = initial_state(model, p, x0, d0, flow0)
     jumps = EventLog(model, events)
     frame_names = _frame_selection(model, frames)
-    compile_integrator(model, method=method, frames=bool(frame_names))
-    compile_integrator(model, *source.function_data, method=method)
+    free = free_run(model, method, projection)
+    compile_integrator(model, method=method, frames=bool(frame_names), free=free)
+    compile_integrator(model, *source.function_data, method=method, free=free)
     u = inputs_at(model, source, 0.0, x, p, d, flow)
     if d0 is None and model.contact_names:      # contacts touching at rest start closed
         initial_mode(model, 0.0, x, u, p, d, flow)

@@ -1,0 +1,62 @@
+"""A fresh install's first run compiles only what its method and model call (issue 39): a fixed-step run of a
+model without constraint rows, jumps or contacts takes the integrator's free variant (andyc_numerics'
+integrator.advance with full=None, andyc.runtime.compiled.free_run), which Numba compiles without the
+constrained solves, projection, event location, jumps, the contact solver and time-stepping. Asserted by what
+Numba compiled (or loaded from its cache) in a fresh process, not by time."""
+
+import json
+import subprocess
+import sys
+from types import SimpleNamespace
+
+from andyc.runtime.compiled import free_run
+from andyc.runtime.options import Projection
+from tests.support import MODELS, ROOT
+
+# In a child process: whatever this test session compiled before, a run's own process starts with no
+# signature in any dispatcher, and a function gets one only when something compiles it or loads it from the cache.
+PROBE = """
+import json, sys
+import andyc
+from numba.core.dispatcher import Dispatcher
+
+model, _ = andyc.compile_model(sys.argv[1], sys.argv[2], integrator=False)     # (as `andyc sim` does)
+run = andyc.simulate(model, t_end=0.01, dt=1e-3)
+numerics = model.numerics
+loaded = {name: module for name, module in sys.modules.items() if name.startswith(numerics.__name__ + ".")}
+compiled = sorted(f"{name.rpartition('.')[2]}.{key}" for name, module in loaded.items()
+                  for key, value in vars(module).items() if isinstance(value, Dispatcher) and value.signatures)
+print(json.dumps({"compiled": compiled, "advance": [str(s[-1]) for s in numerics.integrator.advance.signatures],
+                  "status": run.status}))
+"""
+
+NEVER = ("dynamics.rhs_mode_into", "dynamics.multipliers", "dynamics.project", "dynamics.jump", "dynamics.impact",
+         "dynamics.slip_direction", "integrator.locate", "integrator.instant", "linalg.solve_gram",
+         "sparse_rows.solve_gram_sparse", "slipping.solve_slipping")
+
+
+def test_a_run_without_contacts_compiles_neither_the_constrained_solves_nor_the_contact_solver(shipped_build):
+    out = subprocess.run([sys.executable, "-c", PROBE, str(MODELS / "double_pendulum.yaml"), str(shipped_build)],
+                         cwd=ROOT, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    probe = json.loads(out.stdout.strip().splitlines()[-1])
+    assert probe["status"] == "finished"
+    assert probe["advance"] == ["none"]     # the free variant only (full=None), not the full one (omitted: True)
+    # (a function compiled as another's callee, or loaded with it from the cache, has no signature of its own; the
+    # full advance would be one of those callers: hence the check of advance's own signatures above)
+    assert not [name for name in probe["compiled"] if name in NEVER or name.split(".")[0] in
+                ("contact_solver", "timestepping")], probe["compiled"]
+
+
+def test_which_runs_take_the_free_variant():
+    free = SimpleNamespace(nc=0, nj=0, contact_names=(), quaternions=())
+    assert free_run(free, "rk4", Projection())
+    assert free_run(free, "lagrange", Projection())             # (no rows: every mode computes the same)
+    assert not free_run(free, "RK45", Projection())            # (adaptive: not advance)
+    assert not free_run(free, "moreau", Projection())
+    assert not free_run(free, "projection", Projection(energy_correction=True))     # projects
+    assert not free_run(SimpleNamespace(nc=0, nj=0, contact_names=(), quaternions=(3,)), "rk4", Projection())
+    assert free_run(SimpleNamespace(nc=0, nj=0, contact_names=(), quaternions=(3,)), "rk4",
+                    Projection(normalize=False))
+    assert not free_run(SimpleNamespace(nc=1, nj=0, contact_names=(), quaternions=()), "rk4", Projection())
+    assert not free_run(SimpleNamespace(nc=0, nj=1, contact_names=(), quaternions=()), "rk4", Projection())
