@@ -332,7 +332,8 @@ def write_markdown(results: list, animations: dict, speed_text: str, seconds: fl
     path.write_text("\n".join(out))
 
 
-KEPT = ("First run",)      # sections of docs/BENCHMARKS.md measured by their own scripts (bench/first_run.sh)
+# sections of docs/BENCHMARKS.md measured by their own scripts (bench/first_run.sh, bench/go1.py)
+KEPT = ("First run", "Legged robots: Go1 beside MuJoCo")
 
 
 def kept_sections(path: Path) -> list:

@@ -55,8 +55,11 @@ def numerics_package() -> str:
 
 
 def numerics_compiled() -> bool:
-    """Whether this andyc's numerics are in the cache (compiled once per installation, for every model)."""
-    return any(Path(cache_folder(numerics_package())).glob("*advance*.nbi"))
+    """Whether this andyc's numerics are in the cache (compiled once per installation, for every model): the
+    integrator's full variant, which event location is compiled for alone (a free-variant-only cache, from a first
+    run of a model without rows, jumps or contacts, leaves a constrained model's minute still to come)."""
+    folder = Path(cache_folder(numerics_package()))
+    return any(folder.glob("*advance*.nbi")) and any(folder.glob("*locate*.nbi"))
 
 
 def numerics_path(out_dir, name: str) -> Path:
