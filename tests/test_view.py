@@ -260,3 +260,83 @@ def test_a_double_pendulum_with_shapes_plays_offline(browser, compiled, tmp_path
     shots, requests = screenshots(browser, out, [0.2, 1.0], tmp_path)
     check_shots(shots, requests)
     check_shapes_move(shots, lambda r, g, b: (r > 150) & (g < 90) & (b < 90), 200)
+
+
+# -- the camera frames the run -----------------------------------------------------------------------------
+
+PROJECT = """() => {
+  // The scene as drawn now (all but the trails, the ground and the force arrows), its box's eight corners
+  // through the page's camera into normalized device coordinates: inside the canvas is |x|, |y| <= 1.
+  const v = window.andycView.viewer, THREE = MeshCat.THREE, box = new THREE.Box3();
+  v.scene.updateMatrixWorld(true);
+  for (const k of ["world", "frames", "bodies", "sticks", "fixed"]) box.expandByObject(v.scene_tree.find(["andyc", k]).object);
+  const out = [];
+  for (const x of [box.min.x, box.max.x]) for (const y of [box.min.y, box.max.y]) for (const z of [box.min.z, box.max.z]) {
+    const p = new THREE.Vector3(x, y, z).project(v.camera);
+    out.push([p.x, p.y, p.z]);
+  }
+  return out;
+}"""
+
+
+def projected_boxes(browser, page_file: Path, count: int = 9) -> list:
+    """[(t, [[x, y, z] in NDC per corner of the scene's box])] at `count` times spread over the run (its start,
+    and between: times that need not be samples)."""
+    context = browser.new_context(offline=True, viewport={"width": 800, "height": 600})
+    page = context.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(page_file.resolve().as_uri())
+    page.wait_for_function("window.andycView && window.andycView.ready", timeout=60_000)
+    duration = page.evaluate("window.andycView.duration")
+    out = []
+    for t in np.linspace(0.0, 0.98 * duration, count):     # (the very end wraps to the start: the clip loops)
+        page.evaluate(f"window.andycView.seek({t})")
+        page.wait_for_function(f"document.getElementById('status').textContent.includes('t = {t:.2f} s')",
+                               timeout=120_000)
+        out.append((t, page.evaluate(PROJECT)))
+    context.close()
+    assert errors == []
+    return out
+
+
+def check_framed(boxes):
+    """Every corner of the scene's box, at every time, inside the canvas and between the near and far planes;
+    and the scene is not a speck (the box spans at least a tenth of the canvas at some time)."""
+    for t, corners in boxes:
+        c = np.array(corners)
+        assert np.all(np.abs(c[:, :2]) <= 1.0), (t, c)
+        assert np.all(np.abs(c[:, 2]) <= 1.0), (t, c)
+    spans = [np.ptp(np.array(c)[:, :2], axis=0).max() for _, c in boxes]
+    assert max(spans) > 0.2, spans
+
+
+def test_the_camera_keeps_the_double_pendulum_in_the_canvas_at_every_time(browser, compiled, tmp_path):
+    """The double pendulum's tip ran off the bottom of the canvas: now the camera frames the box of every
+    sample of the run."""
+    run = andyc.simulate(compiled("double_pendulum"), t_end=3.0, dt=1e-3, frames="all")
+    out = tmp_path / "dp.html"
+    assert CliRunner().invoke(cli.main, ["view", str(run.save(tmp_path / "dp.h5")), "-o", str(out)]).exit_code == 0
+    check_framed(projected_boxes(browser, out))
+
+
+def test_the_camera_keeps_a_hopper_in_the_canvas_at_every_time(browser, compiled, tmp_path):
+    run = andyc.simulate(compiled("hopper_contact"), t_end=1.0, dt=1e-4, frames="all")
+    out = tmp_path / "hopper.html"
+    assert CliRunner().invoke(cli.main, ["view", str(run.save(tmp_path / "h.h5")), "-o", str(out)]).exit_code == 0
+    check_framed(projected_boxes(browser, out))
+
+
+def test_the_camera_keeps_the_panda_in_the_canvas_at_every_time(browser, panda_arm, tmp_path):
+    run = andyc.simulate(panda_arm, t_end=1.5, dt=1e-3, frames="all")
+    out = tmp_path / "panda.html"
+    assert CliRunner().invoke(cli.main, ["view", str(run.save(tmp_path / "p.h5")), "-o", str(out)]).exit_code == 0
+    check_framed(projected_boxes(browser, out))
+
+
+def test_the_camera_keeps_a_followed_walker_in_the_canvas(browser, tmp_path):
+    """--follow: the scene slides under the camera; the framing is of the scene as it is drawn then."""
+    out = tmp_path / "walker.html"
+    CliRunner().invoke(cli.main, ["view", str(walker_run().save(tmp_path / "w.h5")), "-o", str(out),
+                                  "--follow", "hip"])
+    check_framed(projected_boxes(browser, out))
