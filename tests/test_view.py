@@ -340,3 +340,54 @@ def test_the_camera_keeps_a_followed_walker_in_the_canvas(browser, tmp_path):
     CliRunner().invoke(cli.main, ["view", str(walker_run().save(tmp_path / "w.h5")), "-o", str(out),
                                   "--follow", "hip"])
     check_framed(projected_boxes(browser, out))
+
+
+# -- the ground -------------------------------------------------------------------------------------------
+
+GROUNDLESS = {"newtons_cradle": "its contacts are between the balls (gaps of two frames), none on a ground"}
+
+
+def test_every_shipped_model_with_contacts_on_a_ground_has_its_plane():
+    """andyc.spec.display.contact_planes, for every shipped model with contacts: a plane (a unit normal) for
+    at least one of them, but for the models listed with why; the block's incline is the slope's plane."""
+    from andyc.spec.display import contact_planes
+    from andyc.spec.load import load
+
+    models = Path(andyc.__file__).parent.parent / "models"
+    seen = 0
+    for path in sorted(models.glob("*.yaml")):
+        spec = load(path)
+        if not spec.contacts:
+            continue
+        seen += 1
+        planes = contact_planes(spec)
+        assert bool(planes) != (path.stem in GROUNDLESS), path.stem
+        for p in planes:
+            assert np.linalg.norm(p["normal"]) == pytest.approx(1.0)
+    assert seen >= 10
+    incline = contact_planes(load(models / "block_incline.yaml"))[0]
+    assert np.allclose(incline["normal"], [-np.sin(0.5), np.cos(0.5), 0]) and incline["offset"] == 0.0
+    assert np.allclose(incline["tangents"], [[np.cos(0.5), np.sin(0.5), 0]])
+
+
+def ground_in_page(browser, page_file: Path) -> tuple:
+    """(<body data-ground-planes>, the number of three.js objects named 'andyc-ground' in the scene)."""
+    context = browser.new_context(offline=True, viewport={"width": 800, "height": 600})
+    page = context.new_page()
+    page.goto(page_file.resolve().as_uri())
+    page.wait_for_function("window.andycView && window.andycView.ready", timeout=60_000)
+    out = page.evaluate("""() => { let k = 0;
+      window.andycView.viewer.scene.traverse((o) => { if (o.name === "andyc-ground") k++; });
+      return [document.body.dataset.groundPlanes, k]; }""")
+    context.close()
+    return tuple(out)
+
+
+def test_the_page_draws_the_ground_of_a_contact_model_and_none_without(browser, compiled, tmp_path):
+    for model, expected in (("bouncing_ball_contact", 1), ("block_incline", 1), ("double_pendulum", 0)):
+        run = andyc.simulate(compiled(model), t_end=0.5, dt=1e-3, frames="all")
+        data = view_data(run)
+        assert len(data["planes"]) == expected, model
+        out = tmp_path / f"{model}.html"
+        out.write_text(view_html(data))
+        assert ground_in_page(browser, out) == (str(expected), expected), model

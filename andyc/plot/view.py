@@ -67,7 +67,8 @@ def view_data(run: Run, fps: int = 30, max_samples: int = MAX_SAMPLES, follow: s
     order) for the frames with shapes, 'shapes' [shape with 'mesh': index into
     'meshes' [{'format', 'base64'}]], 'edges' [[parent, child]] (the sticks of the frames without a
     shape), 'trails' [frame], 'follow' (a frame or None), 'flow_names', 'flow' (per sample), 'events'
-    [[time, jump]], 'hybrid', 'up' (1: y, 2: z), 'planar', 'ground' (height along `up`, or None),
+    [[time, jump]], 'hybrid', 'up' (1: y, 2: z), 'planar', 'ground' (height along `up`, or None), 'planes'
+    (`ground_planes`: the contacts' ground planes or slopes, drawn),
     'centre' and 'extent' (m), 'fps' (samples kept per second of run time at real speed), 'missing'
     [what is not drawn, and why]. ValueError if the run logged no frames, or `follow` or `trails` names a
     frame it did not log."""
@@ -106,7 +107,19 @@ def view_data(run: Run, fps: int = 30, max_samples: int = MAX_SAMPLES, follow: s
         "hybrid": is_hybrid(run), "up": int(view["up"]), "planar": bool(view["planar"]),
         "ground": view["ground_height"], "centre": [float(c) for c in (lo + hi) / 2],
         "extent": float(max(np.max(hi - lo), 1e-3)), "fps": (len(t) - 1) / duration if duration > 0 else 1.0,
+        "planes": ground_planes(run),
     }
+
+
+def ground_planes(run: Run) -> list:
+    """[{'normal', 'offset'}]: the distinct planes normal . p + offset = 0 of the run's contacts (the run file's
+    display record: andyc.spec.display.contact_planes; none in a run file older than it), to 6 digits: a
+    quadruped's four feet on one ground are one plane."""
+    planes = {}
+    for c in (run.display or {}).get("contacts", []):
+        key = tuple(round(float(x), 6) + 0.0 for x in c["normal"]) + (round(float(c["offset"]), 6) + 0.0,)
+        planes.setdefault(key, {"normal": list(key[:3]), "offset": key[3]})
+    return list(planes.values())
 
 
 def _shapes(run: Run) -> tuple[list, list, list]:
