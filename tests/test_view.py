@@ -391,3 +391,48 @@ def test_the_page_draws_the_ground_of_a_contact_model_and_none_without(browser, 
         out = tmp_path / f"{model}.html"
         out.write_text(view_html(data))
         assert ground_in_page(browser, out) == (str(expected), expected), model
+
+
+# -- the contacts' forces ---------------------------------------------------------------------------------
+
+ARROWS = """() => { const out = [];
+  window.andycView.viewer.scene.traverse((o) => { if (o.name === "andyc-force")
+    out.push([o.userData.contact, o.userData.kind, o.visible, o.visible ? o.line.scale.y : 0,
+              new MeshCat.THREE.Vector3(0, 1, 0).applyQuaternion(o.quaternion).toArray()]); });
+  return out; }"""
+
+
+def test_force_arrows_show_while_the_hoppers_foot_is_down_and_not_in_flight(browser, compiled, tmp_path):
+    """The hopper's foot lands at 0.319 s and lifts off at 0.425 s (models/hopper_contact.yaml): its normal
+    force's arrow is shown in stance (pointing up, as long as the largest force's 0.3 of the scene at most) and
+    hidden in flight before and after; the "forces" box hides it in stance too. The data's force is the run's
+    normal force along the ground's normal."""
+    run = andyc.simulate(compiled("hopper_contact"), t_end=0.6, dt=1e-4, frames="all")
+    data = view_data(run)
+    (c,) = data["forces"]["contacts"]
+    kept = np.searchsorted(run.time, np.array(data["time"]) + run.time[0] - 1e-12)
+    assert np.allclose(np.array(c["normal"])[:, 1], run.normal_forces[kept, 0], rtol=1e-4, atol=1e-9)
+    assert np.allclose(np.array(c["foot"])[:, 1], 0.0) and np.all(np.array(c["friction"]) == 0)
+    out = tmp_path / "hopper.html"
+    out.write_text(view_html(data))
+    context = browser.new_context(offline=True, viewport={"width": 800, "height": 600})
+    page = context.new_page()
+    page.goto(out.resolve().as_uri())
+    page.wait_for_function("window.andycView && window.andycView.ready", timeout=60_000)
+    seen = {}
+    for t in (0.1, 0.37, 0.55):
+        page.evaluate(f"window.andycView.seek({t})")
+        page.wait_for_function(f"document.getElementById('status').textContent.includes('t = {t:.2f} s')",
+                               timeout=120_000)
+        seen[t] = {kind: (visible, length, up) for _, kind, visible, length, up in page.evaluate(ARROWS)}
+    page.uncheck("#forces")
+    page.evaluate("window.andycView.seek(0.38)")
+    page.wait_for_function("document.getElementById('status').textContent.includes('t = 0.38 s')", timeout=120_000)
+    unticked = {kind: visible for _, kind, visible, _, _ in page.evaluate(ARROWS)}
+    context.close()
+    assert seen[0.1]["normal"][0] is False and seen[0.55]["normal"][0] is False      # in flight
+    assert seen[0.37]["normal"][0] is True                                           # in stance: up,
+    assert 0 < seen[0.37]["normal"][1] <= 0.3 * data["extent"] * (1 + 1e-6)         # scaled
+    assert np.allclose(seen[0.37]["normal"][2], [0, 1, 0], atol=1e-6)
+    assert seen[0.37]["friction"][0] is False                                        # frictionless
+    assert unticked == {"normal": False, "friction": False}

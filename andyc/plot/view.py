@@ -107,8 +107,41 @@ def view_data(run: Run, fps: int = 30, max_samples: int = MAX_SAMPLES, follow: s
         "hybrid": is_hybrid(run), "up": int(view["up"]), "planar": bool(view["planar"]),
         "ground": view["ground_height"], "centre": [float(c) for c in (lo + hi) / 2],
         "extent": float(max(np.max(hi - lo), 1e-3)), "fps": (len(t) - 1) / duration if duration > 0 else 1.0,
-        "planes": ground_planes(run),
+        "planes": ground_planes(run), "forces": contact_forces(run, samples),
     }
+
+
+def contact_forces(run: Run, samples) -> dict:
+    """{'contacts': [{'name', 'foot' [[x, y, z] per sample], 'normal' [[fx, fy, fz]], 'friction' [[...]]}],
+    'scale' (m per N)}: for each contact whose gap is a plane (display's 'contacts') on a logged frame, its
+    normal force along the plane's normal and its friction along its tangents (Run.normal_forces,
+    friction_forces, friction_forces_2: 0 while open), in world, at the samples kept; the arrows' foot is the
+    frame's origin projected on the plane (the contact point of a point or a sphere). The scale makes the
+    largest force of the run 0.3 of the scene's size."""
+    planes = {c["name"]: c for c in (run.display or {}).get("contacts", [])}
+    out = []
+    if run.contact_names:
+        normal, f1, f2 = run.normal_forces[samples], run.friction_forces[samples], run.friction_forces_2[samples]
+    for i, name in enumerate(run.contact_names):
+        c = planes.get(name)
+        if c is None or c["frame"] not in run.frames:
+            continue
+        n = np.array(c["normal"], float)
+        p = run.frames[c["frame"]][samples]
+        foot = p - (p @ n + c["offset"])[:, None] * n
+        tangents = [np.array(t, float) for t in c.get("tangents", [])]
+        friction = np.zeros_like(p)
+        for t, f in zip(tangents, (f1[:, i], f2[:, i])):
+            friction += f[:, None] * t
+        out.append({"name": name, "foot": foot, "normal": normal[:, i][:, None] * n, "friction": friction})
+    largest = max([float(np.nanmax(np.linalg.norm(c[k], axis=1), initial=0.0)) for c in out
+                   for k in ("normal", "friction")] + [0.0])
+    xyz = np.concatenate([np.zeros((1, 3))] + [q[samples] for q in run.frames.values()])
+    extent = max(float(np.max(np.nanmax(xyz, axis=0) - np.nanmin(xyz, axis=0))), 1e-3)
+    rounded = lambda a: [[float(f"{v:.{DIGITS}g}") for v in row] for row in np.nan_to_num(a)]  # noqa: E731
+    return {"contacts": [{"name": c["name"], **{k: rounded(c[k]) for k in ("foot", "normal", "friction")}}
+                         for c in out],
+            "scale": 0.3 * extent / largest if largest > 0 else 0.0}
 
 
 def ground_planes(run: Run) -> list:
