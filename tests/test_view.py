@@ -436,3 +436,26 @@ def test_force_arrows_show_while_the_hoppers_foot_is_down_and_not_in_flight(brow
     assert np.allclose(seen[0.37]["normal"][2], [0, 1, 0], atol=1e-6)
     assert seen[0.37]["friction"][0] is False                                        # frictionless
     assert unticked == {"normal": False, "friction": False}
+
+
+def test_a_damaged_contact_record_draws_nothing_for_it_and_names_stay_data():
+    """A run file's display 'contacts' written by hand: entries that are not planes of finite numbers are left
+    out (no ground, no arrow for them), not an internal error; a hostile contact name stays inside the JSON."""
+    run = walker_run()
+    run.contact_names = ["</script><script>alert(1)</script>", "bad"]
+    run.contact_rows = [0, 1]
+    run.multiplier_names = ["n0", "n1"]
+    run.multipliers = np.ones((len(run.time), 2))
+    run.contact_stick_rows, run.contact_mu, run.contact_tangents = [-1, -1], [np.nan, np.nan], [0, 0]
+    run.slip_speeds = run.slip_speeds_2 = np.full((len(run.time), 2), np.nan)
+    run.discrete_names = [f"{c}_mode" for c in run.contact_names]
+    run.discrete = np.ones((len(run.time), 2))
+    run.display = {"ground": None, "contacts": [
+        {"name": run.contact_names[0], "frame": "foot2", "normal": [0, 1, 0], "offset": 0.0, "tangents": []},
+        {"name": "bad", "frame": "foot1", "normal": [0, "x", 0], "offset": 0.0},
+        {"name": "nan", "frame": "foot1", "normal": [0, 0, 0], "offset": float("nan")}, "not a dict"]}
+    data = view_data(run)
+    assert data["planes"] == [{"normal": [0.0, 1.0, 0.0], "offset": 0.0}]
+    assert [c["name"] for c in data["forces"]["contacts"]] == [run.contact_names[0]]
+    block = view_html(data).split('id="andyc-data">', 1)[1].split("</script>", 1)[0]
+    assert "<" not in block

@@ -118,7 +118,7 @@ def contact_forces(run: Run, samples) -> dict:
     friction_forces, friction_forces_2: 0 while open), in world, at the samples kept; the arrows' foot is the
     frame's origin projected on the plane (the contact point of a point or a sphere). The scale makes the
     largest force of the run 0.3 of the scene's size."""
-    planes = {c["name"]: c for c in (run.display or {}).get("contacts", [])}
+    planes = {c["name"]: c for c in plane_contacts(run)}
     out = []
     if run.contact_names:
         normal, f1, f2 = run.normal_forces[samples], run.friction_forces[samples], run.friction_forces_2[samples]
@@ -144,12 +144,34 @@ def contact_forces(run: Run, samples) -> dict:
             "scale": 0.3 * extent / largest if largest > 0 else 0.0}
 
 
+def plane_contacts(run: Run) -> list:
+    """The run file's display record's 'contacts' (andyc.spec.display.contact_planes), each read back as
+    {'name', 'frame', 'normal' (unit), 'offset', 'tangents'} of finite numbers; an entry that is not so (a run
+    file written by hand, or damaged) is left out: the page then draws no ground or arrow for it."""
+    raw = (run.display or {}).get("contacts", [])
+    out = []
+    for c in raw if isinstance(raw, list) else []:
+        try:
+            n = np.array(c["normal"], float)
+            offset = float(c["offset"])
+            tangents = [np.array(t, float) for t in c.get("tangents", [])][:2]
+            name, frame = c["name"], c["frame"]
+        except (TypeError, ValueError, KeyError, AttributeError):
+            continue
+        if not (isinstance(name, str) and isinstance(frame, str) and n.shape == (3,) and np.all(np.isfinite(n))
+                and np.isfinite(offset) and abs(np.linalg.norm(n) - 1) < 1e-6
+                and all(t.shape == (3,) and np.all(np.isfinite(t)) for t in tangents)):
+            continue
+        out.append({"name": name, "frame": frame, "normal": n, "offset": offset, "tangents": tangents})
+    return out
+
+
 def ground_planes(run: Run) -> list:
     """[{'normal', 'offset'}]: the distinct planes normal . p + offset = 0 of the run's contacts (the run file's
     display record: andyc.spec.display.contact_planes; none in a run file older than it), to 6 digits: a
     quadruped's four feet on one ground are one plane."""
     planes = {}
-    for c in (run.display or {}).get("contacts", []):
+    for c in plane_contacts(run):
         key = tuple(round(float(x), 6) + 0.0 for x in c["normal"]) + (round(float(c["offset"]), 6) + 0.0,)
         planes.setdefault(key, {"normal": list(key[:3]), "offset": key[3]})
     return list(planes.values())
