@@ -129,7 +129,8 @@ def test_shapes_ride_on_their_frames_rotations(compiled, tmp_path):
 
 
 def test_a_mesh_goes_into_the_page_whole(tmp_path):
-    """A mesh shape's file is in the page as its bytes in base64, read from the run file, not the disk."""
+    """A mesh shape's file is in the page as its bytes in base64, read from the run file, not the disk; two
+    files with the same bytes are one mesh in the page."""
     import base64
 
     run = walker_run()
@@ -142,6 +143,12 @@ def test_a_mesh_goes_into_the_page_whole(tmp_path):
     data = view_data(run)
     assert data["shapes"][0]["mesh"] == 0 and "file" not in data["shapes"][0]
     assert base64.b64decode(data["meshes"][0]["base64"]) == stl and data["meshes"][0]["format"] == "stl"
+    twin = dict(run.display["shapes"][0], frame="foot1", file=str(tmp_path / "twin.stl"))
+    run.display["shapes"].append(twin)
+    run.meshes[twin["file"]] = stl
+    data = view_data(run)                             # the same bytes under two names: stored once
+    assert [s["mesh"] for s in data["shapes"]] == [0, 0] and len(data["meshes"]) == 1
+    run.display["shapes"].pop()
     run.meshes = {}
     assert view_data(run)["missing"] == [f"the mesh {tmp_path / 'gone.stl'} (in neither the run file nor on disk)"]
 

@@ -28,6 +28,7 @@ transform.
 from __future__ import annotations
 
 import base64
+import hashlib
 import html
 import json
 import re
@@ -181,7 +182,9 @@ def _shapes(run: Run) -> tuple[list, list, list]:
     """(shapes, meshes, missing): the run's shapes on the frames it logged (and 'world'), each mesh as an
     index into `meshes` [{'format', 'base64'}] (its file's bytes, from the run file or the file), and
     what is not drawn and why."""
-    shapes, meshes, index, missing = [], [], {}, []
+    # A mesh is stored once per distinct content (its format and bytes), not per file nor per shape: a robot's
+    # left and right legs, or two copies of one file, share one entry in the page.
+    shapes, meshes, index, missing, by_content = [], [], {}, [], {}
     for shape in run.display.get("shapes", []):
         if shape["frame"] != "world" and shape["frame"] not in run.frames:
             missing.append(f"a {shape['kind']} on frame '{shape['frame']}', which the run did not log")
@@ -194,8 +197,11 @@ def _shapes(run: Run) -> tuple[list, list, list]:
                 if data is None:
                     missing.append(f"the mesh {file} (in neither the run file nor on disk)")
                     continue
-                index[file] = len(meshes)
-                meshes.append({"format": shape["format"], "base64": base64.b64encode(data).decode("ascii")})
+                key = (shape["format"], hashlib.sha256(data).hexdigest())
+                if key not in by_content:
+                    by_content[key] = len(meshes)
+                    meshes.append({"format": shape["format"], "base64": base64.b64encode(data).decode("ascii")})
+                index[file] = by_content[key]
             shape["mesh"] = index[file]
         shapes.append(shape)
     return shapes, meshes, missing
