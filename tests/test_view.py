@@ -129,7 +129,8 @@ def test_shapes_ride_on_their_frames_rotations(compiled, tmp_path):
 
 
 def test_a_mesh_goes_into_the_page_whole(tmp_path):
-    """A mesh shape's file is in the page as its bytes in base64, read from the run file, not the disk."""
+    """A mesh shape's file is in the page as its bytes in base64, read from the run file, not the disk; two
+    files with the same bytes are one mesh in the page."""
     import base64
 
     run = walker_run()
@@ -142,6 +143,12 @@ def test_a_mesh_goes_into_the_page_whole(tmp_path):
     data = view_data(run)
     assert data["shapes"][0]["mesh"] == 0 and "file" not in data["shapes"][0]
     assert base64.b64decode(data["meshes"][0]["base64"]) == stl and data["meshes"][0]["format"] == "stl"
+    twin = dict(run.display["shapes"][0], frame="foot1", file=str(tmp_path / "twin.stl"))
+    run.display["shapes"].append(twin)
+    run.meshes[twin["file"]] = stl
+    data = view_data(run)                             # the same bytes under two names: stored once
+    assert [s["mesh"] for s in data["shapes"]] == [0, 0] and len(data["meshes"]) == 1
+    run.display["shapes"].pop()
     run.meshes = {}
     assert view_data(run)["missing"] == [f"the mesh {tmp_path / 'gone.stl'} (in neither the run file nor on disk)"]
 
@@ -260,3 +267,202 @@ def test_a_double_pendulum_with_shapes_plays_offline(browser, compiled, tmp_path
     shots, requests = screenshots(browser, out, [0.2, 1.0], tmp_path)
     check_shots(shots, requests)
     check_shapes_move(shots, lambda r, g, b: (r > 150) & (g < 90) & (b < 90), 200)
+
+
+# -- the camera frames the run -----------------------------------------------------------------------------
+
+PROJECT = """() => {
+  // The scene as drawn now (all but the trails, the ground and the force arrows), its box's eight corners
+  // through the page's camera into normalized device coordinates: inside the canvas is |x|, |y| <= 1.
+  const v = window.andycView.viewer, THREE = MeshCat.THREE, box = new THREE.Box3();
+  v.scene.updateMatrixWorld(true);
+  for (const k of ["world", "frames", "bodies", "sticks", "fixed"]) box.expandByObject(v.scene_tree.find(["andyc", k]).object);
+  const out = [];
+  for (const x of [box.min.x, box.max.x]) for (const y of [box.min.y, box.max.y]) for (const z of [box.min.z, box.max.z]) {
+    const p = new THREE.Vector3(x, y, z).project(v.camera);
+    out.push([p.x, p.y, p.z]);
+  }
+  return out;
+}"""
+
+
+def projected_boxes(browser, page_file: Path, count: int = 9) -> list:
+    """[(t, [[x, y, z] in NDC per corner of the scene's box])] at `count` times spread over the run (its start,
+    and between: times that need not be samples)."""
+    context = browser.new_context(offline=True, viewport={"width": 800, "height": 600})
+    page = context.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(page_file.resolve().as_uri())
+    page.wait_for_function("window.andycView && window.andycView.ready", timeout=60_000)
+    duration = page.evaluate("window.andycView.duration")
+    out = []
+    for t in np.linspace(0.0, 0.98 * duration, count):     # (the very end wraps to the start: the clip loops)
+        page.evaluate(f"window.andycView.seek({t})")
+        page.wait_for_function(f"document.getElementById('status').textContent.includes('t = {t:.2f} s')",
+                               timeout=120_000)
+        out.append((t, page.evaluate(PROJECT)))
+    context.close()
+    assert errors == []
+    return out
+
+
+def check_framed(boxes):
+    """Every corner of the scene's box, at every time, inside the canvas and between the near and far planes;
+    and the scene is not a speck (the box spans at least a tenth of the canvas at some time)."""
+    for t, corners in boxes:
+        c = np.array(corners)
+        assert np.all(np.abs(c[:, :2]) <= 1.0), (t, c)
+        assert np.all(np.abs(c[:, 2]) <= 1.0), (t, c)
+    spans = [np.ptp(np.array(c)[:, :2], axis=0).max() for _, c in boxes]
+    assert max(spans) > 0.2, spans
+
+
+def test_the_camera_keeps_the_double_pendulum_in_the_canvas_at_every_time(browser, compiled, tmp_path):
+    """The double pendulum's tip ran off the bottom of the canvas: now the camera frames the box of every
+    sample of the run."""
+    run = andyc.simulate(compiled("double_pendulum"), t_end=3.0, dt=1e-3, frames="all")
+    out = tmp_path / "dp.html"
+    assert CliRunner().invoke(cli.main, ["view", str(run.save(tmp_path / "dp.h5")), "-o", str(out)]).exit_code == 0
+    check_framed(projected_boxes(browser, out))
+
+
+def test_the_camera_keeps_a_hopper_in_the_canvas_at_every_time(browser, compiled, tmp_path):
+    run = andyc.simulate(compiled("hopper_contact"), t_end=1.0, dt=1e-4, frames="all")
+    out = tmp_path / "hopper.html"
+    assert CliRunner().invoke(cli.main, ["view", str(run.save(tmp_path / "h.h5")), "-o", str(out)]).exit_code == 0
+    check_framed(projected_boxes(browser, out))
+
+
+def test_the_camera_keeps_the_panda_in_the_canvas_at_every_time(browser, panda_arm, tmp_path):
+    run = andyc.simulate(panda_arm, t_end=1.5, dt=1e-3, frames="all")
+    out = tmp_path / "panda.html"
+    assert CliRunner().invoke(cli.main, ["view", str(run.save(tmp_path / "p.h5")), "-o", str(out)]).exit_code == 0
+    check_framed(projected_boxes(browser, out))
+
+
+def test_the_camera_keeps_a_followed_walker_in_the_canvas(browser, tmp_path):
+    """--follow: the scene slides under the camera; the framing is of the scene as it is drawn then."""
+    out = tmp_path / "walker.html"
+    CliRunner().invoke(cli.main, ["view", str(walker_run().save(tmp_path / "w.h5")), "-o", str(out),
+                                  "--follow", "hip"])
+    check_framed(projected_boxes(browser, out))
+
+
+# -- the ground -------------------------------------------------------------------------------------------
+
+GROUNDLESS = {"newtons_cradle": "its contacts are between the balls (gaps of two frames), none on a ground"}
+
+
+def test_every_shipped_model_with_contacts_on_a_ground_has_its_plane():
+    """andyc.spec.display.contact_planes, for every shipped model with contacts: a plane (a unit normal) for
+    at least one of them, but for the models listed with why; the block's incline is the slope's plane."""
+    from andyc.spec.display import contact_planes
+    from andyc.spec.load import load
+
+    models = Path(andyc.__file__).parent.parent / "models"
+    seen = 0
+    for path in sorted(models.glob("*.yaml")):
+        spec = load(path)
+        if not spec.contacts:
+            continue
+        seen += 1
+        planes = contact_planes(spec)
+        assert bool(planes) != (path.stem in GROUNDLESS), path.stem
+        for p in planes:
+            assert np.linalg.norm(p["normal"]) == pytest.approx(1.0)
+    assert seen >= 10
+    incline = contact_planes(load(models / "block_incline.yaml"))[0]
+    assert np.allclose(incline["normal"], [-np.sin(0.5), np.cos(0.5), 0]) and incline["offset"] == 0.0
+    assert np.allclose(incline["tangents"], [[np.cos(0.5), np.sin(0.5), 0]])
+
+
+def ground_in_page(browser, page_file: Path) -> tuple:
+    """(<body data-ground-planes>, the number of three.js objects named 'andyc-ground' in the scene)."""
+    context = browser.new_context(offline=True, viewport={"width": 800, "height": 600})
+    page = context.new_page()
+    page.goto(page_file.resolve().as_uri())
+    page.wait_for_function("window.andycView && window.andycView.ready", timeout=60_000)
+    out = page.evaluate("""() => { let k = 0;
+      window.andycView.viewer.scene.traverse((o) => { if (o.name === "andyc-ground") k++; });
+      return [document.body.dataset.groundPlanes, k]; }""")
+    context.close()
+    return tuple(out)
+
+
+def test_the_page_draws_the_ground_of_a_contact_model_and_none_without(browser, compiled, tmp_path):
+    for model, expected in (("bouncing_ball_contact", 1), ("block_incline", 1), ("double_pendulum", 0)):
+        run = andyc.simulate(compiled(model), t_end=0.5, dt=1e-3, frames="all")
+        data = view_data(run)
+        assert len(data["planes"]) == expected, model
+        out = tmp_path / f"{model}.html"
+        out.write_text(view_html(data))
+        assert ground_in_page(browser, out) == (str(expected), expected), model
+
+
+# -- the contacts' forces ---------------------------------------------------------------------------------
+
+ARROWS = """() => { const out = [];
+  window.andycView.viewer.scene.traverse((o) => { if (o.name === "andyc-force")
+    out.push([o.userData.contact, o.userData.kind, o.visible, o.visible ? o.line.scale.y : 0,
+              new MeshCat.THREE.Vector3(0, 1, 0).applyQuaternion(o.quaternion).toArray()]); });
+  return out; }"""
+
+
+def test_force_arrows_show_while_the_hoppers_foot_is_down_and_not_in_flight(browser, compiled, tmp_path):
+    """The hopper's foot lands at 0.319 s and lifts off at 0.425 s (models/hopper_contact.yaml): its normal
+    force's arrow is shown in stance (pointing up, as long as the largest force's 0.3 of the scene at most) and
+    hidden in flight before and after; the "forces" box hides it in stance too. The data's force is the run's
+    normal force along the ground's normal."""
+    run = andyc.simulate(compiled("hopper_contact"), t_end=0.6, dt=1e-4, frames="all")
+    data = view_data(run)
+    (c,) = data["forces"]["contacts"]
+    kept = np.searchsorted(run.time, np.array(data["time"]) + run.time[0] - 1e-12)
+    assert np.allclose(np.array(c["normal"])[:, 1], run.normal_forces[kept, 0], rtol=1e-4, atol=1e-9)
+    assert np.allclose(np.array(c["foot"])[:, 1], 0.0) and np.all(np.array(c["friction"]) == 0)
+    out = tmp_path / "hopper.html"
+    out.write_text(view_html(data))
+    context = browser.new_context(offline=True, viewport={"width": 800, "height": 600})
+    page = context.new_page()
+    page.goto(out.resolve().as_uri())
+    page.wait_for_function("window.andycView && window.andycView.ready", timeout=60_000)
+    seen = {}
+    for t in (0.1, 0.37, 0.55):
+        page.evaluate(f"window.andycView.seek({t})")
+        page.wait_for_function(f"document.getElementById('status').textContent.includes('t = {t:.2f} s')",
+                               timeout=120_000)
+        seen[t] = {kind: (visible, length, up) for _, kind, visible, length, up in page.evaluate(ARROWS)}
+    page.uncheck("#forces")
+    page.evaluate("window.andycView.seek(0.38)")
+    page.wait_for_function("document.getElementById('status').textContent.includes('t = 0.38 s')", timeout=120_000)
+    unticked = {kind: visible for _, kind, visible, _, _ in page.evaluate(ARROWS)}
+    context.close()
+    assert seen[0.1]["normal"][0] is False and seen[0.55]["normal"][0] is False      # in flight
+    assert seen[0.37]["normal"][0] is True                                           # in stance: up,
+    assert 0 < seen[0.37]["normal"][1] <= 0.3 * data["extent"] * (1 + 1e-6)         # scaled
+    assert np.allclose(seen[0.37]["normal"][2], [0, 1, 0], atol=1e-6)
+    assert seen[0.37]["friction"][0] is False                                        # frictionless
+    assert unticked == {"normal": False, "friction": False}
+
+
+def test_a_damaged_contact_record_draws_nothing_for_it_and_names_stay_data():
+    """A run file's display 'contacts' written by hand: entries that are not planes of finite numbers are left
+    out (no ground, no arrow for them), not an internal error; a hostile contact name stays inside the JSON."""
+    run = walker_run()
+    run.contact_names = ["</script><script>alert(1)</script>", "bad"]
+    run.contact_rows = [0, 1]
+    run.multiplier_names = ["n0", "n1"]
+    run.multipliers = np.ones((len(run.time), 2))
+    run.contact_stick_rows, run.contact_mu, run.contact_tangents = [-1, -1], [np.nan, np.nan], [0, 0]
+    run.slip_speeds = run.slip_speeds_2 = np.full((len(run.time), 2), np.nan)
+    run.discrete_names = [f"{c}_mode" for c in run.contact_names]
+    run.discrete = np.ones((len(run.time), 2))
+    run.display = {"ground": None, "contacts": [
+        {"name": run.contact_names[0], "frame": "foot2", "normal": [0, 1, 0], "offset": 0.0, "tangents": []},
+        {"name": "bad", "frame": "foot1", "normal": [0, "x", 0], "offset": 0.0},
+        {"name": "nan", "frame": "foot1", "normal": [0, 0, 0], "offset": float("nan")}, "not a dict"]}
+    data = view_data(run)
+    assert data["planes"] == [{"normal": [0.0, 1.0, 0.0], "offset": 0.0}]
+    assert [c["name"] for c in data["forces"]["contacts"]] == [run.contact_names[0]]
+    block = view_html(data).split('id="andyc-data">', 1)[1].split("</script>", 1)[0]
+    assert "<" not in block

@@ -28,6 +28,7 @@ transform.
 from __future__ import annotations
 
 import base64
+import hashlib
 import html
 import json
 import re
@@ -67,7 +68,8 @@ def view_data(run: Run, fps: int = 30, max_samples: int = MAX_SAMPLES, follow: s
     order) for the frames with shapes, 'shapes' [shape with 'mesh': index into
     'meshes' [{'format', 'base64'}]], 'edges' [[parent, child]] (the sticks of the frames without a
     shape), 'trails' [frame], 'follow' (a frame or None), 'flow_names', 'flow' (per sample), 'events'
-    [[time, jump]], 'hybrid', 'up' (1: y, 2: z), 'planar', 'ground' (height along `up`, or None),
+    [[time, jump]], 'hybrid', 'up' (1: y, 2: z), 'planar', 'ground' (height along `up`, or None), 'planes'
+    (`ground_planes`: the contacts' ground planes or slopes, drawn),
     'centre' and 'extent' (m), 'fps' (samples kept per second of run time at real speed), 'missing'
     [what is not drawn, and why]. ValueError if the run logged no frames, or `follow` or `trails` names a
     frame it did not log."""
@@ -106,14 +108,83 @@ def view_data(run: Run, fps: int = 30, max_samples: int = MAX_SAMPLES, follow: s
         "hybrid": is_hybrid(run), "up": int(view["up"]), "planar": bool(view["planar"]),
         "ground": view["ground_height"], "centre": [float(c) for c in (lo + hi) / 2],
         "extent": float(max(np.max(hi - lo), 1e-3)), "fps": (len(t) - 1) / duration if duration > 0 else 1.0,
+        "planes": ground_planes(run), "forces": contact_forces(run, samples),
     }
+
+
+def contact_forces(run: Run, samples) -> dict:
+    """{'contacts': [{'name', 'foot' [[x, y, z] per sample], 'normal' [[fx, fy, fz]], 'friction' [[...]]}],
+    'scale' (m per N)}: for each contact whose gap is a plane (display's 'contacts') on a logged frame, its
+    normal force along the plane's normal and its friction along its tangents (Run.normal_forces,
+    friction_forces, friction_forces_2: 0 while open), in world, at the samples kept; the arrows' foot is the
+    frame's origin projected on the plane (the contact point of a point or a sphere). The scale makes the
+    largest force of the run 0.3 of the scene's size."""
+    planes = {c["name"]: c for c in plane_contacts(run)}
+    out = []
+    if run.contact_names:
+        normal, f1, f2 = run.normal_forces[samples], run.friction_forces[samples], run.friction_forces_2[samples]
+    for i, name in enumerate(run.contact_names):
+        c = planes.get(name)
+        if c is None or c["frame"] not in run.frames:
+            continue
+        n = np.array(c["normal"], float)
+        p = run.frames[c["frame"]][samples]
+        foot = p - (p @ n + c["offset"])[:, None] * n
+        tangents = [np.array(t, float) for t in c.get("tangents", [])]
+        friction = np.zeros_like(p)
+        for t, f in zip(tangents, (f1[:, i], f2[:, i])):
+            friction += f[:, None] * t
+        out.append({"name": name, "foot": foot, "normal": normal[:, i][:, None] * n, "friction": friction})
+    largest = max([float(np.nanmax(np.linalg.norm(c[k], axis=1), initial=0.0)) for c in out
+                   for k in ("normal", "friction")] + [0.0])
+    xyz = np.concatenate([np.zeros((1, 3))] + [q[samples] for q in run.frames.values()])
+    extent = max(float(np.max(np.nanmax(xyz, axis=0) - np.nanmin(xyz, axis=0))), 1e-3)
+    rounded = lambda a: [[float(f"{v:.{DIGITS}g}") for v in row] for row in np.nan_to_num(a)]  # noqa: E731
+    return {"contacts": [{"name": c["name"], **{k: rounded(c[k]) for k in ("foot", "normal", "friction")}}
+                         for c in out],
+            "scale": 0.3 * extent / largest if largest > 0 else 0.0}
+
+
+def plane_contacts(run: Run) -> list:
+    """The run file's display record's 'contacts' (andyc.spec.display.contact_planes), each read back as
+    {'name', 'frame', 'normal' (unit), 'offset', 'tangents'} of finite numbers; an entry that is not so (a run
+    file written by hand, or damaged) is left out: the page then draws no ground or arrow for it."""
+    raw = (run.display or {}).get("contacts", [])
+    out = []
+    for c in raw if isinstance(raw, list) else []:
+        try:
+            n = np.array(c["normal"], float)
+            offset = float(c["offset"])
+            tangents = [np.array(t, float) for t in c.get("tangents", [])][:2]
+            name, frame = c["name"], c["frame"]
+        except (TypeError, ValueError, KeyError, AttributeError):
+            continue
+        if not (isinstance(name, str) and isinstance(frame, str) and n.shape == (3,) and np.all(np.isfinite(n))
+                and np.isfinite(offset) and abs(np.linalg.norm(n) - 1) < 1e-6
+                and all(t.shape == (3,) and np.all(np.isfinite(t)) for t in tangents)):
+            continue
+        out.append({"name": name, "frame": frame, "normal": n, "offset": offset, "tangents": tangents})
+    return out
+
+
+def ground_planes(run: Run) -> list:
+    """[{'normal', 'offset'}]: the distinct planes normal . p + offset = 0 of the run's contacts (the run file's
+    display record: andyc.spec.display.contact_planes; none in a run file older than it), to 6 digits: a
+    quadruped's four feet on one ground are one plane."""
+    planes = {}
+    for c in plane_contacts(run):
+        key = tuple(round(float(x), 6) + 0.0 for x in c["normal"]) + (round(float(c["offset"]), 6) + 0.0,)
+        planes.setdefault(key, {"normal": list(key[:3]), "offset": key[3]})
+    return list(planes.values())
 
 
 def _shapes(run: Run) -> tuple[list, list, list]:
     """(shapes, meshes, missing): the run's shapes on the frames it logged (and 'world'), each mesh as an
     index into `meshes` [{'format', 'base64'}] (its file's bytes, from the run file or the file), and
     what is not drawn and why."""
-    shapes, meshes, index, missing = [], [], {}, []
+    # A mesh is stored once per distinct content (its format and bytes), not per file nor per shape: a robot's
+    # left and right legs, or two copies of one file, share one entry in the page.
+    shapes, meshes, index, missing, by_content = [], [], {}, [], {}
     for shape in run.display.get("shapes", []):
         if shape["frame"] != "world" and shape["frame"] not in run.frames:
             missing.append(f"a {shape['kind']} on frame '{shape['frame']}', which the run did not log")
@@ -126,8 +197,11 @@ def _shapes(run: Run) -> tuple[list, list, list]:
                 if data is None:
                     missing.append(f"the mesh {file} (in neither the run file nor on disk)")
                     continue
-                index[file] = len(meshes)
-                meshes.append({"format": shape["format"], "base64": base64.b64encode(data).decode("ascii")})
+                key = (shape["format"], hashlib.sha256(data).hexdigest())
+                if key not in by_content:
+                    by_content[key] = len(meshes)
+                    meshes.append({"format": shape["format"], "base64": base64.b64encode(data).decode("ascii")})
+                index[file] = by_content[key]
             shape["mesh"] = index[file]
         shapes.append(shape)
     return shapes, meshes, missing

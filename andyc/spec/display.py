@@ -10,6 +10,12 @@ the generated module (DISPLAY, in METADATA) and from there into every run file, 
 - 'ground': {'axis': k, 'height': h} when a constraint row or a jump guard holds a frame at world axis k
   = h (a foot on the ground: `foot.y`, `ball.y - r`; or the coordinate that is that frame's height, as a
   bouncing ball's `y`), with gravity pulling along -k; else None. The plots shade the ground only then.
+- 'contacts': [{'name', 'frame', 'normal', 'offset', 'tangents'}] for each contact whose gap is a plane: linear,
+  with numbers (at the parameters' defaults) for coefficients, in the world position of one frame's origin:
+  gap = normal . p + offset (normal a unit vector). The plane normal . p + offset = 0 is where that origin
+  touches (a sphere's centre: the ground lifted by its radius); 'tangents' the friction's directions, from its
+  slip speeds' velocity terms (none without friction). `andyc view` draws the ground and the force arrows
+  from them. A gap between two frames (Newton's cradle) or of a joint (a URDF limit) is not a plane: left out.
 - 'shapes': what `andyc view` draws on the frames: the YAML's `shape:` keys, then the URDF's visuals
   (andyc.spec.shapes), sizes in numbers, mesh files by their absolute path.
 """
@@ -25,7 +31,8 @@ from andyc.spec.shapes import urdf_shapes
 def display(spec) -> dict:
     """{'units': {state: unit}, 'ground': {'axis', 'height'} | None, 'shapes': [shape]}; see the module's
     docstring."""
-    return {"units": units(spec), "ground": ground(spec), "shapes": spec.shapes + urdf_shapes(spec.visuals)}
+    return {"units": units(spec), "ground": ground(spec), "contacts": contact_planes(spec),
+            "shapes": spec.shapes + urdf_shapes(spec.visuals)}
 
 
 def units(spec) -> dict:
@@ -95,3 +102,54 @@ def _translated_heights(spec) -> list:
             if name != "world" and r[axis].free_symbols & {c.q for c in spec.coordinates}:
                 out.append((r[axis], axis))
     return out
+
+
+def contact_planes(spec) -> list:
+    """The contacts whose gap is a plane (see the module's docstring)."""
+    values = {symbol: value for symbol, value in spec.parameters.values()}
+    rows = {c.name: c for c in spec.constraints}
+    out = []
+    for contact in spec.contacts:
+        gap = rows.get(contact.constraint)
+        found = _linear(gap.rows[0], gap.quantities, "position", values) if gap is not None else None
+        if found is None:
+            continue
+        frame, a, b = found
+        norm = sum(x * x for x in a) ** 0.5
+        if not norm > 0:
+            continue
+        tangents = []
+        stick = rows.get(contact.stick) if contact.stick else None
+        for row in (stick.rows if stick is not None else ()):
+            slip = _linear(row, stick.quantities, "velocity", values, frame)
+            if slip is not None and sum(x * x for x in slip[1]) > 0:
+                t = slip[1]
+                tangents.append([x / sum(y * y for y in t) ** 0.5 for x in t])
+        out.append({"name": contact.name, "frame": frame, "normal": [x / norm for x in a], "offset": b / norm,
+                    "tangents": tangents})
+    return out
+
+
+def _linear(expr, quantities: dict, kind: str, values: dict, frame: str | None = None):
+    """(frame, [a_x, a_y, a_z], b) when `expr` at the parameters' defaults is a . r + b, r the world `kind`
+    (position, velocity) of one frame's origin (`frame` if given) and a, b numbers; other frame quantities of
+    that frame (a slip's angular-velocity terms, a sphere's rolling) count as 0; else None."""
+    ours = {sym: q for sym, q in quantities.items() if q.kind == kind and q.in_frame == "world"}
+    frames = {q.frame for q in ours.values()}
+    if len(frames) != 1 or (frame is not None and frames != {frame}):
+        return None
+    (name,) = frames
+    others = {sym: 0 for sym, q in quantities.items() if sym not in ours and q.frame == name}
+    e = sp.expand(sp.sympify(expr).subs(values).subs(others))
+    a = [0.0, 0.0, 0.0]
+    rest = e
+    for sym, q in ours.items():
+        coefficient = sp.diff(e, sym)
+        if coefficient.free_symbols:
+            return None
+        a[q.axis] += float(coefficient)
+        rest -= coefficient * sym
+    rest = sp.simplify(rest)
+    if rest.free_symbols:
+        return None
+    return name, a, float(rest)
