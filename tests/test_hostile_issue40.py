@@ -23,7 +23,7 @@ import pytest
 import andyc
 from tests.support import MODELS
 from tests.support.cli import HANG, andyc_cli, invoke
-from tests.support.processes import STARTED, wait_for
+from tests.support.processes import STARTED, default_signals, wait_for
 from tests.support.diagnostics import LINE_FORMAT, line_of
 
 PENDULUM = (MODELS / "double_pendulum.yaml").read_text()
@@ -677,7 +677,7 @@ def test_ctrl_c_stops_a_sweep_with_one_line_and_no_worker_tracebacks(tmp_path, s
     proc = subprocess.Popen([sys.executable, "-m", "andyc.cli", "sweep", str(MODELS / "double_pendulum.yaml"),
                              "--grid", "m1=1:2:400", "--t-end", "200", "--batch", "1", "--workers", "2", "--build-dir",
                              str(shipped_build), "-o", str(tmp_path / "s.zarr")], start_new_session=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
     deadline = time.monotonic() + HANG
     while len(_workers_of(proc.pid)) < 2:
         assert proc.poll() is None, proc.communicate()

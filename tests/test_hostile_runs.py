@@ -19,7 +19,7 @@ import andyc
 from andyc.runtime.run import Run, read_h5
 from andyc.runtime.status import diverging_constraints
 from tests.support import MODELS
-from tests.support.processes import STARTED, wait_for
+from tests.support.processes import STARTED, default_signals, wait_for
 
 HANG = 300          # seconds after which a command counts as hung (a hang detector, not a speed bound)
 
@@ -35,7 +35,7 @@ def control(t, x, d, p):
 
 def start(args, cwd):
     return subprocess.Popen([sys.executable, "-m", "andyc.cli", *map(str, args)], cwd=cwd, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
 
 
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143), (signal.SIGHUP, 129)])

@@ -1,6 +1,7 @@
 """Runs started as child processes that a test then signals: a controller that says when the run is under way,
 and the wait for it."""
 
+import signal
 import time
 from pathlib import Path
 
@@ -23,3 +24,11 @@ def wait_for(path: Path, proc) -> None:
         assert proc.poll() is None, proc.communicate()
         assert time.monotonic() < deadline, "the run did not start"
         time.sleep(0.05)
+
+
+def default_signals() -> None:
+    """A child's preexec_fn: SIGINT and SIGHUP at their defaults. A test suite started in the background or under
+    nohup passes them on ignored, and andyc keeps a signal it was started ignoring ignored (as nohup asks): the
+    child would then never see the signal the test sends."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
