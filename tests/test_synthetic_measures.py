@@ -29,3 +29,15 @@ def test_mean_of_a_skewed_series_is_its_mean_not_its_median():
     series = {"x": np.array([0.0, 0.0, 0.0, 0.0, 10.0])}
     assert _run_function("mean", (x,), series, run) == 2.0
     assert _run_function("max", (x,), series, run) == 10.0
+
+
+def test_stability_flags_a_run_that_missed_an_event():
+    # A ball dropped from 1.25 m under g = 10 bounces at t = 0.5 s (sqrt(2 h / g)); a step that skipped the
+    # bounce may still end near the reference state (here exactly on it), so only the jump count tells.
+    from andyc.analysis.stability import ACCURATE, FAILED, classify
+
+    ref = SimpleNamespace(jumps=1, scale=1.25)
+    common = dict(finished=True, status="finished", growth=1.0, residual=0.0, error=0.0)
+    missed = classify(SimpleNamespace(jumps=0, **common), ref)
+    assert missed.verdict == FAILED and "missed an event" in missed.reason
+    assert classify(SimpleNamespace(jumps=1, **common), ref).verdict == ACCURATE
