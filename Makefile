@@ -6,7 +6,7 @@ ANDYC := $(VENV)/bin/andyc
 STAMP := $(VENV)/.andyc-installed
 DEMO := double_pendulum
 
-.PHONY: demo test bench clean
+.PHONY: demo test bench mutation clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || python3 -m venv $(VENV)
@@ -36,5 +36,14 @@ bench: $(STAMP)
 	$(PY) bench/go1.py
 	$(PY) bench/view_page.py
 
+# Mutation testing of the core (docs/mutation.md): slow, not in CI nor in `make test`. MUTANTS narrows the
+# run to mutant names (globs of module.function), e.g. make mutation MUTANTS='andyc.analysis.sweeps.metrics*'.
+mutation: $(STAMP)
+	$(PY) -m pip install --quiet --disable-pip-version-check -e '.[test,mutation]'
+	$(VENV)/bin/mutmut run $(MUTANTS)
+	mkdir -p build
+	$(VENV)/bin/mutmut results --all true > build/mutation-results.txt
+	@echo "surviving and killed mutants: build/mutation-results.txt"
+
 clean:
-	rm -rf build runs .pytest_cache
+	rm -rf build runs .pytest_cache mutants

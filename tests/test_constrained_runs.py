@@ -1,4 +1,4 @@
-"""Constrained integration (REFERENCE-CASES sections 3 and 4; issue 4).
+"""Constrained integration (docs/reference-cases.md §3 and 4; issue 4).
 
 - Ball in a bowl, 100 s at 1e-2 s: the projection method holds the holonomic
   and nonholonomic rows at round-off, its energy correction holds the energy,
@@ -97,7 +97,7 @@ def test_ball_normal_force_multiplier(ball_runs):
 
 
 def test_ball_runs_are_logged_side_by_side(ball_runs, tmp_path):
-    """Residuals and multipliers land in the HDF5 layout of DESIGN.md, one file per method."""
+    """Residuals and multipliers land in the HDF5 layout of docs/design.md, one file per method."""
     model, runs = ball_runs
     for key, run in runs.items():
         back = read_h5(run.save(tmp_path / f"ball_{key}.h5"))

@@ -1,5 +1,5 @@
 """andyc cycle --continue (andyc.analysis.continuation): pseudo-arclength continuation of periodic orbits, issue 22
-item 5. The rimless wheel's branch over the slope against its closed forms (REFERENCE-CASES §7); the compass
+item 5. The rimless wheel's branch over the slope against its closed forms (docs/reference-cases.md §7); the compass
 gait's first period doubling over the slope (its step-to-step map, models/compass_gait_step.yaml): a multiplier
 -1 there, checked against central differences of compass_gait.yaml's one-step map (another formulation, no
 continuation), and direct simulations on either side that settle onto period 1 and onto the period-2 branch
@@ -24,7 +24,7 @@ ALPHA = 0.3               # the shipped wheel's half-angle between spokes
 
 
 def wheel_speed(gamma):
-    """omega*(gamma) of REFERENCE-CASES §7 (g = l = 1): omega*^2 = 4 sin(alpha) sin(gamma) cot^2(2 alpha)."""
+    """omega*(gamma) of docs/reference-cases.md §7 (g = l = 1): omega*^2 = 4 sin(alpha) sin(gamma) cot^2(2 alpha)."""
     return math.sqrt(4 * math.sin(ALPHA) * math.sin(gamma)) / math.tan(2 * ALPHA)
 
 

@@ -1,5 +1,5 @@
 """andyc cycle (andyc.analysis.cycles): Newton's method on a jump's Poincaré map with exact Jacobians, issue 22
-items 2, 3 and 4. The rimless wheel against its closed forms (REFERENCE-CASES §7) to 1e-12; the compass gait
+items 2, 3 and 4. The rimless wheel against its closed forms (docs/reference-cases.md §7) to 1e-12; the compass gait
 against §8 and against central differences of its one-step map (the legs swapped, as the step-to-step map of
 §8 is written): the two-step orbit's multipliers are the squares of that map's eigenvalues. The passive walker
 with knees (item 4): its stride's fixed point and the rate at which runs from a perturbed one approach it."""

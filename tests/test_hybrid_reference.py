@@ -1,4 +1,4 @@
-"""Hybrid models against closed forms and published numbers (REFERENCE-CASES §6-8).
+"""Hybrid models against closed forms and published numbers (docs/reference-cases.md §6-8).
 
 The step maps of the walkers are computed from simulated steps: a run from
 a state just after an impact, stopped right after the next one (stop_after).
@@ -72,7 +72,7 @@ def wheel_step(model, w, method):
 def test_rimless_wheel_fixed_point_and_eigenvalue(compiled, method):
     model = compiled("rimless_wheel")
     w_star = math.sqrt(4 * G / G * math.sin(ALPHA) * math.sin(GAMMA) / math.tan(2 * ALPHA) ** 2)
-    assert w_star == pytest.approx(0.317799, abs=5e-7)          # REFERENCE-CASES §7 (g = l = 1)
+    assert w_star == pytest.approx(0.317799, abs=5e-7)          # docs/reference-cases.md §7 (g = l = 1)
     w, h = 0.5, 1e-5
     for _ in range(8):
         f = wheel_step(model, w, method) - w

@@ -1,4 +1,4 @@
-"""The passive walker with knees (ANDY §3.2; REFERENCE-CASES §2), models/passive_walker.yaml.
+"""The passive walker with knees (ANDY §3.2; docs/reference-cases.md §2), models/passive_walker.yaml.
 
 It walks from the reference's initial state, its heel-strike states converge
 to the reference's gait, and every knee strike and heel strike loses the
@@ -14,7 +14,7 @@ import andyc
 
 L1, L2 = 0.5, 0.5
 SQRT_G = math.sqrt(9.81)
-# the active constraint rows of each flow (REFERENCE-CASES §2), columns in the model's order
+# the active constraint rows of each flow (docs/reference-cases.md §2), columns in the model's order
 ROWS = ["iKnee", "oKnee", "iFootX", "iFootY", "oFootX", "oFootY"]
 ACTIVE = {"IFixOOpen": {"iKnee", "iFootX", "iFootY"},
           "IFixOLock": {"oKnee", "iKnee", "iFootX", "iFootY"},
@@ -128,7 +128,7 @@ def test_heel_strike_states_converge_to_a_period_one_gait(walker):
 
 
 def constraint_jacobian(q, rows):
-    """d(rows)/dq, written out from the foot formula of REFERENCE-CASES §2."""
+    """d(rows)/dq, written out from the foot formula of docs/reference-cases.md §2."""
     qx, qy, qi1, qi2, qo1, qo2 = q
     J = {"iKnee": [0, 0, 1, -1, 0, 0], "oKnee": [0, 0, 0, 0, 1, -1],
          "iFootX": [1, 0, L1 * math.cos(qi1), L2 * math.cos(qi2), 0, 0],

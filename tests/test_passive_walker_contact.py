@@ -49,7 +49,7 @@ def run(walker):
 
 
 def foot_heights(x):
-    """(inner, outer) foot height above the slope, from the foot formula (REFERENCE-CASES §2)."""
+    """(inner, outer) foot height above the slope, from the foot formula (docs/reference-cases.md §2)."""
     qx, qy, qi1, qi2, qo1, qo2 = x[:6]
     return qy - L1 * math.cos(qi1) - L2 * math.cos(qi2), qy - L1 * math.cos(qo1) - L2 * math.cos(qo2)
 

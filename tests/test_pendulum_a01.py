@@ -1,4 +1,4 @@
-"""IFToMM A01 (REFERENCE-CASES §5): a long-horizon pendulum against its closed form.
+"""IFToMM A01 (docs/reference-cases.md §5): a long-horizon pendulum against its closed form.
 
 Exact solution, with phi the angle from the downward vertical and
 k = sin(phi0 / 2): sin(phi / 2) = k sn(K - w0 t, k), w0 = sqrt(g / L), where
@@ -13,7 +13,7 @@ from scipy.special import ellipj, ellipk
 import andyc
 
 G, L = 9.81, 1.0
-PUBLISHED = {  # REFERENCE-CASES §5, six decimals
+PUBLISHED = {  # docs/reference-cases.md §5, six decimals
     0.5: (-0.391049, -0.920370),
     10.0: (-0.275087, -0.961419),
     100.0: (-0.181513, -0.983388),

@@ -126,7 +126,7 @@ def test_metrics_against_the_run_and_the_closed_form_impact_times(ball):
         "mid": "at(0.3, y)", "e_end": "energy", "drop": "max(energy) - min(energy)", "fell": "min(y) < -0.01",
         "both": "max(min(y), 0.5) * 2", "speed": "y_dot", "h": "h0 + 1"}.items()}
     assert value["first"] == pytest.approx(t1, abs=1e-6)
-    assert value["second"] == pytest.approx(t1 + 2 * e * t1, abs=1e-6)         # REFERENCE-CASES §6
+    assert value["second"] == pytest.approx(t1 + 2 * e * t1, abs=1e-6)         # docs/reference-cases.md §6
     assert math.isnan(value["fifth"])
     assert value["bounces"] == value["all"] == len(run.events["time"]) == np.count_nonzero(run.events["time"] <= 2.0)
     assert value["top"] == run.column("y").max() and value["low"] == run.frames["ball"][:, 1].min()

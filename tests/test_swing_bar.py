@@ -1,4 +1,4 @@
-"""The swing bar of the ANDY paper (REFERENCE-CASES section 1): a ball joint on a
+"""The swing bar of the ANDY paper (docs/reference-cases.md §1): a ball joint on a
 quaternion signal, driven by three body-frame angular-velocity speeds.
 
 Checks that do not depend on the paper's figures:

@@ -1,4 +1,4 @@
-"""URDF robots against Pinocchio (REFERENCE-CASES.md §9).
+"""URDF robots against Pinocchio (docs/reference-cases.md §9).
 
 For URDFs that ship inside the PyPI package example-robot-data (real robots
 nobody here wrote), andyc's M(q), bias force and forward dynamics must equal

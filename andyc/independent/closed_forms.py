@@ -1,4 +1,4 @@
-"""Closed forms for the constrained reference models (REFERENCE-CASES sections 3, and the four-bar).
+"""Closed forms for the constrained reference models (docs/reference-cases.md §3, and the four-bar).
 
 Written from the mechanics, not from andyc's derivation, so tests and
 benchmarks can hold andyc's runs against them.

@@ -1,4 +1,4 @@
-"""A finished (or stopped) run, and its HDF5 and CSV files (DESIGN.md layout)."""
+"""A finished (or stopped) run, and its HDF5 and CSV files (docs/design.md, the run layout)."""
 
 from __future__ import annotations
 

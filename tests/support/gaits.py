@@ -1,4 +1,4 @@
-"""The compass gait's one-step map by plain simulation of models/compass_gait.yaml (REFERENCE-CASES §8), which
+"""The compass gait's one-step map by plain simulation of models/compass_gait.yaml (docs/reference-cases.md §8), which
 tests/test_cycles.py and tests/test_continuation.py difference independently of andyc cycle."""
 
 import math
