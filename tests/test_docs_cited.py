@@ -30,7 +30,8 @@ def test_no_citation_of_the_old_names_outside_the_repository():
     # REFERENCE-CASES and DESIGN.md were documents next to the repository, not in it
     old = re.compile(r"REFERENCE-CASES|DESIGN\.md")
     sources = [s for folder in ("tests", "andyc") for s in sorted((ROOT / folder).rglob("*.py"))]
-    sources += [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+    sources += [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md")), *sorted((ROOT / "models").rglob("*.yaml")),
+                *sorted((ROOT / "bench").rglob("*.py"))]
     found = [f"{source}:{number}" for source in sources if source.name != "test_docs_cited.py"
              for number, line in enumerate(source.read_text(encoding="utf-8").splitlines(), 1) if old.search(line)]
     assert not found, found
