@@ -202,3 +202,37 @@ def test_cli_prints_the_null_space_bases_of_a_constrained_flow(tmp_path):
     assert "null-space form, dq = N_q z, dv = N_v w" in result.output
     saved = np.load(tmp_path / "fourbar_linearization.npz")
     assert str(saved["form"]) == "null-space" and saved["N_q"].shape == (3, 1)
+
+
+SLOPED_LINE = """\
+name: puck_on_a_line
+parameters: {m: 2.0}
+inputs:
+  F: 0
+coordinates:
+  x: {}
+  y: {}
+frames:
+  - {name: slide_x, parent: world, prismatic: x, axis: x}
+  - {name: puck, parent: slide_x, prismatic: y, axis: y}
+bodies:
+  - {name: puck_mass, frame: puck, mass: m}
+forces:
+  - {name: push, frame: puck, vector: [F, 0, 0]}
+constraints:
+  - {name: on_line, holonomic: x - y}
+"""
+
+
+def test_a_constrained_flows_B_is_the_force_projected_on_the_line(tmp_path):
+    """A puck of mass m held on the line x = y, pushed along x by F: along the line's unit direction b (the
+    null-space basis, b = +-(1, 1)/sqrt 2) the speed w = b . v obeys m w' = b . (F, 0), by hand; so
+    B = [0, b_x / m] and A has only the kinematic 1."""
+    (tmp_path / "puck.yaml").write_text(SLOPED_LINE)
+    model = andyc.derive(andyc.load(tmp_path / "puck.yaml"))
+    x, u, p, d = default_point(model)
+    lin = linearize(model, x, u, p, d)
+    b = lin.basis_v[:, 0]
+    assert lin.form == "null-space" and abs(abs(b[0]) - 1 / np.sqrt(2)) < 1e-14 and abs(b[0] - b[1]) < 1e-14
+    np.testing.assert_allclose(lin.B[:, 0], [0.0, b[0] / 2.0], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(lin.A, [[0.0, 1.0], [0.0, 0.0]], atol=1e-14)
