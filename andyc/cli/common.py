@@ -104,3 +104,17 @@ def report_jumps_file(result) -> None:
         click.echo(f"{result.jumps_path}: warning: no function for jump '{name}' (added to the model since the file "
                    f"was written): it gets no extra resets; add `def {name}(t, x, u, p, d)` with @njit, or delete "
                    f"the file to regenerate it", err=True)
+
+
+def read_run_argument(run_file):
+    """The run in RUN_FILE (plot, view), or a usage error naming it: a damaged file, or a run with no samples."""
+    from andyc.runtime.run import RunFileError, read_run_file
+
+    try:
+        run = read_run_file(run_file)
+    except RunFileError as exc:
+        raise click.BadParameter(str(exc), param_hint="RUN_FILE") from None
+    if not len(run.time):
+        raise click.BadParameter(f"{run_file}: the run of {run.model} holds no samples (its status: {run.status})",
+                                 param_hint="RUN_FILE")
+    return run

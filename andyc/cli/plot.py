@@ -8,6 +8,7 @@ import math
 
 import click
 
+from andyc.cli.common import read_run_argument
 from andyc.outputs import check_output
 
 
@@ -40,7 +41,6 @@ def plot(run_file, out, animate, fps, frames_max, signals, window, metric):
     map of a metric over its two swept names, or a line over one."""
     from andyc.plot.select import select_signals
     from andyc.plot.select import window as time_window
-    from andyc.runtime.run import RunFileError, read_run_file
 
     if Path(run_file).is_dir():             # a sweep's result store (andyc sweep)
         from andyc.cli.sweep import plot_store
@@ -71,13 +71,7 @@ def plot(run_file, out, animate, fps, frames_max, signals, window, metric):
         check_image_type(out)
     if not animate and not patterns:
         check_output(sticks_path(out), [run_file], "plot")
-    try:
-        run = read_run_file(run_file)
-    except RunFileError as exc:
-        raise click.BadParameter(str(exc), param_hint="RUN_FILE") from None
-    if not len(run.time):
-        raise click.BadParameter(f"{run_file}: the run of {run.model} holds no samples (its status: {run.status})",
-                                 param_hint="RUN_FILE")
+    run = read_run_argument(run_file)
     try:
         if window is not None:
             run = time_window(run, t0, t1)

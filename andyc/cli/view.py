@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from andyc.cli.common import Refused
+from andyc.cli.common import Refused, read_run_argument
 from andyc.outputs import check_output
 
 
@@ -29,7 +29,6 @@ def view(run_file, out, fps, max_samples, follow, trails):
     URDF's visuals and meshes) moved by the logged frames, sticks for the frames without one. Needs the
     meshcat package (andyc[view]), whose three.js viewer is inlined into the page."""
     from andyc.plot.view import meshcat_bundle, write_view
-    from andyc.runtime.run import RunFileError, read_run_file
 
     if Path(run_file).suffix.lower() not in (".h5", ".hdf5"):
         raise click.BadParameter(f"{run_file}: andyc view reads the HDF5 run file (.h5) that andyc sim writes",
@@ -42,13 +41,7 @@ def view(run_file, out, fps, max_samples, follow, trails):
     except ImportError as exc:
         raise Refused(str(exc)) from None
     check_output(out, [run_file], "page")
-    try:
-        run = read_run_file(run_file)
-    except RunFileError as exc:
-        raise click.BadParameter(str(exc), param_hint="RUN_FILE") from None
-    if not len(run.time):
-        raise click.BadParameter(f"{run_file}: the run of {run.model} holds no samples (its status: {run.status})",
-                                 param_hint="RUN_FILE")
+    run = read_run_argument(run_file)
     if not run.frames:
         raise click.BadParameter(f"{run_file}: this run of {run.model} logged no frames to view; re-run it with "
                                  f"`andyc sim MODEL.yaml --frames all --out {run_file}`", param_hint="RUN_FILE")
