@@ -43,6 +43,21 @@ def compiled(build_dir, shipped_build):
 
 
 @pytest.fixture(scope="session")
+def compiled_text(tmp_path_factory, compiled):
+    """compiled_text(name, text) -> CompiledModel of the model file `text` (a test's own small model), written as
+    name.yaml and built once per session into the session's build folder."""
+    folder = tmp_path_factory.mktemp("models")
+
+    def get(name, text):
+        path = folder / f"{name}.yaml"
+        if not path.exists():
+            path.write_text(text)
+        return compiled(path)
+
+    return get
+
+
+@pytest.fixture(scope="session")
 def panda_arm(shipped_build):
     """example-robot-data's panda with its fingers locked (as tests/test_reduce.py reads it), compiled into the
     shipped models' build folder: its build is reused by meaning across runs (a fresh build takes a minute)."""

@@ -31,10 +31,8 @@ constraints:
 
 
 @pytest.fixture(scope="module")
-def plane(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("baumgarte")
-    (folder / "baumgarte_plane.yaml").write_text(PLANE)
-    return andyc.compile_model(folder / "baumgarte_plane.yaml", folder / "build")[0]
+def plane(compiled_text):
+    return compiled_text("baumgarte_plane", PLANE)
 
 
 def test_an_offset_row_decays_as_the_damped_oscillator_of_its_gains(plane):

@@ -35,10 +35,8 @@ M, C, H = 2.0, 3.0, 1e-3
 
 
 @pytest.fixture(scope="module")
-def block(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("pushed")
-    (folder / "pushed_block.yaml").write_text(BLOCK)
-    return andyc.compile_model(folder / "pushed_block.yaml", folder / "build")[0]
+def block(compiled_text):
+    return compiled_text("pushed_block", BLOCK)
 
 
 @pytest.mark.parametrize("theta", [0.5, 1.0])

@@ -26,10 +26,8 @@ forces:
 
 
 @pytest.fixture(scope="module")
-def ramp(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("ramp")
-    (folder / "ramp_cart.yaml").write_text(RAMP)
-    return andyc.compile_model(folder / "ramp_cart.yaml", folder / "build")[0]
+def ramp(compiled_text):
+    return compiled_text("ramp_cart", RAMP)
 
 
 def test_rk4_integrates_a_force_ramp_in_t_exactly(ramp):
