@@ -29,11 +29,21 @@ def cholesky_solve(K, y, n):
     """y[:n] <- K^-1 y for K[:n, :n] symmetric positive definite (its lower triangle read), by Cholesky in place
     (K's lower triangle <- L, K = L L^T); False where a pivot is not above CHOLESKY_EPS times its diagonal entry:
     K singular or near it (dependent rows: the least squares of qr_factor decide), y then undefined."""
+    if not _cholesky(K, n, CHOLESKY_EPS):
+        return False
+    _llt_solve(K, y, n)
+    return True
+
+
+@jit(inline="always")
+def _cholesky(K, n, eps):
+    """K[:n, :n]'s lower triangle <- L, K = L L^T (its lower triangle read); False where a pivot is not above eps
+    times its diagonal entry."""
     for j in range(n):
         d = K[j, j]
         for k in range(j):
             d -= K[j, k] * K[j, k]
-        if not d > CHOLESKY_EPS * K[j, j]:
+        if not d > eps * K[j, j]:
             return False
         ljj = math.sqrt(d)
         K[j, j] = ljj
@@ -42,17 +52,22 @@ def cholesky_solve(K, y, n):
             for k in range(j):
                 s -= K[i, k] * K[j, k]
             K[i, j] = s / ljj
+    return True
+
+
+@jit(inline="always")
+def _llt_solve(L, y, n):
+    """y[:n] <- (L L^T)^-1 y, L lower triangular in L[:n, :n]."""
     for i in range(n):                      # L z = y
         s = y[i]
         for k in range(i):
-            s -= K[i, k] * y[k]
-        y[i] = s / K[i, i]
+            s -= L[i, k] * y[k]
+        y[i] = s / L[i, i]
     for i in range(n - 1, -1, -1):          # L^T y = z
         s = y[i]
         for k in range(i + 1, n):
-            s -= K[k, i] * y[k]
-        y[i] = s / K[i, i]
-    return True
+            s -= L[k, i] * y[k]
+        y[i] = s / L[i, i]
 
 
 @jit
@@ -96,16 +111,7 @@ def psd_least_norm(K, y, n, perm, t, u, G):
     for i in range(n):                      # t = Pi y
         t[i] = y[int(perm[i])]
     if r == n:
-        for i in range(n):                  # L L^T x = t
-            s = t[i]
-            for k in range(i):
-                s -= K[i, k] * t[k]
-            t[i] = s / K[i, i]
-        for i in range(n - 1, -1, -1):
-            s = t[i]
-            for k in range(i + 1, n):
-                s -= K[k, i] * t[k]
-            t[i] = s / K[i, i]
+        _llt_solve(K, t, n)                 # L L^T x = t
     else:
         for a in range(r):                  # u = L^T t, G = L^T L (its lower triangle)
             s = 0.0
@@ -117,29 +123,10 @@ def psd_least_norm(K, y, n, perm, t, u, G):
                 for i in range(a, n):
                     s += K[i, a] * K[i, c]
                 G[a, c] = s
-        for j in range(r):                  # G = R R^T, then u <- G^-1 G^-1 u
-            d = G[j, j]
-            for k in range(j):
-                d -= G[j, k] * G[j, k]
-            if not d > 0.0:
-                return False
-            G[j, j] = math.sqrt(d)
-            for i in range(j + 1, r):
-                s = G[i, j]
-                for k in range(j):
-                    s -= G[i, k] * G[j, k]
-                G[i, j] = s / G[j, j]
-        for _ in range(2):
-            for i in range(r):
-                s = u[i]
-                for k in range(i):
-                    s -= G[i, k] * u[k]
-                u[i] = s / G[i, i]
-            for i in range(r - 1, -1, -1):
-                s = u[i]
-                for k in range(i + 1, r):
-                    s -= G[k, i] * u[k]
-                u[i] = s / G[i, i]
+        if not _cholesky(G, r, 0.0):        # G = R R^T, then u <- G^-1 G^-1 u
+            return False
+        _llt_solve(G, u, r)
+        _llt_solve(G, u, r)
         for i in range(n):                  # t = L u
             s = 0.0
             for k in range(min(i + 1, r)):
