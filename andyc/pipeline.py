@@ -18,7 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from andyc.codegen.buildfiles import (BuildResult, build_key, equations_path, jumps_path, library_present, module_name,
-                                     module_path, numerics_package, numerics_path, written_constant)
+                                     module_path, numerics_package, numerics_path, recorded_back,
+                                     written_constant)
 from andyc.errors import Diagnostic, SpecError, plural
 from andyc.outputs import OutputError
 from andyc.spec.yamlpos import MAX_YAML_BYTES
@@ -43,11 +44,13 @@ def unchanged(path, out_dir="build") -> BuildResult | None:
         name = found.group(1).decode()
         front = module_path(out_dir, name)
         files, key = written_constant(front, "SPEC_FILES"), written_constant(front, "BUILD_KEY")
-        if (written_constant(front, "SOURCE_PATH") != str(path.resolve()) or not isinstance(files, list)
-                or not isinstance(key, str) or written_constant(equations_path(out_dir, name), "BUILD_KEY") != key
+        source = written_constant(front, "SOURCE_PATH")
+        if (not isinstance(source, str) or recorded_back(source, front.parent) != path.resolve()
+                or not isinstance(files, list) or not isinstance(key, str)
+                or written_constant(equations_path(out_dir, name), "BUILD_KEY") != key
                 or build_key(str(written_constant(front, "MEANING_SHA256"))) != key):
             return None
-        digest = hashlib.sha256(b"".join(Path(f).read_bytes() for f in files)).hexdigest()
+        digest = hashlib.sha256(b"".join(recorded_back(f, front.parent).read_bytes() for f in files)).hexdigest()
     except (OSError, TypeError):
         return None
     jumps = jumps_path(out_dir, name) if written_constant(front, "JUMPS_FILE") else None
@@ -110,7 +113,8 @@ def build(path, out_dir="build", force: bool = False) -> BuildResult:
     key = build_key(spec.meaning_sha256)
     target = module_path(out_dir, spec.name)
     other = written_constant(target, "SOURCE_PATH")
-    if not force and other is not None and other != str(Path(spec.file).resolve()):
+    other = recorded_back(other, target.parent) if isinstance(other, str) else None
+    if not force and other is not None and other != Path(spec.file).resolve():
         raise OutputError(f"{target.parent}: holds the build of '{spec.name}' from {other}, and {spec.file} has "
                           f"the same name; give one of them another `name:`, build it into another folder "
                           f"(--build-dir DIR), or pass --force to replace that build")

@@ -74,7 +74,7 @@ def generated(spec) -> dict:
     """Every file andyc generates from a model, by name: Python sources and the eom texts."""
     model = andyc.derive(spec)
     eq = equations(model)
-    return {"module.py": render_front(spec, "key"), "equations.py": render(model, "key")[0],
+    return {"module.py": render_front(spec, "key", "."), "equations.py": render(model, "key")[0],
             "jumps.py": render_jumps(model),
             "eom.py": equations_text(eq, "sympy"), "eom.json": equations_text(eq, "json"),
             "eom.tex": equations_text(eq, "latex", standalone=True)}

@@ -2,6 +2,9 @@
 initial values leave the compiled equations (and Numba's cache of them) untouched, and the new
 values are used; an edit of an equation rebuilds; two models of one name never share a build."""
 
+import os
+import shutil
+
 import numpy as np
 import pytest
 
@@ -95,7 +98,9 @@ def test_runtime_data_edits_reuse_the_build_and_an_equation_edit_rebuilds(tmp_pa
 
     # The same bytes again: the build is found without reading the model, and a warm `andyc sim`
     # imports neither SymPy nor SciPy (nor the schema's and templates' libraries).
-    assert written_constant(rebuilt.module_path, "SPEC_FILES") == [str(path.resolve())]
+    # The model's path is recorded relative to the build (no path of the machine that built it in the module).
+    files = written_constant(rebuilt.module_path, "SPEC_FILES")
+    assert files == [os.path.relpath(path.resolve(), rebuilt.module_path.parent.resolve())] and not files[0].startswith("/")
     assert unchanged(path, build).build_key == rebuilt.build_key
     script = ("import sys\nfrom andyc.cli import main\ntry:\n"
               f"    main(['sim', {str(path)!r}, '--build-dir', {str(build)!r}, '--t-end', '0.1', '--out', 'run.csv'])\n"
@@ -132,10 +137,10 @@ def test_two_models_of_one_name_never_share_a_build_folder(tmp_path):
                                           r"same name.*--force"):
         andyc.build(second, build)
     assert written_constant(equations_path(build, "cached_pendulum"), "BUILD_KEY") == key == result.build_key
-    assert written_constant(result.module_path, "SOURCE_PATH") == str(first.resolve())
+    assert written_constant(result.module_path, "SOURCE_PATH") == os.path.join("..", "..", "a.yaml")
     replaced = andyc.build(second, build, force=True)
     assert replaced.build_key != key
-    assert written_constant(result.module_path, "SOURCE_PATH") == str(second.resolve())
+    assert written_constant(result.module_path, "SOURCE_PATH") == os.path.join("..", "..", "b.yaml")
 
 
 @pytest.mark.parametrize("backend", ["c", "numba"])
@@ -201,3 +206,21 @@ def test_the_c_leaves_are_compiled_for_this_processor(tmp_path, monkeypatch):
     there = sorted(p.name for p in folder.glob("*.so"))
     assert len(there) == 2 and here[0] in there and any("othercpu-00000000" in name for name in there)
     assert build(path, tmp_path / "build").skipped
+
+
+def test_a_build_moved_with_its_model_is_still_its_build(tmp_path):
+    """The build records its model's path relative to itself: a project folder moved (or cloned elsewhere) with
+    its builds keeps them; the same build beside another model file of that name is not taken for its build."""
+    first = tmp_path / "one"
+    (first / "build").mkdir(parents=True)
+    (first / "m.yaml").write_text(PENDULUM)
+    built = andyc.build(first / "m.yaml", first / "build")
+    assert not built.skipped
+    moved = tmp_path / "two"
+    shutil.copytree(first, moved)
+    shutil.rmtree(first)
+    found = unchanged(moved / "m.yaml", moved / "build")
+    assert found is not None and found.build_key == built.build_key
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / "elsewhere" / "m.yaml").write_text(PENDULUM)
+    assert unchanged(tmp_path / "elsewhere" / "m.yaml", moved / "build") is None

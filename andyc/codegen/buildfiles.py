@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import ast
 import hashlib
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -91,6 +92,21 @@ def module_name(name: str, key: str) -> str:
 
 def equations_path(out_dir, name: str) -> Path:
     return Path(out_dir) / name / f"{name}_equations.py"
+
+
+def recorded_path(path, folder) -> str:
+    """How a build records the path of a file it was made from (SOURCE_PATH, SPEC_FILES): relative to the build's
+    folder, so that the generated module carries no path of the machine that built it and a build moved together
+    with its model still knows it; absolute only where no relative path exists (another drive)."""
+    try:
+        return os.path.relpath(Path(path).resolve(), Path(folder).resolve())
+    except ValueError:
+        return str(Path(path).resolve())
+
+
+def recorded_back(text: str, folder) -> Path:
+    """The absolute path of a file a build recorded (recorded_path) in `folder`."""
+    return Path(os.path.normpath(Path(folder).resolve() / text))
 
 
 def written_constant(path: Path, constant: str):

@@ -14,18 +14,18 @@ andyc.symbolic.sensitivities:
     reset_terms(k, t, x, u, p, d)      jump k's resets: the index in W of each target, its value, its gradient
     restitution_terms(k, t, x, u, p, d)   the restitution e of jump k's impact and de (NW,)
 
-and, from the template templates/derivatives.py.j2 (the same for every model), `rates` (f and df/dW in a
-flow), `rk4_tangent` (the RK4 step and its tangent), `project_tangent` (the projection method's corrections and
-their tangent) and `tangent_steps` (the steps of a stretch without jumps, in one call), which call flow_terms.
-Those and the terms above are compiled by Numba and cached beside the file (a function handed another as an argument is
-not cached by Numba, so the tangent step lives here, beside the model's flow_terms); the jump terms, called
-once per jump, stay Python. BUILD_KEY ties the file to the build's equations.
+and, bound to those by the template templates/derivatives.py.j2, the algorithms every model shares
+(andyc/numerics/tangents.py, from the build's copy of the numerics): `rates` (f and df/dW in a flow),
+`step_tangent` (the RK4 step, the projection's corrections, and their tangent) and `tangent_steps` (the steps of
+a stretch without jumps, in one call). Those and the terms above are compiled by Numba and cached beside the
+file (the shared algorithms take the model's functions as arguments and compile inside these); the jump terms,
+called once per jump, stay Python. BUILD_KEY ties the file to the build's equations.
 """
 
 from __future__ import annotations
 
 import andyc
-from andyc.codegen.buildfiles import equations_path, written_constant
+from andyc.codegen.buildfiles import equations_path, numerics_package, written_constant
 from andyc.codegen.generate import _environment
 from andyc.codegen.leaves import STATE, _code
 from andyc.codegen.printer import function_body
@@ -109,7 +109,8 @@ def render(model: SymbolicModel, key: str) -> str:
                   f"        return {[index[s] for s, _ in j.resets]!r}, r, dr"]
     lines += ["    return [], np.zeros(0), np.zeros((0, NW))"]
     return _environment().get_template("derivatives.py.j2").render(
-        version=andyc.__version__, name=model.spec.name, build_key=key, nw=nw, functions="\n".join(lines))
+        version=andyc.__version__, name=model.spec.name, build_key=key, nw=nw, functions="\n".join(lines),
+        numerics=numerics_package())
 
 
 def write_derivatives(model: SymbolicModel, out_dir, key: str) -> bool:

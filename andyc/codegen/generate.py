@@ -26,7 +26,7 @@ import andyc
 from andyc.errors import format_path
 from andyc.outputs import check_output, create_once, update_text, write_text
 from andyc.codegen.buildfiles import (PACKAGE, BuildResult, build_key, equations_path, jumps_path, module_name,
-                                     module_path, numerics_package, write_numerics)
+                                     module_path, numerics_package, recorded_path, write_numerics)
 from andyc.codegen import c_leaves
 from andyc.codegen.leaves import leaves, state_names
 from andyc.codegen.printer import to_code
@@ -165,7 +165,7 @@ def render(model: SymbolicModel, key: str, c: bool = False) -> tuple[str, dict, 
     return _environment().get_template("equations.py.j2").render(**context), found.operations, c_source
 
 
-def render_front(spec, key: str) -> str:
+def render_front(spec, key: str, folder) -> str:
     """The text of <name>.py: it loads <name>_equations.py (of the build `key`) and holds the model's
     runtime data, which the equations do not depend on (andyc.spec.meaning): the defaults, the initial
     values (as code: they are expressions of the parameters), the description and where each
@@ -178,8 +178,8 @@ def render_front(spec, key: str) -> str:
     states = state_names(spec)
     return _environment().get_template("module.py.j2").render(
         version=andyc.__version__, name=spec.name, build_key=key, module_name=module_name(spec.name, key),
-        numerics=numerics_package(), source=Path(spec.file).name, source_path=str(Path(spec.file).resolve()), spec_sha256=spec.sha256,
-        spec_files=[str(Path(f).resolve()) for f in spec.files], meaning_sha256=spec.meaning_sha256,
+        numerics=numerics_package(), source=Path(spec.file).name, source_path=recorded_path(spec.file, folder),
+        spec_sha256=spec.sha256, spec_files=[recorded_path(f, folder) for f in spec.files], meaning_sha256=spec.meaning_sha256,
         description=spec.description or "",
         coordinates=[c.name for c in spec.coordinates], speeds=spec.speed_names,
         signals=[s.name for s in spec.signals], constrained=bool(spec.constraints),
@@ -263,7 +263,7 @@ def write_front(spec, out_dir, key: str) -> bool:
     path = module_path(out_dir, spec.name)
     check_output(path, spec.files, "generated module")
     write_numerics(out_dir, spec.name)
-    return update_text(path, render_front(spec, key))
+    return update_text(path, render_front(spec, key, path.parent))
 
 
 def generate(model: SymbolicModel, out_dir="build", force: bool = False) -> BuildResult:

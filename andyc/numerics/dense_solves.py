@@ -29,14 +29,14 @@ def cholesky_solve(K, y, n):
     """y[:n] <- K^-1 y for K[:n, :n] symmetric positive definite (its lower triangle read), by Cholesky in place
     (K's lower triangle <- L, K = L L^T); False where a pivot is not above CHOLESKY_EPS times its diagonal entry:
     K singular or near it (dependent rows: the least squares of qr_factor decide), y then undefined."""
-    if not _cholesky(K, n, CHOLESKY_EPS):
+    if not cholesky_factor(K, n, CHOLESKY_EPS):
         return False
     _llt_solve(K, y, n)
     return True
 
 
 @jit(inline="always")
-def _cholesky(K, n, eps):
+def cholesky_factor(K, n, eps):
     """K[:n, :n]'s lower triangle <- L, K = L L^T (its lower triangle read); False where a pivot is not above eps
     times its diagonal entry."""
     for j in range(n):
@@ -123,7 +123,7 @@ def psd_least_norm(K, y, n, perm, t, u, G):
                 for i in range(a, n):
                     s += K[i, a] * K[i, c]
                 G[a, c] = s
-        if not _cholesky(G, r, 0.0):        # G = R R^T, then u <- G^-1 G^-1 u
+        if not cholesky_factor(G, r, 0.0):        # G = R R^T, then u <- G^-1 G^-1 u
             return False
         _llt_solve(G, u, r)
         _llt_solve(G, u, r)

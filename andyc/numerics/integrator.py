@@ -32,6 +32,7 @@ from .active import select_rows
 from .dynamics import (enabled_value, guard_value, in_mode, jump, multipliers, project, rhs_free_into, rhs_mode_into,
                        slip_direction)
 from .model import borrowed, call
+from . import rk4
 from .slipping import slip_unit
 from .status import (BAUMGARTE, DIVERGED, EITHER, FALLING, GROWTH_LIMIT, INPUT_FAILED, NONFINITE, OK, ON_CONE, ON_ZERO,
                      OPEN_SIDE, REST_SPEED, RISING, SLIP_STOP)
@@ -130,7 +131,7 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale, f
     powers (stage_powers), so the work is RK4's own quadrature of the power along the step's stages, and the
     augmented system's RK4 step is exactly this one (the motion does not depend on W).
 
-    Stage s evaluates at t + c_s h, x + c_s h k_(s-1), c = (0, 1/2, 1/2, 1). A step whose largest
+    Stage s evaluates at t + c_s h, x + a_s h k_(s-1), by the tableau of rk4.py. A step whose largest
     entry exceeds GROWTH_LIMIT times `scale` (the largest entry of the states so far, at least 1)
     is DIVERGED: motion that is followed at all never grows by orders of magnitude in one step; a
     diverging solution (a constraint turning singular, a step far past the method's stability
@@ -139,10 +140,10 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale, f
     """
     k, xt = w.k, w.xt
     nx = x.shape[0]
-    for s in range(4):
-        c = 0.0 if s == 0 else (1.0 if s == 3 else 0.5)
+    for s in range(rk4.STAGES):
+        c = rk4.C[s]
         for j in range(nx):
-            xt[j] = x[j] if s == 0 else x[j] + c * h * k[s - 1, j]
+            xt[j] = x[j] if s == 0 else x[j] + rk4.A[s] * h * k[s - 1, j]
         if update_inputs(inputs, t + c * h, xt, p, d, flow, u, data) != OK:
             return INPUT_FAILED
         if full is not None:
@@ -158,7 +159,8 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale, f
     total = 0.0
     grown = 0.0
     for j in range(nx):
-        out[j] = x[j] + h / 6.0 * (k[0, j] + 2.0 * k[1, j] + 2.0 * k[2, j] + k[3, j])
+        weighted = rk4.B[0] * k[0, j] + rk4.B[1] * k[1, j] + rk4.B[2] * k[2, j] + rk4.B[3] * k[3, j]
+        out[j] = x[j] + h / rk4.DIVISOR * weighted
         total += out[j]
         if j < model.nx:            # (the work may grow without bound: a driven model)
             grown = max(grown, abs(out[j]))

@@ -306,9 +306,9 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
                            np.empty((model.nc, model.nv)), np.empty(model.nc))
     if model.nc:
         numerics.dynamics.project(m, w.ref, 0.0, x.copy(), u, p, d, flow, True, 0.0, -1.0)
+    model.module.energy(0.0, x, u, p, d)             # the energy at the start, and a jump's change (runtime.work)
     if model.nj:
         numerics.dynamics.jump(m, w.ref, 0, 0.0, x.copy(), u, p, d.copy())
-        model.module.energy(0.0, x, u, p, d)         # the energy a jump changes (andyc.runtime.work)
     if adaptive:
         numerics.dynamics.rhs_mode_into(m, w.ref, 0.0, x, u, p, d, flow, w.xdot, IDEAL)
         if model.nw:
