@@ -164,7 +164,7 @@ def test_a_run_file_keeps_a_multi_line_status_inside_its_header(tmp_path, files)
     lines = run.save(tmp_path / "run.csv").read_text(encoding="utf-8").splitlines()
     header = lines[:lines.index(next(line for line in lines if line.startswith("time,")))]
     assert header and all(line.startswith("# ") for line in header)
-    from andyc.runtime.run import read_h5
+    from andyc.runtime.runfiles import read_h5
     back = read_h5(run.save(tmp_path / "run.h5"))
     assert back.status.startswith("stopped: x \"\"\"")      # surrogates escaped, everything else as it was
 

@@ -20,7 +20,7 @@ import yaml
 import andyc
 from andyc.errors import SimulationError
 from andyc.independent.closed_forms import ball_first_integral, fourbar_crank_angle
-from andyc.runtime.run import read_h5
+from andyc.runtime.runfiles import read_h5
 from tests.support import MODELS
 
 

@@ -22,7 +22,7 @@ import pytest
 
 import andyc
 from andyc.errors import SpecError
-from andyc.runtime.run import read_h5
+from andyc.runtime.runfiles import read_h5
 
 G = 9.81
 

@@ -6,7 +6,8 @@ import h5py
 import numpy as np
 
 import andyc
-from andyc.runtime.run import read_h5, unit_quaternions
+from andyc.runtime.run import unit_quaternions
+from andyc.runtime.runfiles import read_h5
 
 
 def _about_z(angle):

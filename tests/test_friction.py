@@ -24,7 +24,7 @@ import pytest
 
 import andyc
 from andyc.errors import SimulationError, SpecError
-from andyc.runtime.run import read_h5
+from andyc.runtime.runfiles import read_h5
 
 G = 9.81
 TH = 0.5                                    # the incline's angle (tan th = 0.546)

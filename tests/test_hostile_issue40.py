@@ -381,7 +381,7 @@ def explodes(tmp_path_factory, build_dir):
 @pytest.mark.parametrize("method", ["Radau", "BDF", "LSODA", "DOP853"])
 def test_an_adaptive_run_that_blows_up_keeps_its_samples_and_writes_its_files(explodes, build_dir, tmp_path,
                                                                                 method):
-    from andyc.runtime.run import read_h5
+    from andyc.runtime.runfiles import read_h5
 
     result = invoke("sim", explodes, "--method", method, "--t-end", 2, "--build-dir", build_dir, "-o",
                     tmp_path / "r.h5", "-o", tmp_path / "r.csv")
@@ -405,7 +405,7 @@ def test_lsoda_stuck_at_a_discontinuity_stops_instead_of_stepping_forever(explod
 # ---- 6. SIGHUP: like SIGINT and SIGTERM (tests/test_hostile_runs.py), unless the run was started under nohup ----
 
 def test_a_run_started_ignoring_sighup_goes_on_and_stops_on_sigterm(tmp_path, shipped_build):
-    from andyc.runtime.run import read_h5
+    from andyc.runtime.runfiles import read_h5
 
     flag, out = tmp_path / "started", tmp_path / "run.h5"
     (tmp_path / "started.py").write_text(STARTED.format(flag=str(flag)))

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 import andyc
-from andyc.runtime.run import Run, read_h5
+from andyc.runtime.run import Run
+from andyc.runtime.runfiles import read_h5
 from andyc.runtime.status import diverging_constraints
 from tests.support import MODELS
 from tests.support.processes import STARTED, default_signals, wait_for
@@ -164,7 +165,7 @@ def test_an_interrupted_write_leaves_the_old_run_file(tmp_path):
     class Boom(Exception):
         pass
 
-    broken = andyc.runtime.run
+    broken = andyc.runtime.runfiles
     original = broken.write_h5
 
     def write_half(r, p):

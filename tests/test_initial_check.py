@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from andyc.runtime.run import read_h5
+from andyc.runtime.runfiles import read_h5
 from tests.support.cli import invoke
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -9,7 +9,7 @@ import h5py
 import pytest
 
 import andyc
-from andyc.runtime.run import read_h5
+from andyc.runtime.runfiles import read_h5
 from andyc.spec.display import display
 from andyc.spec.meshfiles import MAX_MESH_BYTES
 from tests.support.cli import invoke

@@ -297,7 +297,7 @@ def test_cli_usage_errors_exit_2(shipped_build, tmp_path, args, message):
 def test_cli_run_file_and_plot(shipped_build, tmp_path):
     """`andyc sim --method moreau` writes the run file the plots read: its flows (contact modes) and mean forces as
     the in-process run's, and `andyc plot` draws it."""
-    from andyc.runtime.run import read_h5
+    from andyc.runtime.runfiles import read_h5
 
     h5, png = tmp_path / "rod.h5", tmp_path / "rod.png"
     result = invoke("sim", MODELS / "rod_drop.yaml", "--t-end", 0.5, "--method", "moreau", "--theta", 0.75,

@@ -15,7 +15,8 @@ import andyc
 from andyc import cli
 from andyc.plot import animation_view, figure_for, sticks_figure
 from andyc.plot.select import SCALE_RATIO, group_signals, select_signals, split_by_scale, window
-from andyc.runtime.run import Run, read_h5
+from andyc.runtime.run import Run
+from andyc.runtime.runfiles import read_h5
 from andyc.spec.display import display
 
 MODELS = Path(__file__).resolve().parents[1] / "models"

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import andyc
-from andyc.runtime.run import read_h5
+from andyc.runtime.runfiles import read_h5
 from tests.support import MODELS
 from tests.support.cli import andyc_cli, run_python
 

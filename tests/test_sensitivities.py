@@ -7,7 +7,7 @@ with restitution). The run file keeps them; a method they do not follow is refus
 import numpy as np
 
 import andyc
-from andyc.runtime.run import read_h5
+from andyc.runtime.runfiles import read_h5
 from tests.support import MODELS
 from tests.support.cli import invoke
 

@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 import andyc
-from andyc.runtime.run import read_h5
+from andyc.runtime.runfiles import read_h5
 from andyc.spec.display import display
 from andyc.spec.meaning import meaning_sha256
 from tests.support import MODELS, ROBOTS_DIR

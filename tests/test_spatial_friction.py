@@ -28,7 +28,7 @@ import pytest
 
 import andyc
 from andyc.errors import SpecError
-from andyc.runtime.run import read_h5
+from andyc.runtime.runfiles import read_h5
 from tests.support.references import sliding_reference, slope_coordinates
 
 G, MU, R = 9.81, 0.2, 0.1

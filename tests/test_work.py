@@ -23,7 +23,7 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 import andyc
-from andyc.runtime.run import read_h5
+from andyc.runtime.runfiles import read_h5
 from tests.support import MODELS
 from tests.support.diagnostics import line_of, problems
 

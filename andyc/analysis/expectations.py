@@ -177,7 +177,7 @@ def _states(check: Check, run, model, spec) -> tuple:
         p, u = model.parameters(run.parameters), run.input_values[0]
         target, what = dict(zip(run.state_names, model.closed_form(float(t), u, p))), "the closed form"
     else:
-        from andyc.runtime.run import RunFileError, read_run_file
+        from andyc.runtime.runfiles import RunFileError, read_run_file
 
         try:
             reference = read_run_file(check.data["reference"])

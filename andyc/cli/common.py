@@ -108,7 +108,7 @@ def report_jumps_file(result) -> None:
 
 def read_run_argument(run_file):
     """The run in RUN_FILE (plot, view), or a usage error naming it: a damaged file, or a run with no samples."""
-    from andyc.runtime.run import RunFileError, read_run_file
+    from andyc.runtime.runfiles import RunFileError, read_run_file
 
     try:
         run = read_run_file(run_file)

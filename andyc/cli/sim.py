@@ -76,7 +76,7 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
     "interrupted"; the exit code is then 130, 143 or 129."""
     from andyc.runtime.inputs import InputWarning
     from andyc.runtime.interrupts import Interrupts
-    from andyc.runtime.run import RUN_SUFFIXES
+    from andyc.runtime.runfiles import RUN_SUFFIXES
 
     overrides = parse_sets(sets)
     stops = stop_counts(stop_after)
