@@ -9,7 +9,7 @@ import subprocess
 import sys
 from types import SimpleNamespace
 
-from andyc.runtime.compiled import free_run
+from andyc.runtime.compiled import free_run, variant
 from andyc.runtime.options import Projection
 from tests.support import MODELS, ROOT
 
@@ -26,7 +26,7 @@ numerics = model.numerics
 loaded = {name: module for name, module in sys.modules.items() if name.startswith(numerics.__name__ + ".")}
 compiled = sorted(f"{name.rpartition('.')[2]}.{key}" for name, module in loaded.items()
                   for key, value in vars(module).items() if isinstance(value, Dispatcher) and value.signatures)
-print(json.dumps({"compiled": compiled, "advance": [str(s[-1]) for s in numerics.integrator.advance.signatures],
+print(json.dumps({"compiled": compiled, "advance": [[str(a) for a in s[-2:]] for s in numerics.integrator.advance.signatures],
                   "status": run.status}))
 """
 
@@ -41,10 +41,26 @@ def test_a_run_without_contacts_compiles_neither_the_constrained_solves_nor_the_
     assert out.returncode == 0, out.stderr
     probe = json.loads(out.stdout.strip().splitlines()[-1])
     assert probe["status"] == "finished"
-    assert probe["advance"] == ["none"]     # the free variant only (full=None), not the full one (omitted: True)
+    # the free variant only (full=None), not the full one (full omitted: True)
+    assert probe["advance"] == [["none", "omitted(default=True)"]]
     # (a function compiled as another's callee, or loaded with it from the cache, has no signature of its own; the
     # full advance would be one of those callers: hence the check of advance's own signatures above)
     assert not [name for name in probe["compiled"] if name in NEVER or name.split(".")[0] in
+                ("contact_solver", "timestepping")], probe["compiled"]
+
+
+def test_a_constrained_run_without_jumps_compiles_no_event_location_nor_jumps(shipped_build):
+    """The slider-crank (constraint rows, no jumps) with projection: the full loop with events=None, so neither the
+    guards' location, nor the jumps, nor the spatial slip's direction, nor the contact solver are compiled."""
+    out = subprocess.run([sys.executable, "-c", PROBE.replace("dt=1e-3)", "dt=1e-3, method='projection')"),
+                          str(MODELS / "slider_crank.yaml"), str(shipped_build)], cwd=ROOT, capture_output=True,
+                         text=True)
+    assert out.returncode == 0, out.stderr
+    probe = json.loads(out.stdout.strip().splitlines()[-1])
+    assert probe["status"] == "finished"
+    assert probe["advance"] == [["bool", "none"]]
+    skipped = ("dynamics.jump", "dynamics.impact", "dynamics.slip_direction", "integrator.locate", "integrator.instant")
+    assert not [name for name in probe["compiled"] if name in skipped or name.split(".")[0] in
                 ("contact_solver", "timestepping")], probe["compiled"]
 
 
@@ -60,3 +76,15 @@ def test_which_runs_take_the_free_variant():
                     Projection(normalize=False))
     assert not free_run(SimpleNamespace(nc=1, nj=0, contact_names=(), quaternions=()), "rk4", Projection())
     assert not free_run(SimpleNamespace(nc=0, nj=1, contact_names=(), quaternions=()), "rk4", Projection())
+
+
+def test_which_loop_each_run_takes():
+    """advance's trailing arguments: the free variant, the full loop without events (no jumps), the full loop."""
+    free = SimpleNamespace(nc=0, nj=0, contact_names=(), quaternions=())
+    rows = SimpleNamespace(nc=2, nj=0, contact_names=(), quaternions=())
+    jumps = SimpleNamespace(nc=2, nj=1, contact_names=(), quaternions=())
+    assert variant(free, "rk4", Projection()) == (None,)
+    assert variant(free, "rk4", Projection(energy_correction=True)) == (True, None)     # projects: not free
+    assert variant(rows, "projection", Projection()) == (True, None)
+    assert variant(jumps, "rk4", Projection()) == ()
+    assert variant(SimpleNamespace(nc=0, nj=3, contact_names=("foot",), quaternions=()), "rk4", Projection()) == ()

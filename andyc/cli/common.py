@@ -82,7 +82,7 @@ def compiled(file, out_dir, force: bool = False, report=None, integrator: bool =
 
     if sys.stderr.isatty() and not numerics_compiled():
         click.echo("andyc: compiling the integrator every model shares, once for this installation (seconds "
-                   "for a model without constraints, jumps or contacts, about a minute with them; a new model then "
+                   "for a model without constraints, jumps or contacts, up to a minute with them; a new model then "
                    "compiles in seconds) ...", err=True)
     try:
         return andyc.compile_model(file, out_dir, force, integrator)

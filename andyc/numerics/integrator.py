@@ -246,7 +246,8 @@ def locate(model, w, opts, inputs, data, jump_index, tol, t, h, x, u, p, d, flow
 
 
 @jit(nogil=True)
-def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, every, log, row, full=True):
+def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, every, log, row, full=True,
+            events=True):
     """Integrate from time t (on step i: t0 + i dt <= t < t0 + (i + 1) dt) to the grid point i_end,
     stopping early at a jump or a failure. x, d, w.g0 and the log are updated in place; every
     `every`-th grid point is logged at log[row] (log.u: the inputs there, w.u the latest inputs).
@@ -262,7 +263,8 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
     steps, operation for operation, but Numba compiles it without the constrained solves, projection, event
     location and jumps, its branches on `full is not None` pruned at compile time as those on `inputs` (Numba
     prunes on an argument that is None, not on a boolean's value). andyc.runtime.compiled.free_run says when a
-    run takes it.
+    run takes it. events: True, or None for a model without jumps (NJ = 0, hence no contacts): the guards, their
+    location and the jumps pruned likewise (andyc.runtime.compiled.variant).
     """
     u, g0, x1, xb, x_event, counts = w.u, w.g0, w.x1, w.xb, w.x_event, w.counts
     direction, priority = model.jump_direction, model.jump_priority
@@ -275,7 +277,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
         scale = max(scale, abs(x[j]))
     if update_inputs(inputs, t, x, p, d, flow, u, data) != OK:
         return i, row, INPUT_FAILED, t, flow, -1
-    if full is not None:                # (the guards at the start)
+    if full is not None and events is not None:     # (the guards at the start)
         have_rate = False
         for n in range(model.nj):
             if in_mode(model, n, flow, d):
@@ -297,7 +299,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
         h = t_next - t
         if h > 1e-14 * max(1.0, abs(t_next)):
             counts[0] += 1
-            if full is not None:
+            if full is not None and events is not None:
                 if slip_direction(model, w, t, x, u, p, d, flow, h, opts.mode):  # a spatial slip's direction, held?
                     for n in range(model.nj):
                         if model.jump_contact[n] == SLIP_STOP and in_mode(model, n, flow, d):
@@ -308,7 +310,7 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
                 status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale, None)
             if status != OK:
                 return i, row, status, t, flow, -1
-            if full is not None:
+            if full is not None and events is not None:
                 best, best_tau = -1, h
                 tol = opts.event_tol * max(1.0, abs(t))
                 for n in range(model.nj):

@@ -251,6 +251,18 @@ def free_run(model: CompiledModel, method: str, projection) -> bool:
     return method in FIXED_STEP and free_model(model) and not projects(model, method, projection)
 
 
+def variant(model: CompiledModel, method: str, projection) -> tuple:
+    """The trailing arguments (full, events) of the integrator's advance for a run (see its docstring): () for
+    the full loop, (None,) for the free variant (free_run), (True, None) for a model without jumps, whose loop
+    compiles without guards, event location and jumps. Each is compiled once per andyc and cached."""
+    return (None,) if free_run(model, method, projection) else full_variant(model)
+
+
+def full_variant(model: CompiledModel) -> tuple:
+    """The trailing arguments of the full loop for `model`: without events where it has no jumps."""
+    return (True, None) if model.nj == 0 else ()
+
+
 def compile_integrator(model: CompiledModel, function=None, data=None, method: str | None = None,
                        frames: bool = True, free: bool = False) -> None:
     """Compile what a run calls (or load it from Numba's cache) with the argument types simulate() passes: the
@@ -280,7 +292,7 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
                                log, 1, None)
         if not free:
             integrator.advance(m, w.ref, opts, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1,
-                               log, 1)
+                               log, 1, *full_variant(model))
     if (every or method in TIME_STEPPING) and model.contact_names:
         stepping = model.stepping
         s = stepping.new_scratch(model.nq, model.nv, model.nx, model.nw, model.nc, model.nd, len(model.contact_names))

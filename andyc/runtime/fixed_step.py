@@ -15,7 +15,7 @@ import numpy as np
 
 from andyc.errors import SimulationError
 from andyc.numerics.status import BAUMGARTE, DIVERGED, IDEAL, INPUT_FAILED, LAGRANGE, OK
-from andyc.runtime.compiled import free_run, projects, work
+from andyc.runtime.compiled import projects, variant, work
 from andyc.runtime.events import finish_jump, follow_instant_jumps
 from andyc.runtime.inputs import inputs_at
 from andyc.runtime.options import Projection
@@ -40,7 +40,7 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
     constrain = method == "projection" and model.nc > 0
     etol = projection.energy_tol if projection.energy_correction else -1.0
     do_project = projects(model, method, projection)
-    free = (None,) if free_run(model, method, projection) else ()     # (the integrator's free variant: advance)
+    trailing = variant(model, method, projection)      # (the integrator's variant for this run: advance)
     rows = n_steps // every + 2             # the grid, and a last sample where a run stops between grid points
     nu = len(model.input_names)
     nx = model.nx
@@ -78,7 +78,7 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
         w.u[:] = source.held(flow)
         opts = integrator.options(mode, do_project, constrain, e0, etol, jumps.event_tol)
         i, row, status, t, flow, k = integrator.advance(model.ref, w.ref, opts, fn, data, p, d, x, t, flow, i, i_end,
-                                                        0.0, dt, every, log, row, *free)
+                                                        0.0, dt, every, log, row, *trailing)
         if tangent is not None and status == OK:
             tangent.advance(t0, x0, d0, flow0, i0, t, i, dt, k, w.x_event[:nx])
         if k >= 0:
