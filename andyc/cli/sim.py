@@ -26,6 +26,9 @@ from andyc.runtime.methods import METHODS
 @click.option("--method", default="rk4", show_default=True,
               type=click.Choice(list(METHODS)))
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Override a parameter or input.")
+@click.option("--at", "starts", multiple=True, metavar="NAME=VALUE",
+              help="Start a state (or discrete state) at this value, the others at the model's initial values "
+                   "(rerun a sweep's point: --set for its parameters, --at for its states).")
 @click.option("--input", "input_specs", multiple=True, metavar="NAME=VALUE|EXPR|FILE.csv",
               help="Drive an input: a number; an expression of t, the states, parameters and discrete states "
                    "(\"-10*th - 2*th_dot\"); or a CSV table with a time column t and a column NAME, interpolated.")
@@ -66,7 +69,7 @@ from andyc.runtime.methods import METHODS
                    "into the HDF5 run file's /sensitivities.")
 @build_dir_option("--out-dir")
 @format_option
-def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, frames, init, init_tol, energy_correction,
+def sim(file, t_end, dt, method, sets, starts, input_specs, controller, outs, every, frames, init, init_tol, energy_correction,
         energy_tol, event_tol, max_instant_jumps, zeno_tol, stop_after, rtol, atol, theta, timeout, sensitivities,
         build_dir, fmt):
     """Build FILE if needed, simulate it and write run files.
@@ -79,6 +82,7 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
     from andyc.runtime.runfiles import RUN_SUFFIXES
 
     overrides = parse_sets(sets)
+    starts = parse_sets(starts, "--at")
     stops = stop_counts(stop_after)
     inputs = input_drives(input_specs)
     read = [file, controller] + [v for v in inputs.values() if v.lower().endswith(".csv")]
@@ -135,6 +139,8 @@ def sim(file, t_end, dt, method, sets, input_specs, controller, outs, every, fra
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", InputWarning)
             run = andyc.simulate(model, t_end, dt=dt, method=method, parameters=params, inputs=inputs,
+                                 x0={n: v for n, v in starts.items() if n not in model.discrete_names} or None,
+                                 d0={n: v for n, v in starts.items() if n in model.discrete_names} or None,
                                  controller=controller, every=every, frames=frames, rtol=rtol, atol=atol,
                                  interrupts=interrupts, init=andyc.Init(mode=init, tol=init_tol),
                                  projection=andyc.Projection(energy_correction=energy_correction,

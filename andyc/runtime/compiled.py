@@ -116,8 +116,9 @@ class CompiledModel:
     def nj(self) -> int:
         return len(self.jump_names)
 
-    def initial_discrete(self, p: np.ndarray) -> np.ndarray:
-        return self.module.initial_discrete(p)
+    def initial_discrete(self, p: np.ndarray, at: dict | None = None) -> np.ndarray:
+        """The discrete states' initial values at the parameters p; `at` {name: value} over them."""
+        return _with_overrides(self.discrete_names, self.module.initial_discrete(p), at, "discrete state")
 
     def flow_inputs(self, u: np.ndarray, p: np.ndarray) -> np.ndarray:
         """(flows, inputs): the run's inputs u, overridden where a flow sets its own."""
@@ -126,6 +127,10 @@ class CompiledModel:
         return U
 
     def parameters(self, overrides: dict | None = None) -> np.ndarray:
+        for name in overrides or ():
+            if name not in self.parameter_names and name in self.state_names:
+                raise SimulationError(f"'{name}' is a state, not a parameter: set its initial value with --at "
+                                      f"{name}=VALUE (andyc.simulate(..., x0={{'{name}': VALUE}}))")
         return _with_overrides(self.parameter_names, self.parameter_defaults, overrides, "parameter")
 
     def inputs(self, overrides: dict | None = None) -> np.ndarray:
@@ -139,8 +144,10 @@ class CompiledModel:
                                              np.zeros(self.nd) if d is None else np.asarray(d, dtype=np.float64))
         return [int(r) for r in w.active[0, :n]]
 
-    def initial_state(self, p: np.ndarray) -> np.ndarray:
-        return self.module.initial_state(p)
+    def initial_state(self, p: np.ndarray, at: dict | None = None) -> np.ndarray:
+        """The model's initial state at the parameters p; `at` {name: value} over it (the others as the model
+        gives them: its initial values are expressions of p)."""
+        return _with_overrides(self.state_names, self.module.initial_state(p), at, "state")
 
     def closed_form_location(self, k: int) -> str:
         """`FILE:LINE: PATH` of state k's closed form, for messages."""
@@ -149,6 +156,7 @@ class CompiledModel:
 
 
 def _with_overrides(names, defaults, overrides, kind) -> np.ndarray:
+    """defaults (one per name) with {name: value} over them; SimulationError naming an unknown name."""
     values = np.array(defaults, dtype=np.float64)
     for name, value in (overrides or {}).items():
         if name not in names:

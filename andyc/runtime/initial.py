@@ -8,6 +8,8 @@ the active rows to be independent there; the first row that is not is named.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from andyc.errors import InitialStateError, SimulationError
@@ -17,11 +19,12 @@ from andyc.runtime.options import Init
 
 
 def initial_state(model: CompiledModel, p, x0=None, d0=None, flow0=None) -> tuple:
-    """(x, d, flow): the given initial state, discrete states and flow (a name or index), or the model's."""
-    x = np.array(model.initial_state(p) if x0 is None else x0, dtype=np.float64)
+    """(x, d, flow): the given initial state, discrete states and flow (a name or index), or the model's. x0 and d0
+    are arrays of every value, or mappings {name: value} over the model's own initial values (`andyc sim --at`)."""
+    x = np.array(model.initial_state(p, x0) if x0 is None or isinstance(x0, Mapping) else x0, dtype=np.float64)
     if x.shape != (model.nx,):
         raise SimulationError(f"initial state has shape {x.shape}, expected ({model.nx},)")
-    d = np.array(model.initial_discrete(p) if d0 is None else d0, dtype=np.float64)
+    d = np.array(model.initial_discrete(p, d0) if d0 is None or isinstance(d0, Mapping) else d0, dtype=np.float64)
     if d.shape != (model.nd,):
         raise SimulationError(f"initial discrete states have shape {d.shape}, expected ({model.nd},)")
     return x, d, _flow_index(model, flow0)

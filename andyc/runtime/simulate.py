@@ -74,7 +74,8 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     inputs: {name: value}, a value being a number, an expression of t and the states (a string) or a CSV
     table (a path ending in .csv); controller: a Python file defining control(t, x, d, p), which drives
     every input (see andyc.runtime.inputs). rtol, atol: the adaptive methods' tolerances.
-    x0, d0 and flow0 (a name or index): the initial state, discrete states and flow (default the model's; with
+    x0, d0 and flow0 (a name or index): the initial state, discrete states and flow (default the model's; x0 and
+    d0 either whole arrays or {name: value} over the model's initial values, e.g. x0={"q1": 0.7}; with
     contacts and no d0, each contact's mode in d is that of a run starting there: closed where it touches at
     rest, andyc.runtime.contact_modes.initial_mode).
     progress: print t / t_end to stderr (default: when it is a terminal).
