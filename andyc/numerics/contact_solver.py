@@ -22,7 +22,8 @@ corners has 12 rows on 6 speeds; andyc.numerics.dense_solves) and checked agains
 answer is exact to rounding, one that fails leaves the Gauss-Seidel answer (verified False). The states passed in are tried first (the warm
 start: a resting or sliding contact keeps its state, and the step costs one polish, no sweep). Beyond the
 Python twin: where the active set's rows are dependent and the least-norm solution fails a check, the solution
-closest to the Gauss-Seidel answer (or to the warm start's impulses) is tried too (_polish).
+whose friction is split over the sticking contacts by mu P_n (_weighted: a box held on a slope near its cone's
+edge), then the one closest to the Gauss-Seidel answer (or to the warm start's impulses) are tried (_polish).
 
 No call allocates: the only memory is the caller's `work` (work_shape(m) float64s).
 """
@@ -317,7 +318,8 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
     if symmetric:                           # no slide: K = W over the rows, symmetric: K^+ b by Cholesky first
         for i in range(n):
             y[i] = b[i]
-        solved = cholesky_solve(K, y, n)
+        unique = cholesky_solve(K, y, n)
+        solved = unique
         if not solved:                      # (dependent rows, or near it: a box resting on four corners)
             _system(W, w0, rows, c1, c2, n, K, b)
             for i in range(n):
@@ -331,6 +333,9 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
             for i in range(m):
                 w[i] = w0[i] + dot(W[i], cand, 0, m)
             if _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v):
+                return True
+            if not unique and _weighted(W, w0, kind, first, mu, state, direction, tol_v, rows, c1, c2, n, cand, w,
+                                        y, z, vn1, vn2, tau, perm, K, b, work[VECTORS + m:]):
                 return True
         _system(W, w0, rows, c1, c2, n, K, b)          # (the factor, or a part of it, took K's place)
     rank = qr_factor(K, b, n, vn1, vn2, tau, perm, y, z)
@@ -354,6 +359,58 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
         if _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v):
             return True
     return False
+
+
+@jit
+def _weighted(W, w0, kind, first, mu, state, direction, tol_v, rows, c1, c2, n, cand, w, y, t, u, weight, d2, perm,
+              K, b, G):
+    """Whether the active set's solution of least weighted norm sum_j x_j^2 / d2_j satisfies every condition; it is
+    then in `cand` (and w). A sticking contact's friction rows are weighted by mu P_n (P_n of `cand`, the
+    least-norm solution, which failed), every other row by the mean of those: x = D2 K (K D2 K)^+ b for K
+    symmetric (no slide). Of a redundant set's solutions (a box on four corners) the least-norm one splits a
+    friction evenly over the contacts that share its direction; this one splits it in proportion to what their
+    cones allow, so where the load is uneven (the box held on a slope near its cone's edge: the upper corners
+    carry less) it stays inside every cone whenever their total cone holds the total friction.
+    t, u, weight (m,), d2 (n,), perm: scratch; K, G: (m, m) each (K holds the system on return)."""
+    m = w0.shape[0]
+    _system(W, w0, rows, c1, c2, n, K, b)
+    total, count = 0.0, 0
+    for i in range(m):
+        weight[i] = -1.0
+    for k in range(kind.shape[0]):
+        f = first[k]
+        if (kind[k] == PLANAR or kind[k] == SPATIAL) and state[k] == STICK:
+            pn = max(cand[f], 0.0)
+            weight[f + 1] = mu[k] * pn
+            if kind[k] == SPATIAL:
+                weight[f + 2] = mu[k] * pn
+            total += mu[k] * pn
+            count += 1
+    if count == 0 or not total > 0.0:
+        return False
+    mean = total / count
+    for j in range(n):
+        r = int(rows[j])
+        d2[j] = weight[r] if weight[r] >= 0.0 else mean
+    for i in range(n):                      # G = K D2 K (K symmetric)
+        for l in range(n):
+            s = 0.0
+            for j in range(n):
+                s += K[i, j] * d2[j] * K[j, l]
+            G[i, l] = s
+    for i in range(n):
+        y[i] = b[i]
+    if not psd_least_norm(G, y, n, perm, t, u, K):
+        _system(W, w0, rows, c1, c2, n, K, b)
+        return False
+    _system(W, w0, rows, c1, c2, n, K, b)
+    for i in range(m):
+        cand[i] = 0.0
+    for j in range(n):
+        cand[int(rows[j])] = d2[j] * dot(K[j], y, 0, n)
+    for i in range(m):
+        w[i] = w0[i] + dot(W[i], cand, 0, m)
+    return _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v)
 
 
 @jit(inline="always")
