@@ -187,19 +187,7 @@ def accelerations_along(M, dM, G, dG, A, dA, kappa, dkappa, rows, Ts):
     inv = np.empty(nv)
     for i in range(nv):
         inv[i] = 1.0 / L[i, i]
-    Y = np.empty((nv, m))               # M^-1 A^T
-    for r in range(m):
-        for i in range(nv):
-            Y[i, r] = A[rows[r], i]
-    solve_in_place(L, inv, Y)
-    S = np.empty((m, m))                # A M^-1 A^T, then its factor
-    for r in range(m):
-        for j in range(m):
-            s = 0.0
-            for i in range(nv):
-                s += A[rows[r], i] * Y[i, j]
-            S[r, j] = s
-    W = cholesky(S)
+    Y, W = saddle_factor(L, A, rows)    # M^-1 A^T, and the factor of A M^-1 A^T
     winv = np.empty(m)
     for r in range(m):
         winv[r] = 1.0 / W[r, r]
