@@ -9,7 +9,7 @@ import pytest
 
 import andyc
 from andyc.errors import SimulationError
-from andyc.runtime.inputs import InputWarning
+from andyc.runtime.controller import InputWarning
 from tests.support import MODELS
 from tests.support.cli import andyc_cli, run_python
 

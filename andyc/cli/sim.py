@@ -77,7 +77,7 @@ def sim(file, t_end, dt, method, sets, starts, input_specs, controller, outs, ev
     The model's simulate: section gives the options not given here (then the defaults shown).
     SIGINT (Ctrl-C), SIGTERM or SIGHUP stop the run and write the samples so far, with the status
     "interrupted"; the exit code is then 130, 143 or 129."""
-    from andyc.runtime.inputs import InputWarning
+    from andyc.runtime.controller import InputWarning
     from andyc.runtime.interrupts import Interrupts
     from andyc.runtime.runfiles import RUN_SUFFIXES
 

@@ -16,7 +16,8 @@ import numpy as np
 from andyc.errors import SimulationError
 from andyc.numerics.status import OK
 from andyc.runtime.contacts import resolve_impact, resolve_liftoff, resolve_stop, start_slip
-from andyc.runtime.inputs import USER_ERRORS, InputSource, raised
+from andyc.runtime.controller import USER_ERRORS, raised
+from andyc.runtime.inputs import InputSource
 from andyc.runtime.options import Events
 from andyc.runtime.status import ZENO, at, in_jump
 
