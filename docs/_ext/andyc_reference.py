@@ -110,7 +110,8 @@ def status_page() -> str:
              "Generated at build time from `andyc.numerics.status.MESSAGES` (why a compiled function failed) and "
              "`andyc.runtime.status.OUTCOMES` (a run's outcome, one per sweep point).", "",
              "## Compiled functions' status", "", "| code | message |", "|---|---|"]
-    lines += [f"| {code} | {_text(message)} |" for code, message in sorted(numeric.MESSAGES.items())]
+    # code spans: the messages as the program prints them (no smart quotes, no "--" made a dash)
+    lines += [f"| {code} | `{_text(message)}` |" for code, message in sorted(numeric.MESSAGES.items())]
     lines += ["", "## Run outcomes", "", "| code | outcome |", "|---|---|"]
     lines += [f"| {code} | {_text(name)} |" for code, name in sorted(runtime.OUTCOMES.items())]
     return "\n".join(lines) + "\n"
