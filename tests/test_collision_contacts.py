@@ -110,7 +110,7 @@ STOPS = """<?xml version="1.0"?>
 """
 
 
-# -- this file's own plane geometry (the rule README states) -----------------------------
+# -- this file's own plane geometry (the rule docs/model-file.md states) -----------------------------
 
 def plane(ground: dict):
     """(n, h, t1, t2): the unit normal, height and tangents (t1 = x projected on the plane, or y when |n_x| >

@@ -83,7 +83,7 @@ def test_liftoff_where_the_normal_force_reaches_zero(lifted_block, method):
     assert abs(run.events["time"][1] - t_star) < 1e-11
     resting = run.flow != 2
     assert np.allclose(run.multipliers[resting, 0], m * G - c * run.time[resting], rtol=0, atol=1e-12)
-    assert np.all(run.multipliers[resting, 0] >= 0)      # the ground pushes: the sign of the README
+    assert np.all(run.multipliers[resting, 0] >= 0)      # the ground pushes: the sign of docs/model-file.md
     # then y'' = c (t - t*) / m: a cubic, which RK4 integrates exactly
     flying = run.time > t_star
     exact = c * (run.time[flying] - t_star) ** 3 / (6 * m)

@@ -35,3 +35,15 @@ def test_no_citation_of_the_old_names_outside_the_repository():
     found = [f"{source}:{number}" for source in sources if source.name != "test_docs_cited.py"
              for number, line in enumerate(source.read_text(encoding="utf-8").splitlines(), 1) if old.search(line)]
     assert not found, found
+
+
+def test_the_readme_names_the_commands_and_its_links_into_docs_exist():
+    # README is a first visit's page (issue 45): the two commands, the docs site, and links that lead somewhere
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    for command in ("make demo", "make test", "make docs"):
+        assert command in readme, command
+    links = re.findall(r"\]\((docs/[^)#]+)", readme)
+    assert "docs/model-file.md" in links        # the security section, "Model files from anyone", is there
+    assert "Model files from anyone" in (ROOT / "docs" / "model-file.md").read_text(encoding="utf-8")
+    missing = [link for link in links if not (ROOT / link).is_file()]
+    assert not missing, missing

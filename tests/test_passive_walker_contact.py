@@ -2,7 +2,7 @@
 
 It walks: from a state just after a heel strike on its period-one gait it takes 21 alternating heel strikes in
 13.5 s on a 0.0504 rad slope (step 0.4295 m, 0.6218 s), with mu = 1, never below the slope, never in flight,
-never slipping. What changed against the hand-guarded walker (models/passive_walker.yaml) and why (README,
+never slipping. What changed against the hand-guarded walker (models/passive_walker.yaml) and why (docs/model-file.md,
 "Passive walker with contacts"):
 
 - the reference's gait cannot be followed: just after its heel strike its trailing foot is on the slope moving

@@ -46,10 +46,14 @@ class Events:
 class Init:
     """A constrained run's initial state: its distance from the constraint manifold is measured first.
 
-    mode  "check": refuse the run when a residual (position or velocity level) exceeds tol;
-          "project": move the state onto the manifold (Braun & Goldfarb's corrections, repeated to
-          round-off: the smallest change in the mass-matrix metric); "as-is": start from it anyway
-    tol   the largest initial residual "check" accepts
+    Attributes
+    ----------
+    mode : str
+        "check": refuse the run when a residual (position or velocity level) exceeds tol;
+        "project": move the state onto the manifold (Braun & Goldfarb's corrections, repeated to
+        round-off: the smallest change in the mass-matrix metric); "as-is": start from it anyway
+    tol : float
+        the largest initial residual "check" accepts
     """
     mode: str = "check"
     tol: float = 1e-6
@@ -63,13 +67,18 @@ class Init:
 class Projection:
     """What the fixed-step methods correct after each step (the adaptive methods correct nothing).
 
-    normalize          renormalize the quaternion signals (every fixed-step method; the adaptive methods'
-                       norm drift stays within their tolerances and never reaches the dynamics, whose
-                       rotation matrices are exact for any norm)
-    energy_correction  the projection method's energy correction (Braun & Goldfarb eq. 5-6) to each flow's law
-                       (its energy_law, else E - E0 - W); None: on when the method is projection and the model
-                       declares conserves_energy or an energy_law; True needs the projection method
-    energy_tol         the energy correction applies only where 2T exceeds this (Braun & Goldfarb eq. 6)
+    Attributes
+    ----------
+    normalize : bool
+        renormalize the quaternion signals (every fixed-step method; the adaptive methods'
+        norm drift stays within their tolerances and never reaches the dynamics, whose
+        rotation matrices are exact for any norm)
+    energy_correction : bool or None
+        the projection method's energy correction (Braun & Goldfarb eq. 5-6) to each flow's law
+        (its energy_law, else E - E0 - W); None: on when the method is projection and the model
+        declares conserves_energy or an energy_law; True needs the projection method
+    energy_tol : float
+        the energy correction applies only where 2T exceeds this (Braun & Goldfarb eq. 6)
     """
     normalize: bool = True
     energy_correction: bool | None = None

@@ -236,7 +236,7 @@ def read(path, options=None, option_error=None, raw: bytes | None = None, ground
         line, why = writer.refused_meshes[0]
         warnings.append(Diagnostic(file, line, "robot", f"{n} visual mesh file(s) refused, not drawn (first: {why})",
                                    "a mesh must resolve to a regular .stl, .obj or .dae file inside its package or "
-                                   "the URDF's package (README: Model files from anyone)"))
+                                   "the URDF's package (docs/model-file.md: Model files from anyone)"))
     unreadable = [v for v in writer.visuals if v["geometry"] == "mesh" and not v["format"]
                   and Path(v["filename"]).suffix.lower() not in (".stl", ".obj", ".dae")]
     if unreadable:
