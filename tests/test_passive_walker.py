@@ -93,7 +93,18 @@ def test_swing_foot_stays_above_the_slope_from_midstance_to_the_strike(twenty_st
     assert np.max(np.abs(stance[:, :2] - np.c_[fx, np.zeros_like(fx)])) < 1e-12     # locked where it landed
     ahead = swing[:, 0] >= fx
     assert np.min(swing[ahead, 1]) > -1e-6
-    assert -0.025 < np.min(swing[~ahead, 1]) < -0.015          # the dip, as measured: -0.0204 m
+    assert np.min(swing[~ahead, 1]) < 0.0                       # the dip behind the stance foot exists (see pin)
+
+
+@pytest.mark.pin
+def test_pin_the_trailing_foots_dip(twenty_steps):
+    """Regression pin, not a validation: the depth of the trailing foot's dip through the slope (above) is andyc's
+    own earlier output, -0.0204 m, which no published source gives; a change beyond the band needs a reason."""
+    run = twenty_steps
+    inner_stance = np.isin(run.flow, [0, 1, 2])
+    swing = np.where(inner_stance[:, None], run.frames["ofoot"], run.frames["ifoot"])
+    behind = swing[:, 0] < run.column("fx")
+    assert -0.025 < np.min(swing[behind, 1]) < -0.015
 
 
 def test_heel_strike_states_converge_to_a_period_one_gait(walker):

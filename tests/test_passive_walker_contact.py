@@ -96,16 +96,27 @@ def test_twenty_alternating_heel_strikes(run, walker):
     slope at once (its post-impact normal speed away from it)."""
     assert run.finished
     strikes = heel_strikes(run)
-    assert len(strikes) >= 20                                   # measured: 21 in 13.5 s
+    assert len(strikes) >= 20
     assert [s[1] for s in strikes] == ["outer", "inner"] * (len(strikes) // 2) + ["outer"] * (len(strikes) % 2)
-    assert min(s[2] for s in strikes) > 0.4                     # measured: 0.4295 m each
+    assert min(s[2] for s in strikes) > 0.0                     # ahead of the other foot
     ev = run.events
     for k, name in enumerate(run.event_names()):
         if "foot_slope_impact" in name:
             states = run.event_modes(k)
             assert states[:2] == ([0, 1] if name.startswith("ofoot") else [1, 0]), name
     times = np.array([s[0] for s in strikes])
-    assert np.ptp(np.diff(times)) < 1e-6 and abs(np.diff(times).mean() - 0.6218) < 1e-3
+    assert np.ptp(np.diff(times)) < 1e-6                        # a period-one gait: every step as long
+
+
+@pytest.mark.pin
+def test_pin_the_gaits_step(run):
+    """Regression pin, not a validation: the contact walker's step length and period are andyc's own earlier
+    output (21 heel strikes in 13.5 s, 0.4295 m apart, every 0.6218 s); no published gait of this model exists
+    (it is the hand-guarded walker's mechanism with contacts). A change beyond these bands needs a reason."""
+    strikes = heel_strikes(run)
+    assert len(strikes) == 21
+    assert min(s[2] for s in strikes) > 0.4
+    assert abs(np.diff([s[0] for s in strikes]).mean() - 0.6218) < 1e-3
 
 
 def test_no_foot_below_the_slope(run):
