@@ -128,13 +128,8 @@ def simulate_point(model, settings: Settings, point, frames=()):
         (inputs if name in model.input_names else parameters)[name] = value
     for (kind, i), name, value in zip(settings.kinds, settings.names, point):
         {"parameter": parameters, "input": inputs, "state": states}[kind][name] = float(value)
-    x0 = None
-    if states:
-        x0 = np.array(model.initial_state(model.parameters(parameters)), dtype=np.float64)
-        for name, value in states.items():
-            x0[model.state_names.index(name)] = value
     return andyc.simulate(model, settings.t_end, dt=settings.dt, method=settings.method, parameters=parameters,
-                          inputs=inputs, x0=x0, rtol=settings.rtol, atol=settings.atol, frames=list(frames),
+                          inputs=inputs, x0=states or None,     # (the others at the model's: `andyc sim --at`) rtol=settings.rtol, atol=settings.atol, frames=list(frames),
                           progress=False, interrupts=Interrupts(settings.timeout), init=andyc.Init(settings.init),
                           events=andyc.Events(stop_after=dict(settings.stop_after) or None))
 
