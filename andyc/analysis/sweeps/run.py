@@ -88,11 +88,11 @@ def run_sweep(model, points: Points, settings: Settings, store_path, *, client=N
     summary = Summary(str(store_path), points.n, 0, int(done.sum()))
     if len(todo):
         try:
-            with _cluster(client, scheduler, workers) as connected:
+            with _cluster(client, scheduler, workers) as connected, _sigint_deferred() as interrupted:
                 present = set(connected.scheduler_info(n_workers=-1)["workers"])
                 summary.workers = len(present) or workers or 1
                 _run(connected, model, points, settings, store_path, todo,
-                     batch_size(len(todo), summary.workers, batch), progress, summary)
+                     batch_size(len(todo), summary.workers, batch), progress, summary, interrupted)
                 summary.lost = len(present - set(connected.scheduler_info(n_workers=-1)["workers"]))
         except SweepError:
             if created and not summary.computed:        # the store this call made holds nothing: no trace left
@@ -104,24 +104,34 @@ def run_sweep(model, points: Points, settings: Settings, store_path, *, client=N
     return summary
 
 
-def _run(client, model, points, settings, store_path, todo, size, progress, summary) -> None:
-    from dask.distributed import as_completed
+def _run(client, model, points, settings, store_path, todo, size, progress, summary, interrupted) -> None:
+    import time
 
     batches = [todo[i:i + size] for i in range(0, len(todo), size)]
     futures = [client.submit(run_batch, settings, b, points.values[b], pure=False) for b in batches]
     summary.batches = len(batches)
+    pending = list(futures)
     with Progress(f"{model.name} sweep", len(todo), unit="points", enabled=progress) as bar:
         try:
-            for future in as_completed(futures, loop=client.loop):
-                try:
-                    results = future.result()
-                except Exception as exc:        # a batch failed as a whole (the build missing on a worker, ...)
-                    raise SweepError(f"a batch of points failed on a worker: {_reason(exc)}; the points done "
-                                     f"are in {store_path}, rerun to compute the rest") from None
-                store.write_batch(store_path, points, settings, results)
-                summary.computed += len(results["index"])
-                summary.pids.add(results["pid"])
-                bar(summary.computed)
+            while pending:
+                # Polled, not waited on (as_completed): a Ctrl-C is then taken here, between results, never
+                # inside distributed's blocking calls, whose own KeyboardInterrupt path logs a traceback.
+                interrupted.check()
+                done = [future for future in pending if future.done()]
+                if not done:
+                    time.sleep(0.02)
+                    continue
+                pending = [future for future in pending if all(future is not d for d in done)]
+                for future in done:
+                    try:
+                        results = future.result()
+                    except Exception as exc:        # a batch failed as a whole (the build missing on a worker, ...)
+                        raise SweepError(f"a batch of points failed on a worker: {_reason(exc)}; the points "
+                                         f"done are in {store_path}, rerun to compute the rest") from None
+                    store.write_batch(store_path, points, settings, results)
+                    summary.computed += len(results["index"])
+                    summary.pids.add(results["pid"])
+                    bar(summary.computed)
         finally:
             for future in futures:
                 future.cancel()
@@ -290,6 +300,36 @@ class _sigint_held:
 
         if self.before is not None:
             signal.pthread_sigmask(signal.SIG_SETMASK, self.before)
+
+
+class _sigint_deferred:
+    """While open, a SIGINT in the main thread sets a flag instead of raising: check() raises the
+    KeyboardInterrupt where the caller chooses, and leaving the block raises it if one came meanwhile.
+    Elsewhere than the main thread, nothing."""
+
+    def __enter__(self):
+        import signal
+        import threading
+
+        self.came, self.before = False, None
+        if threading.current_thread() is threading.main_thread():
+            self.before = signal.signal(signal.SIGINT, self._note)
+        return self
+
+    def _note(self, signum, frame) -> None:
+        self.came = True
+
+    def check(self) -> None:
+        if self.came:
+            raise KeyboardInterrupt
+
+    def __exit__(self, kind, *exc):
+        import signal
+
+        if self.before is not None:
+            signal.signal(signal.SIGINT, self.before)
+        if self.came and kind is None:
+            raise KeyboardInterrupt
 
 
 class _WorkersWithoutSigint:
