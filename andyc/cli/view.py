@@ -22,13 +22,16 @@ from andyc.outputs import check_output
 @click.option("--trails", default=None, metavar="F1,F2",
               help="The frames that leave a trail (their path up to the time shown); default the end frames "
                    "(feet, tips); '' for none.")
-def view(run_file, out, fps, max_samples, follow, trails):
+@click.option("--full-meshes", is_flag=True,
+              help="Keep every mesh at full resolution (by default a mesh above 10000 faces is simplified, "
+                   "so that a robot's page stays small and opens fast).")
+def view(run_file, out, fps, max_samples, follow, trails, full_meshes):
     """Write RUN_FILE (the HDF5 run of `andyc sim ... --frames all`) as one HTML page that plays its
     logged frames in 3-D in a browser, offline: play, pause, scrub, speed, the time and the active
     flow, the jumps on the timeline, the ground where the model has one; the model's shapes (shape:, a
     URDF's visuals and meshes) moved by the logged frames, sticks for the frames without one. Needs the
     meshcat package (andyc[view]), whose three.js viewer is inlined into the page."""
-    from andyc.plot.view import meshcat_bundle, write_view
+    from andyc.plot.view import FACE_BUDGET, meshcat_bundle, write_view
 
     if Path(run_file).suffix.lower() not in (".h5", ".hdf5"):
         raise click.BadParameter(f"{run_file}: andyc view reads the HDF5 run file (.h5) that andyc sim writes",
@@ -52,7 +55,8 @@ def view(run_file, out, fps, max_samples, follow, trails):
                                      param_hint=option)
     try:
         info = write_view(run, out, fps=fps, max_samples=max_samples, follow=follow,
-                          trails=None if trails is None else [t for t in trails.split(",") if t])
+                          trails=None if trails is None else [t for t in trails.split(",") if t],
+                          face_budget=None if full_meshes else FACE_BUDGET)
     except ValueError as exc:          # a run file from before andyc logged rotations, of a model with shapes
         raise click.BadParameter(f"{run_file}: {exc}", param_hint="RUN_FILE") from None
     for what in info["missing"]:

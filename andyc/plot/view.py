@@ -40,6 +40,7 @@ import numpy as np
 
 from andyc.outputs import write_atomic
 from andyc.plot.animate import animation_samples
+from andyc.plot.meshes import FACE_BUDGET, simplified
 from andyc.plot.scene import animation_edges, animation_view, is_hybrid, leaf_frames
 from andyc.runtime.run import Run
 
@@ -62,11 +63,12 @@ def meshcat_bundle() -> str:
 
 
 def view_data(run: Run, fps: int = 30, max_samples: int = MAX_SAMPLES, follow: str | None = None,
-              trails=None) -> dict:
+              trails=None, face_budget: int | None = FACE_BUDGET) -> dict:
     """The page's data (see the module's docstring): 'model', 'time' (s, from the run's start),
     'frames' {name: [[x, y, z] per sample]}, 'rotations' {name: [[x, y, z, w] per sample]} (three.js's
     order) for the frames with shapes, 'shapes' [shape with 'mesh': index into
-    'meshes' [{'format', 'base64'}]], 'edges' [[parent, child]] (the sticks of the frames without a
+    'meshes' [{'format', 'base64', 'faces'}]] (each simplified to at most `face_budget` faces; None: full
+    resolution), 'edges' [[parent, child]] (the sticks of the frames without a
     shape), 'trails' [frame], 'follow' (a frame or None), 'flow_names', 'flow' (per sample), 'events'
     [[time, jump]], 'hybrid', 'up' (1: y, 2: z), 'planar', 'ground' (height along `up`, or None), 'planes'
     (`ground_planes`: the contacts' ground planes or slopes, drawn),
@@ -81,7 +83,7 @@ def view_data(run: Run, fps: int = 30, max_samples: int = MAX_SAMPLES, follow: s
         if name not in run.frames:
             raise ValueError(f"{run.model}: the run logged no frame '{name}'; logged: {', '.join(run.frames)}")
     samples = animation_samples(run, fps, max_samples)
-    shapes, meshes, missing = _shapes(run)
+    shapes, meshes, missing = _shapes(run, face_budget)
     shaped = {s["frame"] for s in shapes}
     turning = sorted(shaped - {"world"})
     for name in turning:
@@ -178,7 +180,7 @@ def ground_planes(run: Run) -> list:
     return list(planes.values())
 
 
-def _shapes(run: Run) -> tuple[list, list, list]:
+def _shapes(run: Run, face_budget: int | None = FACE_BUDGET) -> tuple[list, list, list]:
     """(shapes, meshes, missing): the run's shapes on the frames it logged (and 'world'), each mesh as an
     index into `meshes` [{'format', 'base64'}] (its file's bytes, from the run file or the file), and
     what is not drawn and why."""
@@ -200,7 +202,9 @@ def _shapes(run: Run) -> tuple[list, list, list]:
                 key = (shape["format"], hashlib.sha256(data).hexdigest())
                 if key not in by_content:
                     by_content[key] = len(meshes)
-                    meshes.append({"format": shape["format"], "base64": base64.b64encode(data).decode("ascii")})
+                    data, fmt, faces = simplified(data, shape["format"], face_budget)
+                    meshes.append({"format": fmt, "base64": base64.b64encode(data).decode("ascii"),
+                                   "faces": faces})
                 index[file] = by_content[key]
             shape["mesh"] = index[file]
         shapes.append(shape)
@@ -222,10 +226,10 @@ def view_html(data: dict) -> str:
 
 
 def write_view(run: Run, out, fps: int = 30, max_samples: int = MAX_SAMPLES, follow: str | None = None,
-               trails=None) -> dict:
+               trails=None, face_budget: int | None = FACE_BUDGET) -> dict:
     """Write the page of `run` to `out`; returns {'samples' (kept), 'shapes', 'bytes', 'seconds', 'missing'}."""
     start = time.perf_counter()
-    data = view_data(run, fps, max_samples, follow, trails)
+    data = view_data(run, fps, max_samples, follow, trails, face_budget)
     text = view_html(data)
     with write_atomic(out) as tmp:
         Path(tmp).write_text(text, encoding="utf-8")
