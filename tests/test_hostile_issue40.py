@@ -39,6 +39,30 @@ def one_line_error(result, *fragments):
         assert fragment in errors[0], result.output
 
 
+def test_ctrl_c_stops_an_inline_sweep_with_one_line_keeping_the_points_done(tmp_path, shipped_build):
+    pytest.importorskip("zarr")
+    store = tmp_path / "s.zarr"
+    proc = subprocess.Popen([sys.executable, "-m", "andyc.cli", "sweep", str(MODELS / "double_pendulum.yaml"),
+                             "--grid", "m1=1:2:400", "--t-end", "20", "--batch", "1", "--engine", "inline",
+                             "--build-dir", str(shipped_build), "-o", str(store)], start_new_session=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
+    deadline = time.monotonic() + HANG
+    while not any((store / "outcome").glob("[0-9]*")):
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "no batch was written"
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=HANG)
+    assert proc.returncode == 130, stderr
+    assert stderr.strip().splitlines()[-1] == "andyc: interrupted"
+    assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr, stderr
+    import zarr
+
+    outcome = np.asarray(zarr.open_group(str(store), mode="r")["outcome"][...])
+    # the points written are whole runs (finished, none cut short by the signal), the others not run
+    assert 1 <= np.count_nonzero(outcome) < 400 and set(np.unique(outcome)) <= {0, 1}, np.unique(outcome)
+
+
 # ---- 1. and 3. sweep points: bounded before they are read or made ------------------------------------------
 
 def test_points_from_a_device_or_a_pipe_are_refused_without_reading(tmp_path, shipped_build):
@@ -675,7 +699,8 @@ def test_ctrl_c_stops_a_sweep_with_one_line_and_no_worker_tracebacks(tmp_path, s
         pytest.skip("needs /proc to find the workers")
     # The terminal sends SIGINT to the whole foreground process group: the sweep, its workers, the tracker.
     proc = subprocess.Popen([sys.executable, "-m", "andyc.cli", "sweep", str(MODELS / "double_pendulum.yaml"),
-                             "--grid", "m1=1:2:400", "--t-end", "200", "--batch", "1", "--workers", "2", "--build-dir",
+                             "--grid", "m1=1:2:400", "--t-end", "200", "--batch", "1", "--engine", "cluster", "--workers", "2",
+                             "--build-dir",
                              str(shipped_build), "-o", str(tmp_path / "s.zarr")], start_new_session=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
     deadline = time.monotonic() + HANG

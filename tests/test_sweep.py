@@ -329,6 +329,9 @@ MODEL = str(Path(__file__).resolve().parents[1] / "models" / "double_pendulum.ya
     (["--grid", "m1=0:1:2", "--set", "nope=1"], "--set nope: double_pendulum has no parameter or input 'nope'"),
     (["--grid", "m1=0:1:2", "--scheduler", "tcp://127.0.0.1:9", "--workers", "2"], "give one of them"),
     (["--points", "missing.csv"], "missing.csv: no such file (--points)"),
+    (["--grid", "m1=0:1:2", "--scheduler", "tcp://127.0.0.1:9", "--engine", "inline"], "--engine inline runs the "
+                                                                                       "points in this process"),
+    (["--grid", "m1=0:1:2", "--engine", "inline", "--workers", "2"], "--engine inline starts none"),
 ])
 def test_cli_bad_input_is_one_line_exit_2(shipped_build, tmp_path, args, message):
     result = CliRunner().invoke(main, ["sweep", MODEL, "--build-dir", str(shipped_build), "-o",
@@ -371,3 +374,73 @@ def test_importing_andyc_and_its_cli_imports_no_dask():
             "print([m for m in sys.modules if m.split('.')[0] in ('dask', 'distributed', 'zarr', 'xarray')])")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+# ---- the inline engine: no cluster ---------------------------------------------------------------------------
+
+def test_inline_sweep_equals_serial_runs_with_the_runs_options_and_frame_metrics(pendulum, tmp_path):
+    """Each point is andyc.simulate with every run option of the sweep (an adaptive method's tolerances, the
+    frames a metric reads), in this process: bit for bit a user's own call."""
+    pts = P.grid(["m1=0.5:2:2", "q1=0.2:1.0:2"])
+    settings = Settings.of(pendulum, pts.names, 0.5, method="RK45", rtol=1e-4, atol=1e-6,
+                           metrics=(("tip", "min(tip.y)"),))
+    summary = run_sweep(pendulum, pts, settings, tmp_path / "s.zarr", engine="inline")
+    assert (summary.engine, summary.computed) == ("inline", 4) and "in this process" in summary.text()
+    ds = xr.open_zarr(tmp_path / "s.zarr")
+    for k, point in enumerate(pts.values):
+        i, j = pts.index(k)
+        x0 = pendulum.initial_state(pendulum.parameters({"m1": point[0]})).copy()
+        x0[pendulum.state_names.index("q1")] = point[1]
+        run = andyc.simulate(pendulum, 0.5, method="RK45", rtol=1e-4, atol=1e-6, parameters={"m1": point[0]},
+                             x0=x0, frames=["tip"], progress=False)
+        assert np.array_equal(ds.final.values[i, j], run.state[-1])
+        assert ds.tip.values[i, j] == run.frames["tip"][:, 1].min()
+    loose = andyc.simulate(pendulum, 0.5, method="RK45", parameters={"m1": 0.5}, progress=False)   # rtol 1e-8
+    assert not np.array_equal(ds.final.values[0, 0], loose.state[-1])       # (the tolerances made a difference)
+
+
+def test_auto_runs_a_small_sweep_inline_and_a_long_one_moves_to_a_cluster(client, pendulum, tmp_path, monkeypatch):
+    from andyc.analysis.sweeps import run as R
+
+    pts = P.grid(["m1=0.5:2:6"])
+    settings = Settings.of(pendulum, pts.names, 0.2)
+    small = run_sweep(pendulum, pts, settings, tmp_path / "a.zarr")
+    assert (small.engine, small.computed) == ("inline", 6)
+    # the judgement: the cores' saving against a cluster's start (R.CLUSTER_START seconds)
+    assert R.worth_a_cluster(1.0, int(R.CLUSTER_START * 2.2), 2) and not R.worth_a_cluster(1.0, int(R.CLUSTER_START), 2)
+    assert not R.worth_a_cluster(100.0, 1000, 1)
+    # a sweep judged long after its first batch: the rest goes to the cluster (the module's), the store whole
+    monkeypatch.setattr(R, "PROBE_SECONDS", 0.0)
+    monkeypatch.setattr(R, "CLUSTER_START", 0.0)
+    monkeypatch.setattr(R, "_cluster", lambda *args: _Given(client))
+    moved = run_sweep(pendulum, pts, settings, tmp_path / "b.zarr", batch=2, workers=2)
+    assert moved.engine == "inline, then cluster" and moved.computed == 6 and moved.pids - {os.getpid()}
+    a, b = xr.open_zarr(tmp_path / "a.zarr"), xr.open_zarr(tmp_path / "b.zarr")
+    assert np.array_equal(a.final.values, b.final.values) and (b.outcome.values == 1).all()
+
+
+class _Given:
+    def __init__(self, client):
+        self.client = client
+
+    def __enter__(self):
+        return self.client
+
+    def __exit__(self, *exc):
+        return None
+
+
+def test_an_inline_sweep_starts_no_cluster(shipped_build, tmp_path):
+    import subprocess
+    import sys
+
+    code = ("import sys; from andyc.cli import main\n"
+            "try:\n    main([" + ", ".join(repr(a) for a in [
+                "sweep", MODEL, "--build-dir", str(shipped_build), "--grid", "m1=0.5:1.5:3", "--t-end", "0.05",
+                "-o", str(tmp_path / "s.zarr")]) + "])\n"
+            "except SystemExit as e:\n    assert not e.code, e.code\n"
+            "print([m for m in sys.modules if m.split('.')[0] == 'distributed'])")     # (xarray may import dask)
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert "3 points (3 computed now in" in result.stdout and "in this process" in result.stdout
+    assert result.stdout.strip().splitlines()[-1] == "[]"

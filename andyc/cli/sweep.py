@@ -55,15 +55,20 @@ from andyc.runtime.methods import METHODS
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="An existing Dask scheduler (tcp://HOST:8786); its workers need andyc and the build folder at "
                    "the same path. Default: a local cluster of processes, one per core.")
+@click.option("--engine", default="auto", show_default=True, type=click.Choice(["auto", "inline", "cluster"]),
+              help="Where the points run: inline (in this process, no cluster), cluster (Dask: --scheduler's, or "
+                   "a local cluster), or auto: a --scheduler's cluster if given, else inline, moving the rest to "
+                   "a local cluster once the first points show it would finish sooner there.")
 @click.option("--workers", default=None, type=Number(1, 4096, integer=True), metavar="N",
               help="Processes of the local cluster (default: one per core).")
 @click.option("--batch", default=None, type=Number(1, 1_000_000, integer=True), metavar="N",
               help="Points per task (default: about 8 tasks per worker, at most 256 points).")
 @click.option("--build-dir", default="build", show_default=True, help="Build folder.")
 def sweep(file, grids, samples, dists, seed, points_file, metrics, out, t_end, dt, method, rtol, atol, sets,
-          stop_after, init, timeout, trajectory, max_events, scheduler, workers, batch, build_dir):
+          stop_after, init, timeout, trajectory, max_events, scheduler, engine, workers, batch, build_dir):
     """Run FILE at many points -- a grid (--grid), Monte Carlo samples (--samples, --dist, --seed) or a CSV
-    file's rows (--points) -- on Dask, into one Zarr store that xarray opens (xarray.open_zarr(STORE)).
+    file's rows (--points) -- in this process or on Dask (--engine), into one Zarr store that xarray opens
+    (xarray.open_zarr(STORE)).
 
     A swept name is a parameter, an input or the initial value of a state (a coordinate, a speed). Each
     point records its outcome (finished, stopped, blew up, Zeno, failed), final state, jumps, metrics and,
@@ -77,6 +82,11 @@ def sweep(file, grids, samples, dists, seed, points_file, metrics, out, t_end, d
     if scheduler is not None and workers is not None:
         raise Refused("--workers sets the local cluster's size; with --scheduler, the cluster's own workers run "
                       "the sweep: give one of them")
+    if scheduler is not None and engine == "inline":
+        raise Refused("--engine inline runs the points in this process; --scheduler names a cluster: give one "
+                      "of them")
+    if engine == "inline" and workers is not None:
+        raise Refused("--workers sets the local cluster's size; --engine inline starts none: give one of them")
     try:
         points = _points(grids, samples, dists, seed, points_file)
         metric_list = metric_items(metrics)
@@ -105,7 +115,7 @@ def sweep(file, grids, samples, dists, seed, points_file, metrics, out, t_end, d
         if name not in model.jump_names:
             raise Refused(f"--stop-after {name}: {model.name} has no jump '{name}'; jumps: "
                           f"{', '.join(model.jump_names) or 'none'}")
-    _run(model, points, settings, out, scheduler, workers, batch, read)
+    _run(model, points, settings, out, scheduler, engine, workers, batch, read)
 
 
 def _points(grids, samples, dists, seed, points_file):
@@ -124,14 +134,14 @@ def _points(grids, samples, dists, seed, points_file):
     return P.from_csv(points_file)
 
 
-def _run(model, points, settings, out, scheduler, workers, batch, read) -> None:
+def _run(model, points, settings, out, scheduler, engine, workers, batch, read) -> None:
     from andyc.analysis.sweeps.metrics import MetricError
     from andyc.analysis.sweeps.run import SweepError, run_sweep
     from andyc.analysis.sweeps.store import StoreError
 
     try:
         summary = run_sweep(model, points, settings, out, scheduler=scheduler, workers=workers, batch=batch,
-                            inputs=read)
+                            inputs=read, engine=engine)
     except (StoreError, MetricError) as exc:
         raise Refused(str(exc)) from None
     except SweepError as exc:

@@ -31,6 +31,10 @@ CONNECT_TIMEOUT = 5.0       # seconds to reach a scheduler (and for it to answer
 WORKER_WAIT = 60.0          # seconds to wait for a scheduler's first worker before giving up
 MAX_BATCH = 256
 TASKS_PER_WORKER = 8
+ENGINES = ("auto", "inline", "cluster")
+CLUSTER_START = 15.0        # seconds a LocalCluster takes to start and load the model in its workers (busy machine)
+PROBE_SECONDS = 2.0         # an auto sweep runs inline this long before it judges the rest's time
+BATCH_SECONDS = 1.0         # inline, a batch of about this long between the store's writes
 
 
 class SweepError(RuntimeError):
@@ -49,15 +53,18 @@ class Summary:
     batches: int = 0
     pids: set = field(default_factory=set)              # the worker processes that ran batches
     lost: int = 0                                       # workers of the start gone by the end (died, killed)
+    engine: str = "inline"                              # where the points ran: inline, cluster, or both
 
     def text(self) -> str:
         counts = ", ".join(f"{k} {v}" for k, v in self.outcomes.items() if v)
         if not self.computed:
             return f"{self.store}: {self.points} points, all in the store already (nothing to compute): {counts}"
         lost = f", {self.lost} of them lost during the sweep" if self.lost else ""
-        return (f"{self.store}: {self.points} points ({self.computed} computed now in {self.batches} batches on "
-                f"{self.workers} worker{'s' if self.workers != 1 else ''}{lost}, {self.already} already in the "
-                f"store): {counts}")
+        where = ("in this process" if self.engine == "inline" else
+                 f"{'in this process, then ' if self.engine != 'cluster' else ''}on {self.workers} "
+                 f"worker{'s' if self.workers != 1 else ''}{lost}")
+        return (f"{self.store}: {self.points} points ({self.computed} computed now in {self.batches} batches "
+                f"{where}, {self.already} already in the store): {counts}")
 
 
 def batch_size(todo: int, workers: int, batch: int | None = None) -> int:
@@ -69,11 +76,15 @@ def batch_size(todo: int, workers: int, batch: int | None = None) -> int:
 
 def run_sweep(model, points: Points, settings: Settings, store_path, *, client=None, scheduler: str | None = None,
               workers: int | None = None, batch: int | None = None, progress: bool | None = None,
-              inputs=()) -> Summary:
+              inputs=(), engine: str = "auto") -> Summary:
     """Run every point of `points` not yet in the store at store_path; returns the Summary.
 
-    client: a dask.distributed Client to use (kept open); else scheduler: the address of one to connect to;
-    else a LocalCluster of `workers` processes (default: one per core), closed at the end."""
+    Where the points run (`engine`): "inline", in this process, one after the other, no cluster; "cluster",
+    on Dask: the `client` given (kept open), else one connected to `scheduler`, else a LocalCluster of
+    `workers` processes (default: one per core), closed at the end; "auto" (the default): on the client or
+    scheduler if one is given, else inline first, moving the rest to a LocalCluster only once the points
+    run so far show that the rest would take long enough for more cores to repay a cluster's start
+    (worth_a_cluster)."""
     from andyc.analysis.sweeps.metrics import compile_metric
 
     check_names(points.names, model)
@@ -86,11 +97,24 @@ def run_sweep(model, points: Points, settings: Settings, store_path, *, client=N
     done = store.open_store(store_path, model, points, settings, inputs)
     todo = np.flatnonzero(~done)
     summary = Summary(str(store_path), points.n, 0, int(done.sum()))
+    if engine not in ENGINES:
+        raise ValueError(f"engine {engine!r}: one of {', '.join(ENGINES)}")
+    if client is not None or scheduler is not None:
+        engine = "cluster"
+    if engine != "cluster" and len(todo):
+        try:
+            todo = _run_inline(model, points, settings, store_path, todo, progress, summary, batch=batch,
+                               workers=None if engine == "inline" else (workers or os.cpu_count() or 1))
+        except SweepError:
+            if created and not summary.computed:
+                shutil.rmtree(store_path, ignore_errors=True)
+            raise
     if len(todo):
+        summary.engine = "cluster" if not summary.computed else "inline, then cluster"
         try:
             with _cluster(client, scheduler, workers) as connected, _sigint_deferred() as interrupted:
                 present = set(connected.scheduler_info(n_workers=-1)["workers"])
-                summary.workers = len(present) or workers or 1
+                summary.workers = max(summary.workers, len(present) or workers or 1)
                 _run(connected, model, points, settings, store_path, todo,
                      batch_size(len(todo), summary.workers, batch), progress, summary, interrupted)
                 summary.lost = len(present - set(connected.scheduler_info(n_workers=-1)["workers"]))
@@ -135,6 +159,43 @@ def _run(client, model, points, settings, store_path, todo, size, progress, summ
         finally:
             for future in futures:
                 future.cancel()
+
+
+def worth_a_cluster(seconds_per_point: float, left: int, workers: int) -> bool:
+    """Whether `left` points, at the pace measured inline, finish sooner on a LocalCluster of `workers`
+    processes: the time its extra cores save, left * s * (1 - 1/workers), against CLUSTER_START."""
+    return workers > 1 and left * seconds_per_point * (1 - 1 / workers) > CLUSTER_START
+
+
+def _run_inline(model, points, settings, store_path, todo, progress, summary, workers=None,
+                batch=None) -> np.ndarray:
+    """Run the points `todo` in this process, in batches written to the store as they end; returns the
+    points not run. With `workers` (the auto engine): stop after PROBE_SECONDS when worth_a_cluster says
+    the rest should go to a cluster of that many processes."""
+    import time
+
+    from andyc.analysis.sweeps.worker import remember
+
+    remember(model, settings)       # the model compiled here is the one the points run on
+    size, start, done = batch or 1, time.perf_counter(), 0
+    summary.workers = 1
+    with Progress(f"{model.name} sweep", len(todo), unit="points", enabled=progress) as bar:
+        while done < len(todo):
+            indices = todo[done:done + size]
+            results = run_batch(settings, indices, points.values[indices])
+            store.write_batch(store_path, points, settings, results)
+            done += len(indices)
+            summary.computed += len(indices)
+            summary.batches += 1
+            bar(summary.computed)
+            spent = time.perf_counter() - start
+            if not batch:       # batches of about BATCH_SECONDS: a Ctrl-C loses little, the store is written rarely
+                size = int(min(MAX_BATCH, max(1, BATCH_SECONDS * done / max(spent, 1e-9))))
+            if workers is not None and spent > PROBE_SECONDS and done < len(todo):
+                if worth_a_cluster(spent / done, len(todo) - done, workers):
+                    break
+                workers = None          # judged once: the rest runs here
+    return todo[done:]
 
 
 def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> dict:

@@ -91,6 +91,12 @@ def loaded(settings: Settings):
     return model, _METRICS[key + (settings.metrics,)]
 
 
+def remember(model, settings: Settings) -> None:
+    """Run the settings' points on `model`, a CompiledModel loaded in this process already (the inline
+    engine: the model the command compiled, not a second import of its build)."""
+    _LOADED.setdefault((settings.build, settings.build_key), model)
+
+
 def run_batch(settings: Settings, indices: np.ndarray, values: np.ndarray) -> dict:
     """Run the points `indices` (their values: one row each) and return their results, stacked (see
     empty_results for the fields); also the process's id (the tests kill workers by it)."""
@@ -129,7 +135,8 @@ def simulate_point(model, settings: Settings, point, frames=()):
     for (kind, i), name, value in zip(settings.kinds, settings.names, point):
         {"parameter": parameters, "input": inputs, "state": states}[kind][name] = float(value)
     return andyc.simulate(model, settings.t_end, dt=settings.dt, method=settings.method, parameters=parameters,
-                          inputs=inputs, x0=states or None,     # (the others at the model's: `andyc sim --at`) rtol=settings.rtol, atol=settings.atol, frames=list(frames),
+                          inputs=inputs, x0=states or None,     # (the others at the model's: `andyc sim --at`)
+                          rtol=settings.rtol, atol=settings.atol, frames=list(frames),
                           progress=False, interrupts=Interrupts(settings.timeout), init=andyc.Init(settings.init),
                           events=andyc.Events(stop_after=dict(settings.stop_after) or None))
 
@@ -137,7 +144,7 @@ def simulate_point(model, settings: Settings, point, frames=()):
 def record(out: dict, row: int, model, metrics: list, settings: Settings, point) -> None:
     """Run one point into row `row` of the results; a failure is recorded, never raised."""
     from andyc.analysis.sweeps.metrics import evaluate
-    from andyc.runtime.status import FAILED, outcome
+    from andyc.runtime.status import FAILED, INTERRUPTED, outcome
 
     if settings.basin is not None:
         from andyc.analysis.basins import record_point
@@ -152,6 +159,8 @@ def record(out: dict, row: int, model, metrics: list, settings: Settings, point)
         out["outcome"][row], out["message"][row] = FAILED, printable(text)[:MESSAGE_CHARS]
         out["wall"][row], out["cpu"][row] = time.perf_counter() - start, time.thread_time() - cpu
         return
+    if run.status.startswith(INTERRUPTED):     # a signal to this process: the sweep's end, not the point's
+        raise KeyboardInterrupt
     out["outcome"][row], out["message"][row] = outcome(run.status), printable(run.status)[:MESSAGE_CHARS]
     out["wall"][row], out["cpu"][row] = time.perf_counter() - start, time.thread_time() - cpu
     if len(run.time):
