@@ -80,8 +80,9 @@ def report(name: str, run, folder: Path) -> None:
         opened = open_seconds(page)
         opened = f"{opened:.2f} s" if isinstance(opened, float) else f"not timed ({opened})"
         meshes = sum(s["kind"] == "mesh" for s in data["shapes"])
-        faces = sum(m["faces"] or 0 for m in data["meshes"])
-        print(f"  page, {label}: {written['bytes'] / 1e6:.1f} MB ({len(data['meshes'])} meshes, {faces} faces, "
+        counted = [m["faces"] for m in data["meshes"] if m["faces"] is not None]
+        faces = f"{sum(counted)} faces" if len(counted) == len(data["meshes"]) else "faces not counted"
+        print(f"  page, {label}: {written['bytes'] / 1e6:.1f} MB ({len(data['meshes'])} meshes, {faces}, "
               f"for {meshes} mesh shapes; {written['samples']} samples); written in {wrote:.2f} s, "
               f"opened headless in {opened}", flush=True)
 

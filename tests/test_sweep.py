@@ -80,6 +80,45 @@ def test_samples_are_numpys_generator_draws_in_the_order_given():
     assert not np.array_equal(P.samples(50, ["m=normal(1, 0.1)", "g=uniform(9, 10)"], seed=8).values, pts.values)
 
 
+def test_grid_values_are_the_decimals_a_user_writes_and_sel_finds_them():
+    pts = P.grid(["m=0:1:11", "k=0:1:7"])
+    assert list(pts.axes[0]) == [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0]   # linspace: 0.30000000000000004
+    assert np.array_equal(pts.axes[1], np.linspace(0, 1, 7))       # thirds and sixths: no short decimal, linspace's
+    assert np.abs(pts.axes[0] - np.linspace(0, 1, 11)).max() <= 2.3e-16
+    assert list(P.grid(["e=1e-9:3e-9:5"]).axes[0]) == [1e-9, 1.5e-9, 2e-9, 2.5e-9, 3e-9]
+
+
+def test_lhs_puts_one_point_in_each_stratum_of_every_name_and_maps_by_the_inverse_cdf():
+    from scipy.stats import norm
+
+    n = 40
+    pts = P.samples(n, ["a=uniform(2, 6)", "m=normal(1, 0.1)"], seed=5, sampler="lhs")
+    assert pts.sampler == "lhs" and pts.values.shape == (n, 2)
+    strata = np.floor((pts.values[:, 0] - 2) / 4 * n).astype(int)      # Latin hypercube: a permutation
+    assert sorted(strata) == list(range(n))
+    u = norm.cdf(pts.values[:, 1], loc=1, scale=0.1)                   # back to the unit interval
+    assert sorted(np.floor(u * n).astype(int)) == list(range(n))
+    again = P.samples(n, ["a=uniform(2, 6)", "m=normal(1, 0.1)"], seed=5, sampler="lhs")
+    assert np.array_equal(again.values, pts.values)
+    assert not np.array_equal(P.samples(n, ["a=uniform(2, 6)", "m=normal(1, 0.1)"], seed=6, sampler="lhs").values,
+                              pts.values)
+
+
+@pytest.mark.parametrize("sampler", ["sobol", "halton"])
+def test_low_discrepancy_samples_cover_the_box_more_evenly_than_random_ones(sampler):
+    from scipy.stats import qmc
+
+    specs = ["a=uniform(0, 2)", "b=uniform(-1, 1)", "c=uniform(5, 6)"]
+    lows, highs = np.array([0, -1, 5]), np.array([2, 1, 6])
+    even = P.samples(256, specs, seed=1, sampler=sampler).values
+    draws = P.samples(256, specs, seed=1).values
+    assert ((even >= lows) & (even < highs)).all()
+    # the centred L2 discrepancy (Hickernell), computed by SciPy: far lower for a low-discrepancy design
+    d_even = qmc.discrepancy((even - lows) / (highs - lows))
+    d_random = qmc.discrepancy((draws - lows) / (highs - lows))
+    assert d_even < d_random / 4, (d_even, d_random)
+
+
 @pytest.mark.parametrize("make, message", [
     (lambda: P.grid(["a=0:1:0"]), "empty range (0 values)"),
     (lambda: P.grid(["a=1:1:4"]), "empty range (from 1 to 1)"),
@@ -329,6 +368,8 @@ MODEL = str(Path(__file__).resolve().parents[1] / "models" / "double_pendulum.ya
     (["--grid", "m1=0:1:2", "--set", "nope=1"], "--set nope: double_pendulum has no parameter or input 'nope'"),
     (["--grid", "m1=0:1:2", "--scheduler", "tcp://127.0.0.1:9", "--workers", "2"], "give one of them"),
     (["--points", "missing.csv"], "missing.csv: no such file (--points)"),
+    (["--samples", "1000", "--sampler", "sobol", "--dist", "m1=uniform(1,2)"], "give a power of 2 (512 or 1024)"),
+    (["--grid", "m1=0:1:2", "--sampler", "lhs"], "--sampler lhs goes with --samples N"),
     (["--grid", "m1=0:1:2", "--scheduler", "tcp://127.0.0.1:9", "--engine", "inline"], "--engine inline runs the "
                                                                                        "points in this process"),
     (["--grid", "m1=0:1:2", "--engine", "inline", "--workers", "2"], "--engine inline starts none"),

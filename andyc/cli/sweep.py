@@ -24,8 +24,14 @@ from andyc.runtime.methods import METHODS
 @click.option("--samples", default=None, type=COUNT, metavar="N", help="Monte Carlo: N samples of the --dist names.")
 @click.option("--dist", "dists", multiple=True, metavar="NAME=normal(MU,SIGMA)|uniform(A,B)",
               help="With --samples: the distribution of NAME.")
+@click.option("--sampler", default="random", show_default=True,
+              type=click.Choice(["random", "lhs", "sobol", "halton"]),
+              help="With --samples: Monte Carlo draws (random), or scipy.stats.qmc's Latin hypercube (lhs), "
+                   "scrambled Sobol' points (sobol; N a power of 2) or scrambled Halton points (halton), mapped "
+                   "to each --dist by its inverse CDF.")
 @click.option("--seed", default=0, show_default=True, type=Number(0, 2**63 - 1, integer=True),
-              help="With --samples: the seed of numpy's random generator (the same seed, the same samples).")
+              help="With --samples: the seed of numpy's random generator, which also scrambles the qmc designs "
+                   "(the same seed, the same samples).")
 @click.option("--points", "points_file", default=None, type=click.Path(dir_okay=False), metavar="FILE.csv",
               help="The points: a header of names, then one point a row.")
 @click.option("--metric", "metrics", multiple=True, metavar="NAME=EXPR",
@@ -64,7 +70,7 @@ from andyc.runtime.methods import METHODS
 @click.option("--batch", default=None, type=Number(1, 1_000_000, integer=True), metavar="N",
               help="Points per task (default: about 8 tasks per worker, at most 256 points).")
 @click.option("--build-dir", default="build", show_default=True, help="Build folder.")
-def sweep(file, grids, samples, dists, seed, points_file, metrics, out, t_end, dt, method, rtol, atol, sets,
+def sweep(file, grids, samples, dists, sampler, seed, points_file, metrics, out, t_end, dt, method, rtol, atol, sets,
           stop_after, init, timeout, trajectory, max_events, scheduler, engine, workers, batch, build_dir):
     """Run FILE at many points -- a grid (--grid), Monte Carlo samples (--samples, --dist, --seed) or a CSV
     file's rows (--points) -- in this process or on Dask (--engine), into one Zarr store that xarray opens
@@ -88,7 +94,7 @@ def sweep(file, grids, samples, dists, seed, points_file, metrics, out, t_end, d
     if engine == "inline" and workers is not None:
         raise Refused("--workers sets the local cluster's size; --engine inline starts none: give one of them")
     try:
-        points = _points(grids, samples, dists, seed, points_file)
+        points = _points(grids, samples, dists, seed, points_file, sampler)
         metric_list = metric_items(metrics)
     except (PointsError, MetricError) as exc:
         raise Refused(str(exc)) from None
@@ -118,7 +124,7 @@ def sweep(file, grids, samples, dists, seed, points_file, metrics, out, t_end, d
     _run(model, points, settings, out, scheduler, engine, workers, batch, read)
 
 
-def _points(grids, samples, dists, seed, points_file):
+def _points(grids, samples, dists, seed, points_file, sampler="random"):
     from andyc.analysis.sweeps import points as P
 
     given = [o for o, v in (("--grid", grids), ("--samples", samples), ("--points", points_file)) if v]
@@ -127,10 +133,12 @@ def _points(grids, samples, dists, seed, points_file):
                             + (f" (given: {', '.join(given)})" if given else ""))
     if dists and not samples:
         raise P.PointsError("--dist goes with --samples N")
+    if sampler != "random" and not samples:
+        raise P.PointsError(f"--sampler {sampler} goes with --samples N")
     if grids:
         return P.grid(grids)
     if samples:
-        return P.samples(samples, dists, seed)
+        return P.samples(samples, dists, seed, sampler)
     return P.from_csv(points_file)
 
 

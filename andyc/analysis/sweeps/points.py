@@ -3,9 +3,15 @@ every swept name.
 
 A swept name is a parameter, an input (its held value) or the initial value of a state (a coordinate, a
 speed `<coordinate>_dot` or a declared speed, a signal), as `andyc linearize --at` names them. A grid
-keeps its shape (one axis per name, the first name slowest, as numpy's C order); samples and CSV rows are a
-flat list of points. Monte Carlo draws from numpy's Generator (PCG64) seeded with the sweep's seed, the
-names in the order given, so that the same seed gives the same samples.
+keeps its shape (one axis per name, the first name slowest, as numpy's C order), its values the decimal
+numbers a user would write (0.4, not linspace's 0.39999999999999997, so that xarray's `ds.sel(m=0.4)` finds
+them); samples and CSV rows are a flat list of points.
+
+Samples are drawn with the sweep's seed, so that the same seed gives the same samples: "random" (Monte
+Carlo: numpy's Generator, PCG64, the names in the order given), or a space-filling design of scipy.stats.qmc
+in the unit cube -- "lhs" (Latin hypercube: each of n equal strata of every name holds one point), "sobol"
+(scrambled Sobol' points: n a power of 2) or "halton" (scrambled Halton) -- mapped to each name's
+distribution by its inverse CDF (uniform(A,B): A + (B - A) u; normal(MU,SIGMA): MU + SIGMA Phi^-1(u)).
 
 Bad input raises PointsError with one line that says what and how to fix it.
 """
@@ -27,6 +33,7 @@ import numpy as np
 MAX_POINTS = 10_000_000
 MAX_CSV_BYTES = 256 * 2**20     # a points file of MAX_POINTS rows of a few names; read whole, so bounded
 DISTRIBUTIONS = ("normal(MU,SIGMA)", "uniform(A,B)")
+SAMPLERS = ("random", "lhs", "sobol", "halton")
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _DIST = re.compile(r"^\s*(normal|uniform)\s*\(\s*([^,()]+?)\s*,\s*([^,()]+?)\s*\)\s*$")
 
@@ -45,6 +52,7 @@ class Points:
     shape: tuple
     axes: tuple = ()
     seed: int | None = None
+    sampler: str | None = None      # samples: how they were drawn (SAMPLERS)
 
     @property
     def n(self) -> int:
@@ -108,21 +116,43 @@ def grid(specs, option: str = "--grid") -> Points:
         ranges.append((low, high, int(count)))
     shape = tuple(n for _, _, n in ranges)
     _check_count(math.prod(shape), option)  # from the counts, before any value is made
-    axes = [np.linspace(low, high, n) for low, high, n in ranges]
+    axes = [decimal_axis(low, high, n) for low, high, n in ranges]
     mesh = np.meshgrid(*axes, indexing="ij")
     values = np.stack([m.ravel() for m in mesh], axis=1) if axes else np.zeros((0, 0))
     return Points("grid", tuple(names), values, shape, tuple(axes))
 
 
-def samples(n: int, specs, seed: int) -> Points:
-    """n Monte Carlo samples of ('NAME=normal(MU,SIGMA)' | 'NAME=uniform(A,B)', ...), drawn in that order from
-    numpy.random.default_rng(seed)."""
+def decimal_axis(low: float, high: float, n: int) -> np.ndarray:
+    """numpy.linspace(low, high, n), each value replaced by the shortest decimal (at most 12 significant
+    digits) within 4 units in the last place of it, when there is one: linspace's rounding undone (0.4 for
+    0.39999999999999997), a value with no short decimal (a third) left as linspace made it."""
+    axis = np.linspace(low, high, n)
+    for k, value in enumerate(axis[1:-1], start=1):
+        for digits in range(1, 13):
+            short = float(f"{value:.{digits}g}")
+            if abs(short - value) <= 4 * np.spacing(abs(value)):
+                axis[k] = short
+                break
+    return axis
+
+
+def samples(n: int, specs, seed: int, sampler: str = "random") -> Points:
+    """n samples of ('NAME=normal(MU,SIGMA)' | 'NAME=uniform(A,B)', ...) with the given seed: "random" draws
+    them in that order from numpy.random.default_rng(seed); "lhs", "sobol" and "halton" take scipy.stats.qmc's
+    design of n points in the unit cube (one dimension per name, in that order; scrambled, seeded with
+    default_rng(seed)) through each distribution's inverse CDF."""
+    if sampler not in SAMPLERS:
+        raise PointsError(f"--sampler {sampler}: not a sampler; choose one of {', '.join(SAMPLERS)}")
     if n < 1:
         raise PointsError(f"--samples {n}: give at least 1 sample")
     _check_count(n)
     if not specs:
         raise PointsError("--samples needs at least one --dist NAME=normal(MU,SIGMA) or NAME=uniform(A,B)")
+    if sampler == "sobol" and n & (n - 1):
+        raise PointsError(f"--sampler sobol: {n} samples lose the balance of Sobol' points; give a power of 2 "
+                          f"({1 << (n - 1).bit_length() >> 1} or {1 << (n - 1).bit_length()}), or --sampler lhs")
     rng = np.random.default_rng(seed)
+    unit = None if sampler == "random" else _design(sampler, len(specs), n, rng)
     names, columns = [], []
     for text in specs:
         name, sep, rest = text.partition("=")
@@ -135,8 +165,26 @@ def samples(n: int, specs, seed: int) -> Points:
         if kind == "uniform" and not b > a:
             raise PointsError(f"--dist '{text}': a bad distribution: uniform(A,B) needs A < B, got {a:g}, {b:g}")
         names.append(name.strip())
-        columns.append(rng.normal(a, b, n) if kind == "normal" else rng.uniform(a, b, n))
-    return Points("samples", tuple(names), np.stack(columns, axis=1), (n,), seed=seed)
+        if unit is None:
+            columns.append(rng.normal(a, b, n) if kind == "normal" else rng.uniform(a, b, n))
+        else:
+            u = unit[:, len(columns)]
+            columns.append(_normal_quantile(u, a, b) if kind == "normal" else a + (b - a) * u)
+    return Points("samples", tuple(names), np.stack(columns, axis=1), (n,), seed=seed, sampler=sampler)
+
+
+def _design(sampler: str, d: int, n: int, rng) -> np.ndarray:
+    """n points of scipy.stats.qmc's `sampler` in the unit cube of dimension d."""
+    from scipy.stats import qmc
+
+    engine = {"lhs": qmc.LatinHypercube, "sobol": qmc.Sobol, "halton": qmc.Halton}[sampler](d, rng=rng)
+    return engine.random(n)
+
+
+def _normal_quantile(u: np.ndarray, mu: float, sigma: float) -> np.ndarray:
+    from scipy.special import ndtri
+
+    return mu + sigma * ndtri(u)
 
 
 def from_csv(path) -> Points:

@@ -68,7 +68,8 @@ def attributes(model, points: Points, settings: Settings) -> dict:
     return {"andyc_version": andyc.__version__, "model": model.name, "build_key": settings.build_key,
             "spec_sha256": model.spec_sha256, "source": model.source, "kind": points.kind,
             "swept": list(points.names), "points_sha256": points.digest(),
-            "seed": -1 if points.seed is None else int(points.seed), "options": json.dumps(settings.options()),
+            "seed": -1 if points.seed is None else int(points.seed), "sampler": points.sampler or "",
+            "options": json.dumps(settings.options()),
             "outcomes": json.dumps(OUTCOMES)}
 
 
