@@ -208,7 +208,7 @@ def test_grid_sweep_equals_serial_runs_bit_for_bit_and_resumes_with_nothing_new(
         assert ds.emax.values[i, j] == ds.emax.sel(m1=point[0], q1=point[1]).values
     assert (ds.outcome.values == 1).all() and np.isfinite(ds.trajectory.values).all()
     assert np.array_equal(ds.trajectory.values[..., -1, :], ds.final.values)      # at t_end: the final state
-    assert np.array_equal(ds.trajectory_time.values[0, 0], np.linspace(0, 0.3, 4))
+    assert list(ds.trajectory_time.values[0, 0]) == [0.0, 0.1, 0.2, 0.3]      # (linspace: 0.30000000000000004)
     x0 = pendulum.initial_state(pendulum.parameters({"m1": 0.5})).copy()
     x0[0] = 0.2
     assert np.array_equal(ds.trajectory.values[0, 0, 0], x0)                     # at t = 0: the point's start
@@ -485,3 +485,47 @@ def test_an_inline_sweep_starts_no_cluster(shipped_build, tmp_path):
     assert result.returncode == 0, result.stderr
     assert "3 points (3 computed now in" in result.stdout and "in this process" in result.stdout
     assert result.stdout.strip().splitlines()[-1] == "[]"
+
+
+def test_the_store_follows_xarrays_and_cfs_conventions(pendulum, tmp_path):
+    """A grid value found by its decimal (ds.sel), the trajectory over a time coordinate with its units, CF's
+    long names and units, and a message kept whole however long."""
+    pts = P.grid(["m1=0:1:11"])
+    settings = Settings.of(pendulum, pts.names, 0.2, trajectory=5, metrics=(("top", "max(q1)"),))
+    run_sweep(pendulum, pts, settings, tmp_path / "s.zarr", engine="inline")
+    ds = xr.open_zarr(tmp_path / "s.zarr")
+    assert ds.attrs["Conventions"].startswith("CF-")
+    assert float(ds.m1.sel(m1=0.3)) == 0.3 and ds.m1.attrs["long_name"] == "parameter m1"
+    line = ds.trajectory.sel(m1=0.3, state="q1")
+    assert line.dims == ("time",) and np.array_equal(line.time.values, [0.0, 0.05, 0.1, 0.15, 0.2])
+    assert ds.time.attrs["units"] == "s" and ds.time.attrs["standard_name"] == "time"
+    assert ds.t_final.attrs["units"] == "s" and ds.wall.attrs["units"] == "s"
+    assert ds.top.attrs["long_name"] == "metric top = max(q1)"
+    assert line.values[0] == ds.trajectory.sel(m1=0.3, state="q1", time=0.0).values     # time found by value
+    name = "no_such_" + "x" * 400
+    pts = P.grid(["q1=0:1:2"])
+    failed = Settings.of(pendulum, pts.names, 0.1, fixed=((name, 1.0),))
+    run_sweep(pendulum, pts, failed, tmp_path / "f.zarr", engine="inline")
+    message = str(xr.open_zarr(tmp_path / "f.zarr").message.values[0])
+    assert f"unknown parameter '{name}'" in message and len(message) > 400
+
+
+def test_a_metric_map_marks_the_points_whose_run_did_not_finish():
+    from matplotlib.collections import PathCollection, QuadMesh
+
+    from andyc.plot.sweepmap import sweep_figure
+
+    x, y = np.array([0.0, 1.0, 2.0]), np.array([5.0, 6.0])
+    values = np.arange(6.0).reshape(3, 2)
+    code = np.ones((3, 2), int)
+    code[1, 0], code[2, 1] = 2, 3                      # stopped at (1, 5), blew up at (2, 6)
+    names = {int(c): n for c, n in OUTCOMES.items()}
+    fig = sweep_figure(True, [("a", x), ("b", y)], values, "m", runs=(code, names))
+    ax = fig.axes[0]
+    mesh = next(c for c in ax.collections if isinstance(c, QuadMesh))
+    shown = np.ma.masked_invalid(mesh.get_array()).reshape(2, 3).T      # (pcolormesh of values.T)
+    assert shown.mask[1, 0] and shown.mask[2, 1] and shown.mask.sum() == 2
+    assert shown[0, 0] == 0.0 and shown[2, 0] == 4.0
+    crosses = {c.get_label(): c.get_offsets().tolist() for c in ax.collections if isinstance(c, PathCollection)}
+    assert crosses == {"stopped": [[1.0, 5.0]], "blew up": [[2.0, 6.0]]}
+    assert {t.get_text() for t in ax.get_legend().get_texts()} == {"stopped", "blew up"}

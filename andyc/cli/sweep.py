@@ -190,8 +190,13 @@ def plot_store(store, out, variable) -> None:
                                                               data.attrs["flag_meanings"].split())}
         if variable == "basin":
             from andyc.plot.basinmap import CLASS_COLOURS as colours
+    runs = None
+    if outcomes is None and variable != "outcome":      # a metric's map marks the runs that did not finish
+        meanings = ds.outcome.attrs["flag_meanings"].split()
+        runs = (ds.outcome.values, {int(c): m.replace("_", " ") for c, m in zip(ds.outcome.attrs["flag_values"],
+                                                                               meanings)})
     plot_sweep(ds.attrs["kind"] == "grid", axes, data.values, variable, data.attrs.get("expression", ""), out,
-               title=f"{ds.attrs['model']}: {variable}", outcomes=outcomes, colours=colours)
+               title=f"{ds.attrs['model']}: {variable}", outcomes=outcomes, colours=colours, runs=runs)
     click.echo(f"wrote {out}")
 
 

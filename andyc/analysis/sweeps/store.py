@@ -4,22 +4,25 @@
 
 Dimensions: a grid's swept names (its coordinates, the grid's values), or `point` for samples and CSV rows
 (the swept names are then coordinates along it); `state`, `discrete`, `jump` (their names), `event` (the
-first jumps of a run) and `sample` (decimated trajectories). Variables, per point:
+first jumps of a run) and `time` (the times of the kept trajectories, a coordinate: plots are over time).
+Variables, per point:
 
     outcome          0 not run, 1 finished, 2 stopped, 3 blew up, 4 Zeno, 5 failed (flag_meanings names them)
-    message          the run's status, or why it failed
+    message          the run's status, or why it failed (a variable-length string, whole)
     t_final          the time the run reached
     final            the final state (state), final_discrete (discrete), final_flow (the flow's index)
     jump_count       how many times each jump happened (jump)
     event_time       the times of the first jumps (event; NaN past the last), event_jump their jump's index
     wall, cpu        seconds the point took on its worker: wall-clock time, and the CPU time of its thread
     <metric>         each --metric, by its name
-    trajectory       the state at `sample` evenly spaced times (trajectory_time), with --trajectory N
+    trajectory       the state at the `time` coordinate's N evenly spaced times, with --trajectory N;
+                     trajectory_time: those the run reached (NaN past its end)
     basin            a basin's class of each point (andyc.analysis.basins: 1 cycle, 2 other orbit, 3 falls,
                      4 other), with basin_period, basin_steps and basin_distance; the run variables are
                      then those of the point's last step (t_final: the time of all its steps)
 
-Attributes name the model, its build key and andyc's version, the sweep's points (their SHA-256, the kind,
+Variables and coordinates carry CF's `long_name` and, where andyc knows them (times), `units`; the time
+coordinate `standard_name` and `axis`. Attributes name the model, its build key and andyc's version, the sweep's points (their SHA-256, the kind,
 the seed) and the run options; a store made by another model, build or version, or for other points or
 options, is refused. The store is made whole (in a temporary folder, then renamed); results are written as
 each batch of points completes (Zarr writes each chunk file atomically), `outcome` last, so that a point
@@ -36,7 +39,7 @@ import numpy as np
 
 import andyc
 from andyc.analysis.sweeps.points import Points
-from andyc.analysis.sweeps.worker import MESSAGE_CHARS, Settings, empty_results
+from andyc.analysis.sweeps.worker import MESSAGE_CHARS, Settings, empty_results, sample_times
 from andyc.outputs import OutputError, check_folder, new_folder_atomic
 from andyc.runtime.status import OUTCOMES
 
@@ -45,7 +48,20 @@ CHUNK_POINTS = 4096             # at most this many points in a chunk
 # Names of the store's own variables and dimensions, which a metric or a swept name must not take.
 RESERVED = ("outcome", "message", "t_final", "final", "final_discrete", "final_flow", "jump_count", "event_time",
             "event_jump", "wall", "cpu", "trajectory", "trajectory_time", "point", "state", "discrete", "jump", "event",
-            "sample", "basin", "basin_period", "basin_steps", "basin_distance")
+            "time", "basin", "basin_period", "basin_steps", "basin_distance")
+# CF attributes of the store's own variables: (long_name, units); units only where andyc knows them (a
+# model's states and parameters carry none)
+DESCRIPTIONS = {
+    "outcome": ("outcome of the run", None), "message": ("status of the run, or why it failed", None),
+    "t_final": ("time the run reached", "s"), "final": ("final state", None),
+    "final_discrete": ("final discrete state", None), "final_flow": ("index of the final flow", None),
+    "jump_count": ("number of occurrences of each jump", "1"), "event_time": ("time of the first jumps", "s"),
+    "event_jump": ("index of the jump at event_time", None), "wall": ("wall-clock time the point took", "s"),
+    "cpu": ("CPU time of the point's thread", "s"), "trajectory": ("state at the sampled times", None),
+    "trajectory_time": ("sampled time reached by the run (NaN past its end)", "s"),
+    "basin": ("class of the orbit", None), "basin_period": ("period of the cycle, in steps", "1"),
+    "basin_steps": ("steps taken", "1"), "basin_distance": ("distance to the cycle at the last step", None)}
+KINDS = {"parameter": "parameter", "input": "held input", "state": "initial value of the state"}
 
 
 class StoreError(ValueError):
@@ -65,7 +81,7 @@ def check_names(points: Points, settings: Settings) -> None:
 
 
 def attributes(model, points: Points, settings: Settings) -> dict:
-    return {"andyc_version": andyc.__version__, "model": model.name, "build_key": settings.build_key,
+    return {"Conventions": "CF-1.10", "andyc_version": andyc.__version__, "model": model.name, "build_key": settings.build_key,
             "spec_sha256": model.spec_sha256, "source": model.source, "kind": points.kind,
             "swept": list(points.names), "points_sha256": points.digest(),
             "seed": -1 if points.seed is None else int(points.seed), "sampler": points.sampler or "",
@@ -163,7 +179,7 @@ def _skeleton(model, points: Points, settings: Settings):
     dims = _point_dims(points)
     empty = empty_results(model, settings, 1)
     extra = {"final": ("state",), "final_discrete": ("discrete",), "jump_count": ("jump",), "event_time": ("event",),
-             "event_jump": ("event",), "trajectory": ("sample", "state"), "trajectory_time": ("sample",)}
+             "event_jump": ("event",), "trajectory": ("time", "state"), "trajectory_time": ("time",)}
     data = {}
     for name, one in _variables(settings, empty).items():
         shape = points.shape + one.shape[1:]
@@ -173,14 +189,22 @@ def _skeleton(model, points: Points, settings: Settings):
                                                                                  for o in OUTCOMES.values())})
     coords = {k: list(v) for k, v in (("state", model.state_names), ("jump", model.jump_names),
                                       ("discrete", model.discrete_names)) if len(v)}
+    if settings.trajectory:         # the sampled times as the dimension's coordinate: plots over time
+        coords["time"] = ("time", sample_times(settings),
+                          {"standard_name": "time", "long_name": "time", "units": "s", "axis": "T"})
     if points.kind == "grid":
         coords.update({n: axis for n, axis in zip(points.names, points.axes)})
     else:
         coords["point"] = np.arange(points.n)
         coords.update({n: ("point", points.values[:, k]) for k, n in enumerate(points.names)})
     ds = xr.Dataset(data, coords=coords, attrs=attributes(model, points, settings))
+    for name, (kind, _) in zip(points.names, settings.kinds):
+        ds[name].attrs["long_name"] = f"{KINDS[kind]} {name}"
+    for name, (long_name, units) in DESCRIPTIONS.items():
+        if name in ds:
+            ds[name].attrs.update({"long_name": long_name, **({"units": units} if units else {})})
     for name, text in settings.metrics:
-        ds[name].attrs["expression"] = text
+        ds[name].attrs.update({"expression": text, "long_name": f"metric {name} = {text}"})
     ds["message"].attrs["max_characters"] = MESSAGE_CHARS
     if settings.basin is not None:
         from andyc.analysis.basins import CLASSES

@@ -21,7 +21,7 @@ import numpy as np
 
 from andyc.errors import SimulationError, printable
 
-MESSAGE_CHARS = 200         # a status message is kept to this many characters in the store
+MESSAGE_CHARS = 8192        # a status message is kept whole up to this many characters (a variable-length string)
 
 
 @dataclass(frozen=True)
@@ -91,6 +91,14 @@ def loaded(settings: Settings):
     return model, _METRICS[key + (settings.metrics,)]
 
 
+def sample_times(settings: Settings) -> np.ndarray:
+    """The times of a point's kept trajectory: --trajectory N evenly spaced from 0 to t_end, as decimals (the
+    store's time coordinate, which `ds.sel(time=0.15)` finds)."""
+    from andyc.analysis.sweeps.points import decimal_axis
+
+    return decimal_axis(0.0, settings.t_end, settings.trajectory)
+
+
 def remember(model, settings: Settings) -> None:
     """Run the settings' points on `model`, a CompiledModel loaded in this process already (the inline
     engine: the model the command compiled, not a second import of its build)."""
@@ -112,7 +120,7 @@ def run_batch(settings: Settings, indices: np.ndarray, values: np.ndarray) -> di
 def empty_results(model, settings: Settings, n: int) -> dict:
     """The results of n points, not run: NaN, -1 and empty text."""
     full, nan = np.full, math.nan
-    return {"outcome": np.zeros(n, np.int8), "message": full(n, "", dtype=f"<U{MESSAGE_CHARS}"),
+    return {"outcome": np.zeros(n, np.int8), "message": full(n, "", dtype=object),
             "t_final": full(n, nan), "final": full((n, model.nx), nan), "final_discrete": full((n, model.nd), nan),
             "final_flow": full(n, -1, dtype=np.int16), "jump_count": np.zeros((n, model.nj), np.int32),
             "event_time": full((n, settings.max_events), nan),
@@ -176,7 +184,7 @@ def record(out: dict, row: int, model, metrics: list, settings: Settings, point)
         except (ValueError, ArithmeticError, TypeError):
             out["metrics"][row, j] = math.nan
     if settings.trajectory and len(run.time):
-        times = np.linspace(0.0, settings.t_end, settings.trajectory)
+        times = sample_times(settings)
         # the last sample at or before each time (a jump is not smeared); NaN past the run's end
         at = np.clip(np.searchsorted(run.time, times, side="right") - 1, 0, len(run.time) - 1)
         reached = times <= run.time[-1] * (1 + 1e-12)
