@@ -333,3 +333,19 @@ def test_a_run_with_contacts_gets_their_normal_forces_and_closed_spans():
     xs = np.concatenate([path.vertices[:, 0] for path in shade.get_paths()])
     assert xs.min() == pytest.approx(1.0) and xs.max() == pytest.approx(2.0)
     assert [a.get_gid() for a in fig.axes].index("contacts") < [a.get_gid() for a in fig.axes].index("multipliers")
+
+
+def test_a_run_whose_elements_do_work_gets_its_energy_balance_not_the_change_of_e():
+    """A damped run: E falls; the work W of the damper is -(E(0) - E); the lower panel is E - E(0) - W in J
+    (the summary's residual), the upper one E beside E(0) + W."""
+    t = np.linspace(0.0, 2.0, 41)
+    energy = 1.0 * np.exp(-t)
+    work = (energy - 1.0 + 1e-6 * np.sin(t))[:, None]           # W with an error of 1e-6 sin t
+    run = make_run(["q", "q_dot"], 1, 1, np.column_stack([t, t]), work_names=["damper"], work=work)
+    run.energy = energy
+    p = panels(figure_for(run))
+    (label, x, balance), = lines(p["energy_change"])
+    assert label == "E - E(0) - W" and "J" in p["energy_change"].get_ylabel()
+    assert np.allclose(balance, -1e-6 * np.sin(t), atol=1e-15)
+    drawn = {label: y for label, _, y in lines(p["energy"])}
+    assert np.array_equal(drawn["E"], energy) and np.allclose(drawn["E(0) + W"], energy + 1e-6 * np.sin(t))

@@ -298,12 +298,22 @@ def _residuals(ax, run: Run) -> None:
 
 
 def _energy(ax, run: Run) -> None:
-    ax.plot(run.time, run.energy, color="k", lw=1)
+    """E; with elements that do work (dampers, friction, inputs, jumps), also E(0) + W, which E follows."""
+    ax.plot(run.time, run.energy, color="k", lw=1, label="E")
+    if run.work_names:
+        ax.plot(run.time, run.energy[0] + run.work.sum(axis=1), color="tab:blue", lw=1, ls="--", label="E(0) + W")
+        _legend(ax)
     ax.set_ylabel("energy E, J")
     ax.ticklabel_format(axis="y", useOffset=False)
 
 
 def _energy_change(ax, run: Run) -> None:
+    """The energy balance E - E(0) - W in J where elements do work (the residual the run's summary reports:
+    0 but for the integration's error), else the relative change of a conserved E."""
+    if run.work_names:
+        ax.plot(run.time, run.energy_balance, color="tab:red", lw=0.8, label="E - E(0) - W")
+        ax.set_ylabel("balance E - E(0) - W, J")
+        return
     e = run.energy
     ax.plot(run.time, (e - e[0]) / max(abs(e[0]), np.abs(e).max(), 1e-300), color="tab:red", lw=0.8)
     ax.set_ylabel("(E - E(0)) / max|E|, 1")
