@@ -195,3 +195,37 @@ def test_a_urdf_robots_tree_is_its_links_and_joints():
     for j in joints:
         want = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prismatic"}.get(j.get("type"), "fixed")
         assert kinds[j.find("child").get("link")] == want, j.get("name")
+
+
+def _label_overlaps(fig) -> list:
+    """[(gid, gid)] of the figure's labelled texts (nodes, links, jumps) whose drawn boxes overlap by more
+    than a pixel each way, as matplotlib renders them."""
+    import itertools
+
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    out = []
+    for ax in fig.axes:
+        boxes = [(t.get_gid(), (t.get_bbox_patch() or t).get_window_extent(renderer)) for t in ax.texts if t.get_gid()]
+        for (ga, a), (gb, b) in itertools.combinations(boxes, 2):
+            if min(a.x1, b.x1) - max(a.x0, b.x0) > 1 and min(a.y1, b.y1) - max(a.y0, b.y0) > 1:
+                out.append((ga, gb))
+    return out
+
+
+def test_no_two_labels_overlap_in_any_shipped_models_graph():
+    overlapping = {p.stem: _label_overlaps(graph_figure(andyc.load(p))) for p in YAML_MODELS}
+    assert {k: v for k, v in overlapping.items() if v} == {}
+
+
+def test_the_overlap_check_sees_two_labels_drawn_on_each_other():
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure()
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    for gid in ("a", "b"):
+        ax.text(0.5, 0.5, "a label", gid=gid, bbox=dict(boxstyle="round"))
+    ax.text(0.1, 0.1, "apart", gid="c", bbox=dict(boxstyle="round"))
+    assert _label_overlaps(fig) == [("a", "b")]
