@@ -305,6 +305,17 @@ def test_compass_gait_through_andyc_plot(compiled, tmp_path):
     assert result.exit_code == 0, result.output
     with Image.open(tmp_path / "r.gif") as im:
         assert im.format == "GIF" and im.n_frames == 6
+    assert ("andyc view" in result.output) == bool(run.display.get("shapes"))      # a pointer to the shapes
+
+
+def test_animating_a_contact_run_points_to_the_viewer_for_its_ground_and_forces(tmp_path):
+    run = contact_run()
+    run.frames = {"ball": np.column_stack([np.zeros_like(run.time), run.state[:, 0], np.zeros_like(run.time)])}
+    run.frame_parents = {"ball": "world"}
+    path = run.save(tmp_path / "c.h5")
+    result = invoke("plot", path, "--animate", "--frames-max", 3)
+    assert result.exit_code == 0, result.output
+    assert f"ground and contact forces are drawn by `andyc view {path}`" in result.output
 
 
 def test_a_contact_with_friction_adds_its_friction_force_dashed():

@@ -17,7 +17,8 @@ from andyc.outputs import check_output
 @click.option("-o", "--out", default=None, help="PNG file; default RUN.png beside the run. With --animate: the "
               "animation, OUT.gif or OUT.mp4 (needs ffmpeg); default RUN.gif beside the run.")
 @click.option("--animate", is_flag=True, help="Instead of the plots, write a 3-D stick animation of the frames the "
-              "run logged (andyc sim ... --frames all).")
+              "run logged (andyc sim ... --frames all). The model's shapes and meshes, its ground and contact "
+              "forces are drawn by `andyc view RUN` instead.")
 @click.option("--fps", default=None, type=click.IntRange(1, 100), metavar="N",
               help="With --animate: frames per second (default 30; a GIF frame lasts whole hundredths of a "
                    "second: 30 plays at 33.3).")
@@ -148,3 +149,8 @@ def animate_file(run, run_file, out, fps: int, frames_max: int) -> None:
     pace = "real time" if info["speed"] < 1.01 else f"{info['speed']:.2f} x real time"
     click.echo(f"wrote {out} ({info['frames']} frames, {info['seconds']:.1f} s at {info['fps']:.3g} fps, {pace}; "
                f"rendered in {info['render_seconds']:.1f} s)")
+    drawn = [what for what, there in (("shapes", run.display.get("shapes")), ("ground and contact forces",
+                                                                               run.contact_names)) if there]
+    if drawn:       # the sticks show the frames only: say where the rest is drawn
+        click.echo(f"the animation draws the frames as sticks; its {' and '.join(drawn)} are drawn by "
+                   f"`andyc view {run_file}` (a page that plays in a browser)")
