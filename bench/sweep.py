@@ -12,6 +12,11 @@
    here), 1000 points on the one-worker cluster: (the sweep's wall time - the points' own wall times on the
    worker) / 1000, target <= 5 ms; beside it, a loop of andyc.simulate over the same points here.
 
+4. The command end to end, as the issue measured it: `andyc sweep` of the double pendulum, 200 points of 5 s,
+   with --engine inline (this process, no cluster), auto, and cluster on 1 and 2 workers; each command's
+   wall time and CPU time (its process and every child: the cluster's workers), the engines alternated in
+   each round; the final states of the stores compared first (equal to the bit).
+
     python bench/sweep.py [--rounds 3]
 """
 
@@ -153,12 +158,45 @@ def main() -> None:
               f"{min(w for w, _ in runs) / many.n * 1e3:.2f} ms a point, of which the runs "
               f"{min(p for _, p in runs) / many.n * 1e3:.2f} ms; overhead {min(overhead) * 1e3:.2f} .. "
               f"{max(overhead) * 1e3:.2f} ms a point over 3 sweeps (target <= 5 ms)")
+        engines(scratch, args.rounds)
     finally:
         logging.getLogger("distributed").setLevel(logging.ERROR)     # (starting a cluster resets it)
         for made, client in clusters.values():
             client.close()
             made.close()
         shutil.rmtree(scratch, ignore_errors=True)
+
+
+def engines(scratch: Path, rounds: int) -> None:
+    """Section 4: the command line's engines, A/B alternated; wall and CPU seconds of each command."""
+    import resource
+    import subprocess
+
+    import xarray as xr
+
+    variants = {"inline": ["--engine", "inline"], "auto": ["--engine", "auto"],
+                "cluster, 1 worker": ["--engine", "cluster", "--workers", "1"],
+                "cluster, 2 workers": ["--engine", "cluster", "--workers", "2"]}
+    walls, cpus, finals = {k: [] for k in variants}, {k: [] for k in variants}, {}
+    for _ in range(rounds):
+        for name, extra in variants.items():
+            store = scratch / f"engine_{len(walls[name])}_{name.replace(' ', '_').replace(',', '')}.zarr"
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            start = time.perf_counter()
+            subprocess.run([sys.executable, "-m", "andyc.cli", "sweep", str(ROOT / "models" / "double_pendulum.yaml"),
+                            "--grid", "m1=0.5:2:200", "--t-end", "5", "--build-dir", str(BUILD), "-o", str(store),
+                            *extra], check=True, capture_output=True)
+            walls[name].append(time.perf_counter() - start)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpus[name].append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
+            finals.setdefault(name, xr.open_zarr(store).final.values)
+    reference = finals["inline"]
+    agree = all(np.array_equal(f, reference) for f in finals.values())
+    print(f"andyc sweep, double pendulum, 200 points of 5 s, the whole command ({rounds} rounds, engines alternated; "
+          f"final states {'equal to the bit' if agree else 'DIFFER'} across engines):")
+    for name in variants:
+        print(f"  {name:>20}: wall {min(walls[name]):.2f} .. {max(walls[name]):.2f} s, "
+              f"CPU {min(cpus[name]):.2f} .. {max(cpus[name]):.2f} s")
 
 
 if __name__ == "__main__":          # (Dask starts its worker processes by spawning: they import this file)
