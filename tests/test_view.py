@@ -19,7 +19,7 @@ import andyc
 from andyc import cli
 
 pytest.importorskip("meshcat")
-from andyc.plot.view import view_data, view_html  # noqa: E402
+from andyc.plot.view import ground_planes, view_data, view_html  # noqa: E402
 from andyc.runtime.run import Run  # noqa: E402
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -375,6 +375,24 @@ def test_every_shipped_model_with_contacts_on_a_ground_has_its_plane():
     incline = contact_planes(load(models / "block_incline.yaml"))[0]
     assert np.allclose(incline["normal"], [-np.sin(0.5), np.cos(0.5), 0]) and incline["offset"] == 0.0
     assert np.allclose(incline["tangents"], [[np.cos(0.5), np.sin(0.5), 0]])
+
+
+def test_a_model_with_a_ground_section_draws_that_ground_not_its_feets_centres():
+    """Go1's feet are spheres of radius 0.02 m (its URDF's <collision>): their contact planes are their
+    centres', 2 cm up; the ground the page draws is the model's `ground:`, at height 0. A damaged record of
+    the ground falls back to the contacts' planes."""
+    from andyc.spec.display import display
+    from andyc.spec.load import load
+
+    shown = display(load(Path(andyc.__file__).parent.parent / "models" / "go1.yaml"))
+    assert {c["offset"] for c in shown["contacts"] if c["name"].endswith("foot_sphere")} == {-0.02}
+    run = walker_run(n=11)
+    run.display = {**run.display, "contacts": shown["contacts"], "plane": shown["plane"]}
+    assert ground_planes(run) == [{"normal": [0.0, 0.0, 1.0], "offset": 0.0}]
+    run.display["plane"] = {"normal": [0.0, 0.0, 2.0], "offset": 0.0}           # not a unit normal: damaged
+    assert ground_planes(run) == [{"normal": [0.0, 0.0, 1.0], "offset": -0.02}]
+    run.display["plane"] = None
+    assert ground_planes(run) == [{"normal": [0.0, 0.0, 1.0], "offset": -0.02}]
 
 
 def ground_in_page(browser, page_file: Path) -> tuple:

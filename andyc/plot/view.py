@@ -170,9 +170,19 @@ def plane_contacts(run: Run) -> list:
 
 
 def ground_planes(run: Run) -> list:
-    """[{'normal', 'offset'}]: the distinct planes normal . p + offset = 0 of the run's contacts (the run file's
-    display record: andyc.spec.display.contact_planes; none in a run file older than it), to 6 digits: a
-    quadruped's four feet on one ground are one plane."""
+    """[{'normal', 'offset'}]: the model's `ground:` plane when it has one (the run file's display record's
+    'plane'); else the distinct planes normal . p + offset = 0 of the run's contacts (its 'contacts':
+    andyc.spec.display.contact_planes; none in a run file older than it), to 6 digits: a quadruped's four
+    feet on one ground are one plane. (A sphere's contact plane is its centre's, the ground lifted by its
+    radius: the ground itself, where the model says it, is the one to draw.)"""
+    plane = (run.display or {}).get("plane")
+    try:
+        normal, offset = np.array(plane["normal"], float), float(plane["offset"])
+        if normal.shape == (3,) and np.all(np.isfinite(normal)) and np.isfinite(offset) and \
+                abs(np.linalg.norm(normal) - 1) < 1e-6:
+            return [{"normal": [float(x) for x in normal], "offset": offset}]
+    except (TypeError, ValueError, KeyError, IndexError):
+        pass            # none, or damaged: the contacts' planes
     planes = {}
     for c in plane_contacts(run):
         key = tuple(round(float(x), 6) + 0.0 for x in c["normal"]) + (round(float(c["offset"]), 6) + 0.0,)

@@ -16,6 +16,9 @@ the generated module (DISPLAY, in METADATA) and from there into every run file, 
   touches (a sphere's centre: the ground lifted by its radius); 'tangents' the friction's directions, from its
   slip speeds' velocity terms (none without friction). `andyc view` draws the ground and the force arrows
   from them. A gap between two frames (Newton's cradle) or of a joint (a URDF limit) is not a plane: left out.
+- 'plane': the YAML's `ground:` plane {'normal' (unit), 'offset'}: normal . p + offset = 0, or None. The
+  ground itself, which the contacts' planes above lift by a sphere's radius: `andyc view` draws this one
+  when the model has it.
 - 'shapes': what `andyc view` draws on the frames: the YAML's `shape:` keys, then the URDF's visuals
   (andyc.spec.shapes), sizes in numbers, mesh files by their absolute path.
 """
@@ -31,7 +34,10 @@ from andyc.spec.shapes import urdf_shapes
 def display(spec) -> dict:
     """{'units': {state: unit}, 'ground': {'axis', 'height'} | None, 'shapes': [shape]}; see the module's
     docstring."""
-    return {"units": units(spec), "ground": ground(spec), "contacts": contact_planes(spec),
+    plane = None
+    if spec.ground is not None:
+        plane = {"normal": [float(x) for x in spec.ground.normal], "offset": -float(spec.ground.height)}
+    return {"units": units(spec), "ground": ground(spec), "contacts": contact_planes(spec), "plane": plane,
             "shapes": spec.shapes + urdf_shapes(spec.visuals)}
 
 

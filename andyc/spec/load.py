@@ -28,7 +28,7 @@ from andyc.spec.elements import build_elements
 from andyc.spec.energy_law import build_energy_laws
 from andyc.spec.expect import build_expect
 from andyc.spec.frames import build_frames
-from andyc.spec.geometry import expand_shapes
+from andyc.spec.geometry import expand_shapes, ground_plane
 from andyc.spec.hybrid import build_hybrid, check_nonlinear_impacts
 from andyc.spec.meaning import meaning_sha256
 from andyc.spec.model import Spec
@@ -131,6 +131,7 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
     energy_laws = build_energy_laws(data, flows, constraints, scope, quantities)
     check_work_names(data, jumps, scope)
     shapes = build_shapes(data, scope, smap.file)
+    ground = ground_plane(data.get("ground"), lambda *problem: None)    # (its problems reported with the shapes')
     gravity = (scope.vector(data["gravity"], ("gravity",), scope.parameter_names, "only parameters are allowed here")
                if "gravity" in data else sp.zeros(3, 1))
     if report.problems:     # (the contacts made from one option or shape may each report it: once)
@@ -153,5 +154,6 @@ def build_spec(data: dict, smap: SourceMap, sha: str, robot: urdf.UrdfModel | No
                 potentials=elements.potentials,
                 constraints=constraints, conserves_energy=conserves, discrete=scope.discrete, flows=flows,
                 jumps=jumps, initial_flow=initial_flow, contacts=contacts, input_expressions=input_expressions, shapes=shapes,
+                ground=ground,
                 driven_inputs=driven, closed_form=closed_form, simulate=simulate, expect=expect,
                 energy_laws=energy_laws, **origin)

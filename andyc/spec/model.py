@@ -265,6 +265,7 @@ class Spec:
     warnings: list = field(default_factory=list)   # of Diagnostic
     visuals: list = field(default_factory=list)    # URDF visual geometry, as read (andyc.spec.urdf)
     shapes: list = field(default_factory=list)     # the YAML's shape: keys, for andyc view (andyc.spec.shapes)
+    ground: object = None       # the YAML's ground: plane (andyc.spec.geometry.Ground), or None
     locked: tuple = ()          # URDF joints held at given values (urdf: {lock: ...}), by their URDF name
     reduce: bool = False        # merge the bodies fixed to one moving frame before deriving (andyc.symbolic.reduce)
     input_expressions: dict = field(default_factory=dict)  # input name -> the expression text that drives it
