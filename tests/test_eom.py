@@ -359,3 +359,31 @@ def test_latex_compiles_standalone_and_as_a_fragment(tmp_path):
                              capture_output=True, text=True, timeout=120)
         assert run.returncode == 0, run.stdout[-2000:]
         assert (tmp_path / document).with_suffix(".pdf").stat().st_size > 0
+
+
+def test_a_decimal_the_file_wrote_prints_as_a_decimal_and_the_derivations_fractions_stay(tmp_path):
+    """An inertia of 1.0e-7 in the file is kept exact (1/10000000) but printed 1.0 · 10^-7 in LaTeX; the
+    derivation's own 1/2 stays a fraction; the sympy format, which reads back exactly, keeps the rational."""
+    from andyc.symbolic.eom import decimals
+
+    x = sp.Symbol("x")
+    shown = decimals(sp.Matrix([x / 2, x + sp.Rational(1, 10**7), -sp.Rational(3, 10) * x, sp.Rational(1, 12)]))
+    assert list(shown) == [x / 2, x + sp.Float(1e-7), -sp.Float(0.3) * x, sp.Rational(1, 12)]
+    assert isinstance(shown[0].args[0], sp.Rational) and shown[3] == sp.Rational(1, 12)
+    (tmp_path / "m.yaml").write_text(textwrap.dedent("""\
+        name: tiny_inertia
+        parameters: {L: 0.25, m: 1.0, g: 9.81}
+        coordinates: {theta: {initial: 0.1}}
+        gravity: [0, -g, 0]
+        frames:
+          - {name: link, parent: world, revolute: theta, axis: z}
+          - {name: tip, parent: link, translation: [L, 0, 0]}
+        bodies:
+          - {name: bob, frame: tip, mass: m, inertia: [1.0e-7, 1.0e-7, 1.0e-7]}
+        """))
+    latex = invoke("eom", tmp_path / "m.yaml")
+    assert latex.exit_code == 0, latex.output
+    assert r"M = \left[\begin{matrix}L^{2} m + 1.0 \cdot 10^{-7}\end{matrix}\right]" in latex.output
+    assert "10000000" not in latex.output
+    exact = invoke("eom", tmp_path / "m.yaml", "--format", "sympy")
+    assert exact.exit_code == 0 and "Rational(1, 10000000)" in exact.output

@@ -224,6 +224,20 @@ def _kinds(eq: Equations) -> dict:
     return out
 
 
+def decimals(mat):
+    """`mat` with each rational whose denominator is a power of ten (a number the model file wrote as a
+    decimal, 1.0e-7, which andyc keeps exact as 1/10000000) as that decimal: for reading. The derivation's
+    own fractions (1/2, 1/12) stay; the sympy format, which must read back exactly, keeps them all."""
+    def decimal(r):
+        q = r.q
+        while q % 10 == 0:
+            q //= 10
+        return q == 1 and r.q > 1
+
+    found = {r: sp.Float(repr(float(r))) for r in mat.atoms(sp.Rational) if decimal(r)}
+    return mat.xreplace(found) if found else mat
+
+
 def to_latex(eq: Equations, standalone: bool = False) -> str:
     """An `equation` block per quantity (a fragment, or with `standalone` a document); comment lines say
     what the symbols are."""
@@ -244,7 +258,8 @@ def to_latex(eq: Equations, standalone: bool = False) -> str:
     for _, label, mat, what in _quantities(eq):
         if mat.rows:
             lines += [f"% {what}"] if what else []
-            lines += [r"\begin{equation}", f"{label} = {sp.latex(mat, symbol_names=tex)}", r"\end{equation}"]
+            lines += [r"\begin{equation}", f"{label} = {sp.latex(decimals(mat), symbol_names=tex)}",
+                      r"\end{equation}"]
     body = "\n".join(lines) + "\n"
     if standalone:
         return ("\\documentclass{article}\n\\usepackage{amsmath}\n\\usepackage[margin=1.5cm]{geometry}\n"
@@ -310,7 +325,7 @@ def to_json(eq: Equations) -> str:
         if mat is None:
             return None
         return {"shape": list(mat.shape), "str": [[str(mat[i, j]) for j in range(mat.cols)] for i in range(mat.rows)],
-                "latex": sp.latex(mat, symbol_names=tex)}
+                "latex": sp.latex(decimals(mat), symbol_names=tex)}
 
     kinds = {kind: [s.name for s in syms] for kind, syms in _kinds(eq).items()}
     return json.dumps({
