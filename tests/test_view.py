@@ -334,6 +334,16 @@ def test_the_camera_keeps_a_hopper_in_the_canvas_at_every_time(browser, compiled
     check_framed(projected_boxes(browser, out))
 
 
+@pytest.mark.parametrize("name, t_end", [("slider_crank", 2.0), ("fourbar", 2.0), ("compass_gait", 2.0),
+                                          ("bouncing_ball_contact", 1.5), ("block_incline", 1.0),
+                                          ("rimless_wheel_contact", 2.0)])
+def test_the_camera_keeps_more_shipped_models_in_the_canvas_at_every_time(browser, compiled, tmp_path, name, t_end):
+    run = andyc.simulate(compiled(name), t_end=t_end, dt=1e-3, frames="all")
+    out = tmp_path / f"{name}.html"
+    assert CliRunner().invoke(cli.main, ["view", str(run.save(tmp_path / "r.h5")), "-o", str(out)]).exit_code == 0
+    check_framed(projected_boxes(browser, out, count=5))
+
+
 def test_the_camera_keeps_the_panda_in_the_canvas_at_every_time(browser, panda_arm, tmp_path):
     run = andyc.simulate(panda_arm, t_end=1.5, dt=1e-3, frames="all")
     out = tmp_path / "panda.html"
