@@ -8,8 +8,9 @@ the same equations; MuJoCo gives each rod an inertia of 1e-9 about its long axis
 planar motion never turns: measured, they agree to 1e-13). Then, in `--rounds` rounds with the variants alternated, the wall time of the
 whole batch of T seconds each:
 
-    andyc inline        andyc.analysis.sweeps.run_sweep(engine="inline"): the points one after the other in this
-                        process, each andyc.simulate (its compiled loop), final states into a Zarr store
+    andyc 1 thread      andyc.analysis.sweeps.run_sweep(engine="inline", workers=1): the points one after the other
+                        in this process, each andyc.simulate (its compiled loop), final states into a Zarr store
+    andyc 2 threads     the same on two threads (the compiled loop runs without the GIL)
     mujoco 1 thread     mujoco.rollout.rollout over the batch on one thread (C, no Python per step or point),
                         keeping every step's state as rollout does
     mujoco 2 threads    the same on two threads (one MjData each)
@@ -42,13 +43,13 @@ from large_models import planar_chain_mjcf, planar_chain_yaml  # noqa: E402
 DT = 1e-3
 
 
-def andyc_finals(model, points, t_end: float, store: Path) -> tuple[np.ndarray, float]:
-    """(final states (N, nx), wall seconds) of an inline sweep of the points."""
+def andyc_finals(model, points, t_end: float, store: Path, threads: int = 1) -> tuple[np.ndarray, float]:
+    """(final states (N, nx), wall seconds) of an inline sweep of the points on `threads` threads."""
     import xarray as xr
 
     settings = Settings.of(model, points.names, t_end, dt=DT)
     start = time.perf_counter()
-    run_sweep(model, points, settings, store, engine="inline", progress=False)
+    run_sweep(model, points, settings, store, engine="inline", workers=threads, progress=False)
     wall = time.perf_counter() - start
     return xr.open_zarr(store).final.values, wall
 
@@ -79,8 +80,10 @@ def main() -> None:
 
     n = args.links
     scratch = Path(tempfile.mkdtemp(prefix="andyc-rollout-"))
-    (scratch / f"chain{n}.yaml").write_text(planar_chain_yaml(n))
-    model = andyc.compile_model(scratch / f"chain{n}.yaml", ROOT / "build" / "bench")[0]
+    source = ROOT / "build" / "rollout" / "models" / f"chain{n}.yaml"     # (one path: its build is reused)
+    source.parent.mkdir(parents=True, exist_ok=True)
+    source.write_text(planar_chain_yaml(n))
+    model = andyc.compile_model(source, ROOT / "build" / "rollout")[0]
     mj = mujoco.MjModel.from_xml_string(planar_chain_mjcf(n))
     names = [f"q{i}" for i in range(1, n + 1)]
     points = P.samples(args.points, [f"{q}=uniform(-0.2, 0.8)" for q in names], seed=1, sampler="lhs")
@@ -93,23 +96,26 @@ def main() -> None:
         mujoco.mj_getState(mj, data, starts[k], spec)
     one, two = [mujoco.MjData(mj)], [mujoco.MjData(mj) for _ in range(2)]
 
-    a, _ = andyc_finals(model, points, 0.2, scratch / "check.zarr")
+    a, _ = andyc_finals(model, points, 0.2, scratch / "check.zarr", threads=2)
     b, _ = mujoco_finals(mj, one, starts, 0.2)
     gap = np.abs(a[:, :2 * n] - b).max()      # (andyc's states: q1 .. qn, then their rates)
     print(f"planar chain of {n} rods, {points.n} initial states (Latin hypercube), RK4 at dt = {DT:g}: after 0.2 s "
           f"andyc and MuJoCo agree to {gap:.1e} (largest difference of any angle or speed)")
-    walls = {"andyc inline": [], "mujoco 1 thread": [], "mujoco 2 threads": []}
+    walls = {"andyc 1 thread": [], "mujoco 1 thread": [], "andyc 2 threads": [], "mujoco 2 threads": []}
     for r in range(args.rounds):
-        walls["andyc inline"].append(andyc_finals(model, points, args.t_end, scratch / f"r{r}.zarr")[1])
-        walls["mujoco 1 thread"].append(mujoco_finals(mj, one, starts, args.t_end)[1])
-        walls["mujoco 2 threads"].append(mujoco_finals(mj, two, starts, args.t_end)[1])
+        for threads in (1, 2):
+            name = f"{threads} thread{'s' if threads > 1 else ''}"
+            store = scratch / f"r{r}_{threads}.zarr"
+            walls[f"andyc {name}"].append(andyc_finals(model, points, args.t_end, store, threads)[1])
+            walls[f"mujoco {name}"].append(mujoco_finals(mj, one if threads == 1 else two, starts, args.t_end)[1])
     steps = points.n * args.t_end / DT
     print(f"{points.n} runs of {args.t_end:g} s ({steps:.0f} steps), {args.rounds} rounds alternated:")
     for name, w in walls.items():
         print(f"  {name:>16}: {min(w):.2f} .. {max(w):.2f} s, {steps / min(w) / 1e6:.2f} M steps/s at best")
-    ratio = [x / y for x, y in zip(walls["andyc inline"], walls["mujoco 1 thread"])]
-    print(f"  andyc inline / mujoco 1 thread, per round: {min(ratio):.2f} .. {max(ratio):.2f} (time ratio; "
-          f"above 1: andyc slower)")
+    for name in ("1 thread", "2 threads"):
+        ratio = [x / y for x, y in zip(walls[f"andyc {name}"], walls[f"mujoco {name}"])]
+        print(f"  andyc / mujoco on {name}, per round: {min(ratio):.2f} .. {max(ratio):.2f} (time ratio; above 1: "
+              f"andyc slower)")
 
 
 if __name__ == "__main__":

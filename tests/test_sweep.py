@@ -372,7 +372,6 @@ MODEL = str(Path(__file__).resolve().parents[1] / "models" / "double_pendulum.ya
     (["--grid", "m1=0:1:2", "--sampler", "lhs"], "--sampler lhs goes with --samples N"),
     (["--grid", "m1=0:1:2", "--scheduler", "tcp://127.0.0.1:9", "--engine", "inline"], "--engine inline runs the "
                                                                                        "points in this process"),
-    (["--grid", "m1=0:1:2", "--engine", "inline", "--workers", "2"], "--engine inline starts none"),
 ])
 def test_cli_bad_input_is_one_line_exit_2(shipped_build, tmp_path, args, message):
     result = CliRunner().invoke(main, ["sweep", MODEL, "--build-dir", str(shipped_build), "-o",
@@ -440,35 +439,18 @@ def test_inline_sweep_equals_serial_runs_with_the_runs_options_and_frame_metrics
     assert not np.array_equal(ds.final.values[0, 0], loose.state[-1])       # (the tolerances made a difference)
 
 
-def test_auto_runs_a_small_sweep_inline_and_a_long_one_moves_to_a_cluster(client, pendulum, tmp_path, monkeypatch):
-    from andyc.analysis.sweeps import run as R
-
-    pts = P.grid(["m1=0.5:2:6"])
-    settings = Settings.of(pendulum, pts.names, 0.2)
-    small = run_sweep(pendulum, pts, settings, tmp_path / "a.zarr")
-    assert (small.engine, small.computed) == ("inline", 6)
-    # the judgement: the cores' saving against a cluster's start (R.CLUSTER_START seconds)
-    assert R.worth_a_cluster(1.0, int(R.CLUSTER_START * 2.2), 2) and not R.worth_a_cluster(1.0, int(R.CLUSTER_START), 2)
-    assert not R.worth_a_cluster(100.0, 1000, 1)
-    # a sweep judged long after its first batch: the rest goes to the cluster (the module's), the store whole
-    monkeypatch.setattr(R, "PROBE_SECONDS", 0.0)
-    monkeypatch.setattr(R, "CLUSTER_START", 0.0)
-    monkeypatch.setattr(R, "_cluster", lambda *args: _Given(client))
-    moved = run_sweep(pendulum, pts, settings, tmp_path / "b.zarr", batch=2, workers=2)
-    assert moved.engine == "inline, then cluster" and moved.computed == 6 and moved.pids - {os.getpid()}
+def test_inline_threads_give_every_point_its_serial_answer_and_auto_runs_inline(pendulum, tmp_path):
+    """Points on 1 and 3 threads (the compiled loops side by side), in batches of 2: the stores equal to the bit;
+    without a scheduler, auto is inline."""
+    pts = P.grid(["m1=0.5:2:7"])
+    settings = Settings.of(pendulum, pts.names, 0.3)
+    one = run_sweep(pendulum, pts, settings, tmp_path / "a.zarr", engine="inline", workers=1)
+    three = run_sweep(pendulum, pts, settings, tmp_path / "b.zarr", workers=3, batch=2)
+    assert (one.engine, one.workers, three.engine, three.workers, three.batches) == ("inline", 1, "inline", 3, 4)
+    assert "in this process on 3 threads" in three.text()
     a, b = xr.open_zarr(tmp_path / "a.zarr"), xr.open_zarr(tmp_path / "b.zarr")
     assert np.array_equal(a.final.values, b.final.values) and (b.outcome.values == 1).all()
-
-
-class _Given:
-    def __init__(self, client):
-        self.client = client
-
-    def __enter__(self):
-        return self.client
-
-    def __exit__(self, *exc):
-        return None
+    assert np.array_equal(b.final.values[3], serial_final(pendulum, settings, pts.values[3]))
 
 
 def test_an_inline_sweep_starts_no_cluster(shipped_build, tmp_path):

@@ -140,6 +140,8 @@ def classify(model, basin: Basin, held: list, values) -> dict:
     """The point's class (see the module docstring) and its record: class, period, steps, distance, the
     crossing times, the last run's status and state, the total time and jump counts."""
     import andyc
+    from andyc.analysis.sweeps.worker import interrupts
+    from andyc.runtime.status import INTERRUPTED
 
     derivatives, fall = _loaded(model, basin)
     nx = model.nx
@@ -159,7 +161,10 @@ def classify(model, basin: Basin, held: list, values) -> dict:
     history = [y]
     for n in range(1, basin.steps + 1):
         run = andyc.simulate(model, basin.t_step, basin.dt, "rk4", parameters=params, x0=y[:nx], d0=y[nx:],
-                             flow0=flow, progress=False, init=andyc.Init("as-is"), events=events)
+                             flow0=flow, progress=False, init=andyc.Init("as-is"), events=events,
+                             interrupts=interrupts(None))
+        if run.status.startswith(INTERRUPTED):     # the sweep's end, not the point's (record())
+            raise KeyboardInterrupt
         out["run"], out["status"], out["steps"] = run, run.status, n
         jumps = run.events["jump"]
         out["jump_count"] += np.bincount(jumps, minlength=model.nj)[:model.nj].astype(np.int32)

@@ -62,11 +62,11 @@ from andyc.runtime.methods import METHODS
               help="An existing Dask scheduler (tcp://HOST:8786); its workers need andyc and the build folder at "
                    "the same path. Default: a local cluster of processes, one per core.")
 @click.option("--engine", default="auto", show_default=True, type=click.Choice(["auto", "inline", "cluster"]),
-              help="Where the points run: inline (in this process, no cluster), cluster (Dask: --scheduler's, or "
-                   "a local cluster), or auto: a --scheduler's cluster if given, else inline, moving the rest to "
-                   "a local cluster once the first points show it would finish sooner there.")
+              help="Where the points run: inline (in this process, on threads: the compiled loop runs without "
+                   "the GIL; no cluster), cluster (Dask: --scheduler's, or a local cluster of processes), or "
+                   "auto: a --scheduler's cluster if given, else inline.")
 @click.option("--workers", default=None, type=Number(1, 4096, integer=True), metavar="N",
-              help="Processes of the local cluster (default: one per core).")
+              help="Threads (inline) or processes of the local cluster (default: one per core).")
 @click.option("--batch", default=None, type=Number(1, 1_000_000, integer=True), metavar="N",
               help="Points per task (default: about 8 tasks per worker, at most 256 points).")
 @click.option("--build-dir", default="build", show_default=True, help="Build folder.")
@@ -86,13 +86,11 @@ def sweep(file, grids, samples, dists, sampler, seed, points_file, metrics, out,
     if trajectory == 1:
         raise Refused("--trajectory 1: give 0 (none) or at least 2 samples")
     if scheduler is not None and workers is not None:
-        raise Refused("--workers sets the local cluster's size; with --scheduler, the cluster's own workers run "
-                      "the sweep: give one of them")
+        raise Refused("--workers sets the number of threads or of the local cluster's processes; with "
+                      "--scheduler, the cluster's own workers run the sweep: give one of them")
     if scheduler is not None and engine == "inline":
         raise Refused("--engine inline runs the points in this process; --scheduler names a cluster: give one "
                       "of them")
-    if engine == "inline" and workers is not None:
-        raise Refused("--workers sets the local cluster's size; --engine inline starts none: give one of them")
     try:
         points = _points(grids, samples, dists, seed, points_file, sampler)
         metric_list = metric_items(metrics)

@@ -1,5 +1,10 @@
-"""Running a sweep on Dask (dask.distributed): batches of points as tasks, each result written to the store
-as its batch completes.
+"""Running a sweep: in this process on threads (the inline engine, the default without a scheduler), or on
+Dask (dask.distributed), batches of points as tasks; each batch's results written to the store as it
+completes.
+
+Inline, each thread runs batches of points (worker.run_batch, as a Dask worker does); andyc's compiled loop
+runs without the GIL, so the threads share the cores, and no process starts. The rest of this docstring is
+the cluster's way.
 
 The points not yet in the store are cut into batches of consecutive points (enough per task that the
 scheduler's few milliseconds per task do not dominate tiny runs, few enough that every worker gets several
@@ -24,6 +29,7 @@ import numpy as np
 from andyc.analysis.sweeps import store
 from andyc.analysis.sweeps.points import Points, check_names
 from andyc.analysis.sweeps.worker import Settings, run_batch
+from andyc.errors import plural
 from andyc.runtime.progress import Progress
 from andyc.runtime.status import OUTCOMES
 
@@ -32,9 +38,7 @@ WORKER_WAIT = 60.0          # seconds to wait for a scheduler's first worker bef
 MAX_BATCH = 256
 TASKS_PER_WORKER = 8
 ENGINES = ("auto", "inline", "cluster")
-CLUSTER_START = 15.0        # seconds a LocalCluster takes to start and load the model in its workers (busy machine)
-PROBE_SECONDS = 2.0         # an auto sweep runs inline this long before it judges the rest's time
-BATCH_SECONDS = 1.0         # inline, a batch of about this long between the store's writes
+BATCH_SECONDS = 1.0         # inline, a batch of about this long (of one thread's time) between the store's writes
 
 
 class SweepError(RuntimeError):
@@ -53,16 +57,15 @@ class Summary:
     batches: int = 0
     pids: set = field(default_factory=set)              # the worker processes that ran batches
     lost: int = 0                                       # workers of the start gone by the end (died, killed)
-    engine: str = "inline"                              # where the points ran: inline, cluster, or both
+    engine: str = "inline"                              # where the points ran: inline (threads) or cluster
 
     def text(self) -> str:
         counts = ", ".join(f"{k} {v}" for k, v in self.outcomes.items() if v)
         if not self.computed:
             return f"{self.store}: {self.points} points, all in the store already (nothing to compute): {counts}"
         lost = f", {self.lost} of them lost during the sweep" if self.lost else ""
-        where = ("in this process" if self.engine == "inline" else
-                 f"{'in this process, then ' if self.engine != 'cluster' else ''}on {self.workers} "
-                 f"worker{'s' if self.workers != 1 else ''}{lost}")
+        where = (f"in this process on {plural(self.workers, 'thread')}" if self.engine == "inline" else
+                 f"on {plural(self.workers, 'worker')}{lost}")
         return (f"{self.store}: {self.points} points ({self.computed} computed now in {self.batches} batches "
                 f"{where}, {self.already} already in the store): {counts}")
 
@@ -79,12 +82,10 @@ def run_sweep(model, points: Points, settings: Settings, store_path, *, client=N
               inputs=(), engine: str = "auto") -> Summary:
     """Run every point of `points` not yet in the store at store_path; returns the Summary.
 
-    Where the points run (`engine`): "inline", in this process, one after the other, no cluster; "cluster",
-    on Dask: the `client` given (kept open), else one connected to `scheduler`, else a LocalCluster of
-    `workers` processes (default: one per core), closed at the end; "auto" (the default): on the client or
-    scheduler if one is given, else inline first, moving the rest to a LocalCluster only once the points
-    run so far show that the rest would take long enough for more cores to repay a cluster's start
-    (worth_a_cluster)."""
+    Where the points run (`engine`): "inline", in this process on `workers` threads (default: one per core),
+    no cluster; "cluster", on Dask: the `client` given (kept open), else one connected to `scheduler`, else
+    a LocalCluster of `workers` processes (default: one per core), closed at the end; "auto" (the default):
+    on the client or scheduler if one is given, else inline."""
     from andyc.analysis.sweeps.metrics import compile_metric
 
     check_names(points.names, model)
@@ -102,19 +103,14 @@ def run_sweep(model, points: Points, settings: Settings, store_path, *, client=N
     if client is not None or scheduler is not None:
         engine = "cluster"
     if engine != "cluster" and len(todo):
-        try:
-            todo = _run_inline(model, points, settings, store_path, todo, progress, summary, batch=batch,
-                               workers=None if engine == "inline" else (workers or os.cpu_count() or 1))
-        except SweepError:
-            if created and not summary.computed:
-                shutil.rmtree(store_path, ignore_errors=True)
-            raise
-    if len(todo):
-        summary.engine = "cluster" if not summary.computed else "inline, then cluster"
+        _run_inline(model, points, settings, store_path, todo, progress, summary, batch=batch,
+                    threads=workers or os.cpu_count() or 1)
+    elif len(todo):
+        summary.engine = "cluster"
         try:
             with _cluster(client, scheduler, workers) as connected, _sigint_deferred() as interrupted:
                 present = set(connected.scheduler_info(n_workers=-1)["workers"])
-                summary.workers = max(summary.workers, len(present) or workers or 1)
+                summary.workers = len(present) or workers or 1
                 _run(connected, model, points, settings, store_path, todo,
                      batch_size(len(todo), summary.workers, batch), progress, summary, interrupted)
                 summary.lost = len(present - set(connected.scheduler_info(n_workers=-1)["workers"]))
@@ -161,41 +157,47 @@ def _run(client, model, points, settings, store_path, todo, size, progress, summ
                 future.cancel()
 
 
-def worth_a_cluster(seconds_per_point: float, left: int, workers: int) -> bool:
-    """Whether `left` points, at the pace measured inline, finish sooner on a LocalCluster of `workers`
-    processes: the time its extra cores save, left * s * (1 - 1/workers), against CLUSTER_START."""
-    return workers > 1 and left * seconds_per_point * (1 - 1 / workers) > CLUSTER_START
+def _run_inline(model, points, settings, store_path, todo, progress, summary, threads: int = 1,
+                batch=None) -> None:
+    """Run the points `todo` in this process on `threads` threads (andyc's compiled loop runs without the
+    GIL, so threads share the cores), in batches of about BATCH_SECONDS written to the store by this thread
+    as they end. A Ctrl-C (or any error) sets worker.STOP, which ends the running points at their next
+    look (about every 0.25 s of compiled steps); their batches are not written, the others are kept."""
+    from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
+    from andyc.analysis.sweeps import worker
 
-def _run_inline(model, points, settings, store_path, todo, progress, summary, workers=None,
-                batch=None) -> np.ndarray:
-    """Run the points `todo` in this process, in batches written to the store as they end; returns the
-    points not run. With `workers` (the auto engine): stop after PROBE_SECONDS when worth_a_cluster says
-    the rest should go to a cluster of that many processes."""
-    import time
-
-    from andyc.analysis.sweeps.worker import remember
-
-    remember(model, settings)       # the model compiled here is the one the points run on
-    size, start, done = batch or 1, time.perf_counter(), 0
-    summary.workers = 1
-    with Progress(f"{model.name} sweep", len(todo), unit="points", enabled=progress) as bar:
-        while done < len(todo):
-            indices = todo[done:done + size]
-            results = run_batch(settings, indices, points.values[indices])
-            store.write_batch(store_path, points, settings, results)
-            done += len(indices)
-            summary.computed += len(indices)
-            summary.batches += 1
-            bar(summary.computed)
-            spent = time.perf_counter() - start
-            if not batch:       # batches of about BATCH_SECONDS: a Ctrl-C loses little, the store is written rarely
-                size = int(min(MAX_BATCH, max(1, BATCH_SECONDS * done / max(spent, 1e-9))))
-            if workers is not None and spent > PROBE_SECONDS and done < len(todo):
-                if worth_a_cluster(spent / done, len(todo) - done, workers):
-                    break
-                workers = None          # judged once: the rest runs here
-    return todo[done:]
+    worker.remember(model, settings)    # the model compiled here is the one the points run on
+    size, submitted, seconds = batch or 1, 0, 0.0
+    pending = {}
+    summary.workers = threads
+    with Progress(f"{model.name} sweep", len(todo), unit="points", enabled=progress) as bar, \
+            ThreadPoolExecutor(threads, thread_name_prefix="andyc-sweep") as pool:
+        try:
+            while submitted < len(todo) or pending:
+                while submitted < len(todo) and len(pending) < 2 * threads:     # a few ahead, not all
+                    indices = todo[submitted:submitted + size]
+                    pending[pool.submit(worker.run_batch, settings, indices, points.values[indices])] = indices
+                    submitted += len(indices)
+                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    del pending[future]
+                    results = future.result()
+                    store.write_batch(store_path, points, settings, results)
+                    summary.computed += len(results["index"])
+                    summary.batches += 1
+                    seconds += float(np.nansum(results["wall"]))
+                    bar(summary.computed)
+                if not batch:   # batches of about BATCH_SECONDS: a Ctrl-C loses little, the store is written rarely
+                    size = int(min(MAX_BATCH, max(1, BATCH_SECONDS * summary.computed / max(seconds, 1e-9))))
+        except BaseException:
+            worker.STOP.set()           # the points running now end at their next look; the rest never start
+            for future in pending:
+                future.cancel()
+            raise
+        finally:
+            pool.shutdown(wait=True)
+            worker.STOP.clear()
 
 
 def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> dict:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 import time
 from dataclasses import dataclass
 
@@ -132,10 +133,24 @@ def empty_results(model, settings: Settings, n: int) -> dict:
             "basin_distance": full(n, nan)}
 
 
+STOP = threading.Event()    # set: every point running in this process stops (the inline engine's Ctrl-C)
+
+
+def interrupts(timeout: float | None):
+    """The Interrupts of a point's run: its wall-clock limit, and STOP, which ends it as a signal would (its
+    status "interrupted: ..."; record() then ends the batch): a point run in a thread gets no signal itself."""
+    from andyc.runtime.interrupts import Interrupts
+
+    class Stoppable(Interrupts):
+        def reason(self):
+            return "interrupted: the sweep was stopped" if STOP.is_set() else super().reason()
+
+    return Stoppable(timeout)
+
+
 def simulate_point(model, settings: Settings, point, frames=()):
     """The Run of one point: andyc.simulate with the point's values over the settings' fixed ones."""
     import andyc
-    from andyc.runtime.interrupts import Interrupts
 
     parameters, inputs, states = {}, {}, {}
     for (name, value) in settings.fixed:
@@ -145,7 +160,7 @@ def simulate_point(model, settings: Settings, point, frames=()):
     return andyc.simulate(model, settings.t_end, dt=settings.dt, method=settings.method, parameters=parameters,
                           inputs=inputs, x0=states or None,     # (the others at the model's: `andyc sim --at`)
                           rtol=settings.rtol, atol=settings.atol, frames=list(frames),
-                          progress=False, interrupts=Interrupts(settings.timeout), init=andyc.Init(settings.init),
+                          progress=False, interrupts=interrupts(settings.timeout), init=andyc.Init(settings.init),
                           events=andyc.Events(stop_after=dict(settings.stop_after) or None))
 
 
