@@ -1,11 +1,11 @@
 """Sweeps, Monte Carlo and grids of runs (`andyc sweep`), in this process or on Dask, into one result store.
 
-    points.py   the points: a full grid, Monte Carlo samples (a seeded numpy Generator) or a CSV file's rows
+    points.py   the points: a full grid, samples (seeded: Monte Carlo or scipy.stats.qmc designs) or a CSV file's rows
     metrics.py  --metric NAME=EXPR: expressions of a run (its end, max/min/mean, at(T, E), jumps), evaluated
                 on the run's arrays without running user text
     worker.py   a batch of points on a worker: the compiled model loaded once per process, a failure recorded
     store.py    the Zarr store xarray opens: the swept names as coordinates, the metrics as variables
-    run.py      the driver: batches on threads here or as dask.distributed tasks, written as they complete, resumable
+    run.py      the driver: batches on threads here or as dask.distributed tasks, written as they end, resumable
 
 Importing this package imports neither Dask nor Zarr (run.py and store.py import them when they work).
 """
