@@ -104,6 +104,26 @@ def test_lhs_puts_one_point_in_each_stratum_of_every_name_and_maps_by_the_invers
                               pts.values)
 
 
+@pytest.mark.parametrize("sampler", ["lhs", "sobol", "halton"])
+def test_a_designs_points_are_scipys_through_each_distributions_inverse_cdf(sampler):
+    """Each name takes its own column of scipy.stats.qmc's design (seeded by numpy's Generator of the seed), a
+    uniform one scaled to [A, B), a normal one through SciPy's norm.ppf."""
+    from scipy.stats import norm, qmc
+
+    engine = {"lhs": qmc.LatinHypercube, "sobol": qmc.Sobol, "halton": qmc.Halton}[sampler]
+    u = engine(2, rng=np.random.default_rng(9)).random(16)
+    pts = P.samples(16, ["a=uniform(2, 6)", "m=normal(1, 0.1)"], seed=9, sampler=sampler)
+    assert (pts.kind, pts.seed, pts.sampler) == ("samples", 9, sampler)
+    assert np.allclose(pts.values[:, 0], 2 + 4 * u[:, 0], rtol=0, atol=1e-15)
+    assert np.allclose(pts.values[:, 1], norm.ppf(u[:, 1], loc=1, scale=0.1), rtol=0, atol=1e-12)
+
+
+def test_sobol_takes_powers_of_two_and_names_the_nearest_ones():
+    assert P.samples(1, ["a=uniform(0, 1)"], seed=0, sampler="sobol").n == 1
+    with pytest.raises(P.PointsError, match=r"3 samples lose the balance of Sobol' points; give a power of 2 \(2 or 4\)"):
+        P.samples(3, ["a=uniform(0, 1)"], seed=0, sampler="sobol")
+
+
 @pytest.mark.parametrize("sampler", ["sobol", "halton"])
 def test_low_discrepancy_samples_cover_the_box_more_evenly_than_random_ones(sampler):
     from scipy.stats import qmc
@@ -126,6 +146,10 @@ def test_low_discrepancy_samples_cover_the_box_more_evenly_than_random_ones(samp
     (lambda: P.grid(["a=0:x:3"]), "'x' is not a number"),
     (lambda: P.samples(5, ["a=normal(0,-1)"], 0), "the standard deviation -1 must be above 0"),
     (lambda: P.samples(5, ["a=uniform(2,1)"], 0), "uniform(A,B) needs A < B"),
+    (lambda: P.samples(5, ["a=uniform(1,1)"], 0), "uniform(A,B) needs A < B, got 1, 1"),
+    (lambda: P.samples(5, ["=uniform(1,2)"], 0), "a bad distribution; write NAME=normal(MU,SIGMA) or"),
+    (lambda: P.samples(5, ["a=uniform(1,2)"], 0, "grid"), "--sampler grid: not a sampler; choose one of random, "),
+    (lambda: P.samples(0, ["a=uniform(1,2)"], 0), "--samples 0: give at least 1 sample"),
     (lambda: P.samples(5, ["a=poisson(3)"], 0), "a bad distribution; write NAME=normal(MU,SIGMA) or"),
 ])
 def test_bad_points_get_one_line(make, message):
