@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parent.parent
 def site(tmp_path_factory):
     out = tmp_path_factory.mktemp("site")
     done = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
-                           str(ROOT / "docs"), str(out)], capture_output=True, text=True, timeout=120)
+                           str(ROOT / "docs"), str(out)], capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stdout + done.stderr
     return out
 
@@ -68,6 +68,15 @@ def test_the_gallery_lists_every_shipped_model_with_its_command(site):
     text = page_text(site, "generated/gallery.html")
     missing = [p.name for p in sorted((ROOT / "models").glob("*.yaml")) if f"andyc sim models/{p.name}" not in text]
     assert not missing, missing
+
+
+def test_the_gallery_shows_every_shipped_models_graph_drawn_by_the_build(site):
+    page = (site / "generated" / "gallery.html").read_text(encoding="utf-8")
+    images = dict(re.findall(r'<img alt="andyc graph of ([\w-]+)" src="([^"]+)"', page))
+    assert sorted(images) == sorted(p.stem for p in (ROOT / "models").glob("*.yaml"))
+    for stem, src in images.items():
+        picture = (site / "generated" / src).resolve()
+        assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", stem
 
 
 def test_every_page_is_in_a_toctree(site):

@@ -229,3 +229,15 @@ def test_the_overlap_check_sees_two_labels_drawn_on_each_other():
         ax.text(0.5, 0.5, "a label", gid=gid, bbox=dict(boxstyle="round"))
     ax.text(0.1, 0.1, "apart", gid="c", bbox=dict(boxstyle="round"))
     assert _label_overlaps(fig) == [("a", "b")]
+
+
+def test_a_urdf_robots_locked_joints_are_drawn_as_locked_links():
+    """g1.yaml locks its waist and arms (urdf: {lock: ...}): their links have no joint step left; the tree
+    draws them as fixed links labelled locked (andyc graph failed on them), its legs' joints as revolute."""
+    spec = andyc.load(MODELS / "g1.yaml")
+    locked = set(raw(MODELS / "g1.yaml")["urdf"]["lock"])
+    edges = {e["child"]: e for e in frame_tree(spec)["edges"]}
+    assert "waist_yaw_joint" in locked and edges["waist_yaw_link"] == {**edges["waist_yaw_link"], "kind": "fixed",
+                                                                      "label": "revolute, locked"}
+    assert edges["left_knee_link"]["kind"] == "revolute"
+    assert graph_figure(spec).axes

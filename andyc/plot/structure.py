@@ -89,10 +89,13 @@ def _link(frame, coordinates: set, names: dict) -> dict:
         return _text(nonzero[0]) if len(nonzero) == 1 else _vector(v)
 
     kind = frame.joint
+    step = _last(steps, {"revolute": Rotate, "prismatic": Translate}.get(kind, ()))
+    if kind in ("revolute", "prismatic") and step is None:      # a URDF joint locked at zero (urdf: {lock})
+        return {"kind": "fixed", "label": f"{kind}, locked"}
     if kind == "revolute":
-        return {"kind": kind, "label": f"revolute {_text(_last(steps, Rotate).angle)}"}
+        return {"kind": kind, "label": f"revolute {_text(step.angle)}"}
     if kind == "prismatic":
-        return {"kind": kind, "label": f"prismatic {_along(_last(steps, Translate).vector)}"}
+        return {"kind": kind, "label": f"prismatic {_along(step.vector)}"}
     if kind == "dh":
         theta = next((s.angle for s in steps if isinstance(s, Rotate) and list(s.axis) == [0, 0, 1]), 0)
         return {"kind": kind, "label": f"DH θ = {_text(theta)}"}

@@ -2,7 +2,7 @@
 
 conf.py calls write_all(docs) before Sphinx reads the sources: the model file reference from the JSON Schemas,
 every command and option from the click group, the status codes from their tables, the gallery from the shipped
-models. The pages go to docs/generated/, which is not committed (.gitignore): the build is the only writer.
+models with their pictures (`andyc graph` of each, drawn here). The pages go to docs/generated/, which is not committed (.gitignore): the build is the only writer.
 """
 
 from __future__ import annotations
@@ -123,6 +123,19 @@ def _picture(stem: str, docs: Path) -> str | None:
     return found[0].name if found else None
 
 
+def graph_pictures(out: Path) -> None:
+    """out/<model>.png: `andyc graph` of every shipped model (its frame tree and, for a hybrid model, its
+    automaton), drawn again when the model file is newer than its picture."""
+    import andyc
+    from andyc.plot.graph import plot_graph
+
+    out.mkdir(parents=True, exist_ok=True)
+    for path in sorted((ROOT / "models").glob("*.yaml")):
+        picture = out / f"{path.stem}.png"
+        if not picture.is_file() or picture.stat().st_mtime < path.stat().st_mtime:
+            plot_graph(andyc.load(path), picture)
+
+
 def gallery_page(docs: Path) -> str:
     lines = ["# Gallery", "", "Every shipped model in `models/`, generated at build time from the YAML files: "
              "its command and its expectations (`expect:`, checked by `andyc test models/`).", ""]
@@ -132,7 +145,9 @@ def gallery_page(docs: Path) -> str:
                   "```console", f"andyc sim models/{path.name}", "```", ""]
         picture = _picture(path.stem, docs)
         if picture:
-            lines += [f"![{path.stem}](../{picture})", ""]
+            lines += [f"![{path.stem} in andyc view](../{picture})", ""]
+        lines += [f"```{{image}} graphs/{path.stem}.png", f":alt: andyc graph of {path.stem}", ":width: 55%",
+                  "```", ""]
         expectations = model.get("expect") or []
         if expectations:
             lines += ["Expectations:", "", "```yaml", yaml.safe_dump(expectations, sort_keys=False).strip(), "```", ""]
@@ -142,6 +157,7 @@ def gallery_page(docs: Path) -> str:
 def write_all(docs: Path) -> None:
     out = docs / "generated"
     out.mkdir(exist_ok=True)
+    graph_pictures(out / "graphs")
     pages = {"cli.md": cli_page(), "status.md": status_page(), "gallery.md": gallery_page(docs)}
     for schema in sorted((ROOT / "andyc" / "schemas").glob("*.schema.json")):
         pages[schema.name.replace(".schema.json", ".md")] = schema_page(schema)
