@@ -21,7 +21,7 @@ from andyc.runtime.methods import METHODS
 @click.argument("file", type=click.Path(dir_okay=False))
 @click.option("--grid", "grids", multiple=True, metavar="NAME=FROM:TO:COUNT",
               help="Sweep NAME over COUNT values from FROM to TO (both included); repeat for a full grid.")
-@click.option("--samples", default=None, type=COUNT, metavar="N", help="Monte Carlo: N samples of the --dist names.")
+@click.option("--samples", default=None, type=COUNT, metavar="N", help="N samples of the --dist names, drawn as --sampler says.")
 @click.option("--dist", "dists", multiple=True, metavar="NAME=normal(MU,SIGMA)|uniform(A,B)",
               help="With --samples: the distribution of NAME.")
 @click.option("--sampler", default="random", show_default=True,
@@ -60,7 +60,7 @@ from andyc.runtime.methods import METHODS
               help="Keep the times of each run's first N jumps.")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="An existing Dask scheduler (tcp://HOST:8786); its workers need andyc and the build folder at "
-                   "the same path. Default: a local cluster of processes, one per core.")
+                   "the same path. Without it the points run in this process (--engine).")
 @click.option("--engine", default="auto", show_default=True, type=click.Choice(["auto", "inline", "cluster"]),
               help="Where the points run: inline (in this process, on threads: the compiled loop runs without "
                    "the GIL; no cluster), cluster (Dask: --scheduler's, or a local cluster of processes), or "
@@ -68,7 +68,8 @@ from andyc.runtime.methods import METHODS
 @click.option("--workers", default=None, type=Number(1, 4096, integer=True), metavar="N",
               help="Threads (inline) or processes of the local cluster (default: one per core).")
 @click.option("--batch", default=None, type=Number(1, 1_000_000, integer=True), metavar="N",
-              help="Points per task (default: about 8 tasks per worker, at most 256 points).")
+              help="Points per batch (default: inline, about a second's worth; on a cluster, about 8 tasks per "
+                   "worker, at most 256 points).")
 @click.option("--build-dir", default="build", show_default=True, help="Build folder.")
 def sweep(file, grids, samples, dists, sampler, seed, points_file, metrics, out, t_end, dt, method, rtol, atol, sets,
           stop_after, init, timeout, trajectory, max_events, scheduler, engine, workers, batch, build_dir):
