@@ -82,8 +82,7 @@ class Moreau:
         self.p, self.flow, self.x, self.d = p, flow, with_work(model, x), d
         self.w = work(model)
         stepping = model.stepping
-        self.s = stepping.new_scratch(model.nq, model.nv, model.nx, model.nw, model.nc, model.nd,
-                                      len(model.contact_names))
+        self.s = model.stepping_scratch()
         stepping.coefficients(model.ref, self.w.ref, self.s, p)
         self.s.guess[:] = [m if m > 0 else -1 for m in model.contact_states(d)]
         self.w.u[:] = self.source.held(flow)

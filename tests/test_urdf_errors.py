@@ -226,12 +226,14 @@ def test_unused_elements_are_listed_once_in_one_warning(tmp_path):
     assert w.file == str(tmp_path / "arm.urdf") and w.line == line_of(text, "<collision>")     # the first
     # limits are stops by default (LIMITS_DEFAULT): their lower and upper used, effort and velocity not
     limits = ("2 <limit effort>", "2 <limit velocity>") if LIMITS_DEFAULT else ("2 <joint><limit>",)
-    for kind in limits + ("1 <joint><safety_controller>", "1 <dynamics friction>",
+    for kind in limits + ("1 <joint><safety_controller>",
                           "1 <link><collision>", "1 <transmission>", "2 <gazebo>", "1 <material>"):
         assert w.message.count(kind) == 1, (kind, w.message)
     assert "visual" not in w.message.split(":", 1)[1].split(";")[0]       # visuals are kept, not unused
-    # The damping is used: a damper on the joint's coordinate.
-    assert [(d.speed, float(d.coefficient)) for d in spec.dampers] == [("shoulder", 0.1)]
+    # The damping and the friction are used: a linear and a coulomb damper on the joint's coordinate.
+    assert "friction" not in w.message
+    assert [(d.name, d.speed, float(d.coefficient), d.law) for d in spec.dampers] == [
+        ("shoulder_damping", "shoulder", 0.1, "linear"), ("shoulder_friction", "shoulder", 0.3, "coulomb")]
     # The visual mesh is kept as a reference; its package is not found, which a second warning says.
     assert spec.visuals == [{"link": "upper", "frame": "upper", "geometry": "mesh", "line": line_of(text, "<visual>"),
                              "origin": {"xyz": [0.0] * 3, "rpy": [0.0] * 3},

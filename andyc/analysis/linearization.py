@@ -20,6 +20,7 @@ import numpy as np
 
 from andyc.errors import plural
 from andyc.outputs import write_atomic
+from andyc.runtime.timestepping import refuse_friction
 from andyc.symbolic.linearize import (Linearization, LinearizeError, default_point, find_equilibrium,
                                       linearize, values_at)
 from andyc.symbolic.model import SymbolicModel
@@ -38,6 +39,7 @@ def linearize_at(model: SymbolicModel, at: dict | None = None, parameters: dict 
     LinearizeError for an unknown flow, input, parameter, coordinate or speed, and for a point the
     linearization does not handle; the message names what exists."""
     spec = model.spec
+    refuse_friction(spec, "andyc linearize", "", LinearizeError)
     flows = model.hybrid.flows
     if flow is not None and flow not in flows:
         raise LinearizeError(f"{spec.name}: no flow named '{flow}'; flows: {', '.join(flows)}")

@@ -67,7 +67,18 @@ def _hybrid_context(model: SymbolicModel) -> dict:
         "jump_mode_state": [j.mode_state for j in h.jumps], "jump_mode_mask": [j.mode_mask for j in h.jumps],
         "jump_kinds": [[j.kind, j.contact] for j in model.spec.jumps],
         **_contact_tables(model),
+        **_friction_tables(model),
     }
+
+
+def _friction_tables(model: SymbolicModel) -> dict:
+    """Per joint friction (a coulomb damper): its name, the speed it acts on and its work slot; its force is the
+    restitution leaf's entry NJ + i."""
+    spec = model.spec
+    damped = [c.name for c in spec.coordinates] + [s.name for s in spec.speeds]
+    frictions = spec.joint_frictions
+    return {"frictions": [d.name for d in frictions], "friction_speeds": [damped.index(d.speed) for d in frictions],
+            "friction_slots": [model.work_names.index(d.name) for d in frictions]}
 
 
 def _contact_tables(model: SymbolicModel) -> dict:

@@ -34,7 +34,8 @@ DOCS = {
     "frame_poses": "Pose of each of FRAMES in world into out (len(FRAMES), 12): origin, then rotation row by row.",
     "constraint_gains": "Soft-constraint gains K_s and K_d of each row (ANDY eq. 13-15), for the baumgarte method, "
                         "into S.",
-    "restitution": "Coefficient of restitution of each jump's impact (a contact's slip end: its friction mu), into S.",
+    "restitution": "Coefficient of restitution of each jump's impact (a contact's slip end: its friction mu), then each "
+                   "joint friction's force, into S.",
     "guard": "The guard of jump k: it happens where this crosses zero in JUMP_DIRECTION[k]; lam: the multipliers of "
              "its source flow (read when JUMP_MULTIPLIERS[k]).",
     "guard_rate": "d/dt of the guard of jump k, given xdot.",
@@ -135,7 +136,7 @@ def leaves(model: SymbolicModel) -> Leaves:
     mass = [(f"M[{i * n + j}]", model.M[i, j]) for i in range(n) for j in range(i, n)]
     mirror = [(f"M[{j * n + i}]", sp.Symbol(f"M[{i * n + j}]")) for i in range(n) for j in range(i + 1, n)]
     force = [(f"G[{i}]", model.G[i]) for i in range(n)] + [(f"G[{n + i}]", e) for i, e in enumerate(model.powers)]
-    at = scratch_layout(n, cons.nc, len(model.hybrid.jumps))      # the rows of S
+    at = scratch_layout(n, cons.nc, len(model.hybrid.jumps) + len(spec.joint_frictions))      # the rows of S
     S = _flat("S", at["width"])
     rows = ([(S(at['phi'], i), e) for i, e in enumerate(cons.phi)]
             + [(S(at['cv'], i), e) for i, e in enumerate(cons.c)]
@@ -162,6 +163,10 @@ def leaves(model: SymbolicModel) -> Leaves:
         out.add("constraint_gains", "p, S", [(S(at['ks'], i), e) for i, e in enumerate(cons.stiffness)]
                 + [(S(at['kd'], i), e) for i, e in enumerate(cons.damping)])
     _hybrid(out, model, at)
+    coefficients = [j.restitution for j in model.hybrid.jumps] + [d.coefficient for d in spec.joint_frictions]
+    if coefficients:
+        S = _flat("S", at["width"])
+        out.add("restitution", "p, S", [(S(at['e'], k), e) for k, e in enumerate(coefficients)])
     _energy_law(out, model)
     if model.prescribed:
         slot, a, b = model.prescribed
@@ -190,8 +195,6 @@ def _hybrid(out: Leaves, model: SymbolicModel, at: dict) -> None:
     out.add_per_jump("guard_rate", f"{STATE}, xdot", [([("g", j.guard_rate)], "g") for j in h.jumps], "0.0")
     out.add_per_jump("enabled", f"{STATE}, lam", [([("e", j.enabled)], "e") for j in h.jumps], "1.0")
     out.add_per_jump("reset", STATE, [([(index[s], e) for s, e in j.resets], None) for j in h.jumps], "None")
-    S = _flat("S", at["width"])
-    out.add("restitution", "p, S", [(S(at['e'], k), j.restitution) for k, j in enumerate(h.jumps)])
 
 
 def _energy_law(out: Leaves, model: SymbolicModel) -> None:

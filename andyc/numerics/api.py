@@ -75,7 +75,7 @@ def _jump_source(model, k):
 @jit
 def _restitutions(model, p, S, out):
     call(model.restitution, (p, S))
-    for k in range(model.nj):
+    for k in range(out.shape[0]):
         out[k] = S[model.s_e, k]
 
 
@@ -234,9 +234,10 @@ class Functions:
         return p, u, d, flow
 
     def restitutions(self, p=None):
-        """The coefficient of restitution of each jump's impact (NJ,), at parameters p."""
+        """The coefficient of restitution of each jump's impact (NJ,), then each joint friction's force, at
+        parameters p."""
         p, _, _, _ = self._args(None, p, None, None)
-        out = np.zeros(self.sizes["nj"])
+        out = np.zeros(self.sizes["ne"])
         _restitutions(self.model, p, self.work.S, out)
         return out
 

@@ -11,9 +11,12 @@ Dynamical Systems, sec. 10.1):
     Coulomb contact:         0 <= w_n  _|_  P_n >= 0,  |P_t| <= mu P_n,
                              w_t = 0 where |P_t| < mu P_n,  P_t = -mu P_n w_t / |w_t| where w_t != 0
                              (planar: one tangent row, P_t a number; spatial: two, P_t in the disk)
+    bounded row (dry friction of a joint: a bound F h, F the friction force or torque, h the step):
+                             |P_f| <= F h,  w_f = 0 where |P_f| < F h,  P_f = -F h sign(w_f) where w_f != 0
+                             (Coulomb's law with a normal impulse held fixed: MuJoCo's frictionloss)
 
-Blocks: block k is of kind[k] (BILATERAL, NORMAL, PLANAR, SPATIAL: 1, 1, 2, 3 rows, the normal row first), its
-rows first[k] .. first[k] + size - 1. As Jean 1999 (The non-smooth contact dynamics method, CMAME 177, sec. 5)
+Blocks: block k is of kind[k] (BILATERAL, NORMAL, PLANAR, SPATIAL, BOUNDED: 1, 1, 2, 3, 1 rows, the normal row
+first; size(kind)), its rows first[k] .. first[k] + size - 1; a bounded block's bound F h is its mu[k]. As Jean 1999 (The non-smooth contact dynamics method, CMAME 177, sec. 5)
 does, nonlinear Gauss-Seidel over the blocks, each block's local problem solved exactly (open, sticking, sliding
 either way; a spatial slide's direction by the secant method, else a scan of the circle and bisection), then a
 polish: the states found (open, stick, slip +/-, a spatial slide with its direction) fix an active set whose
@@ -35,19 +38,27 @@ import numpy as np
 from .compiler import jit
 from .dense_solves import cholesky_solve, dot, psd_least_norm, qr_factor, qr_solution
 
-BILATERAL, NORMAL, PLANAR, SPATIAL = 0, 1, 2, 3     # a block's kind (its size: max(kind, 1) rows)
-OPEN, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3        # a block's state (bilateral blocks: STICK)
+BILATERAL, NORMAL, PLANAR, SPATIAL, BOUNDED = 0, 1, 2, 3, 4    # a block's kind (its rows: size(kind))
+OPEN, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3        # a block's state (bilateral blocks: STICK; a bounded block
+#                                                     slipping forwards, w_f > 0: SLIP_POS, P_f = -bound)
 SLIDE = 2                                           # a spatial contact's one sliding state
 NONE = -1                                           # no guess (in `state`): no warm start
+FAILED, VERIFIED, ADJUSTED = 0, 1, 2                 # what a polish found (_polish)
 SCAN = 36           # spatial sliding: the slip directions tried around the circle before bisecting
 SWEEPS = 500        # Gauss-Seidel sweeps at most (the polish makes the answer exact when it verifies)
 SWEEP_TOL = 1e-15   # ... until no impulse changes by more than this, relative to the largest
-VECTORS = 12        # work's rows before the reduced system's
+VECTORS = 14        # work's rows before the reduced system's
+
+
+@jit(inline="always")
+def size(kind):
+    """The rows of a block of this kind."""
+    return 1 if kind == BOUNDED else max(kind, 1)
 
 
 @jit
 def work_shape(m):
-    """The shape of `work` for problems of up to m rows: twelve vectors, the polish's reduced system, then the
+    """The shape of `work` for problems of up to m rows: VECTORS vectors, the polish's reduced system, then the
     Gram matrix of its pivoted Cholesky (psd_least_norm)."""
     return 2 * m + VECTORS, m
 
@@ -74,9 +85,13 @@ def solve(W, w0, kind, first, mu, state, direction, P, work):
     warm = True
     for k in range(nb):
         warm = warm and state[k] >= 0
-    if warm and _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
+    if warm and _settle(W, w0, kind, first, mu, state, direction, tol_v, P, work):
         for i in range(m):                      # (the polish's answer: work's first m)
             P[i] = work[0, i]
+        return 0, True
+    if warm and _unclamp(kind, state) and _settle(W, w0, kind, first, mu, state, direction, tol_v, P, work):
+        for i in range(m):                      # (the warm start with its bounded rows sticking again, clamped
+            P[i] = work[0, i]                   #  afresh: a joint held at its friction's bound that lets go)
         return 0, True
     for i in range(m):
         P[i] = 0.0
@@ -90,11 +105,55 @@ def solve(W, w0, kind, first, mu, state, direction, P, work):
         if change <= SWEEP_TOL * top or change != change:     # (NaN: no use sweeping on)
             break
     _states(P, kind, first, mu, state, direction)
-    if _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
+    if _settle(W, w0, kind, first, mu, state, direction, tol_v, P, work):
         for i in range(m):
             P[i] = work[0, i]
         return sweeps, True
     return sweeps, False
+
+
+@jit
+def _settle(W, w0, kind, first, mu, state, direction, tol_v, P, work):
+    """_polish, and where its answer fails with a sticking bounded row beyond its bound, that row held at the
+    bound (a slip state, whose zero slip also satisfies its conditions), or with a held row whose slip reverses,
+    that row sticking, and polished again (_adjust), until it verifies or no such row is left. Why: where the rows are dependent (a robot standing on its feet with its joints stuck:
+    more rows than speeds) the least-norm impulses share the load evenly and can ask a joint's friction for more
+    than it has; the other solutions, with that friction at its bound, hold."""
+    for _ in range(2 * kind.shape[0] + 1):
+        found = _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work)
+        if found != ADJUSTED:
+            return found == VERIFIED
+    return False
+
+
+@jit
+def _unclamp(kind, state):
+    """Every bounded row sticking (state); whether any was not."""
+    changed = False
+    for k in range(kind.shape[0]):
+        if kind[k] == BOUNDED and state[k] != STICK:
+            state[k] = STICK
+            changed = True
+    return changed
+
+
+@jit
+def _adjust(kind, first, mu, state, P, w, tol_v):
+    """The bounded rows' states that the impulses P and velocities w of a failed polish contradict, changed
+    (_settle): a sticking row asked for more than its bound is held at it, a row held at its bound whose slip
+    reverses sticks; whether any changed."""
+    changed = False
+    for k in range(kind.shape[0]):
+        if kind[k] != BOUNDED:
+            continue
+        f = first[k]
+        if state[k] == STICK and abs(P[f]) > mu[k] * (1.0 + 1e-9):
+            state[k] = SLIP_POS if P[f] < 0.0 else SLIP_NEG
+            changed = True
+        elif (state[k] == SLIP_POS and w[f] < -tol_v) or (state[k] == SLIP_NEG and w[f] > tol_v):
+            state[k] = STICK
+            changed = True
+    return changed
 
 
 @jit
@@ -104,7 +163,7 @@ def _sweep(W, w0, kind, first, mu, P):
     m = P.shape[0]
     change = 0.0
     for k in range(kind.shape[0]):
-        f, s = first[k], max(kind[k], 1)
+        f, s = first[k], size(kind[k])
         # the block's velocities without its own impulses (summed without them: no cancellation)
         u1 = w0[f] + dot(W[f], P, 0, f) + dot(W[f], P, f + s, m)
         u2 = w0[f + 1] + dot(W[f + 1], P, 0, f) + dot(W[f + 1], P, f + s, m) if s > 1 else 0.0
@@ -124,6 +183,10 @@ def _local(W, f, kind, mu, u1, u2, u3, P):
     """P[f:f + size] <- block f's impulses with the others held (u: its velocities without its own impulses),
     exact: a bilateral row's, a normal row's projected on P_n >= 0; with friction open, sticking, else sliding."""
     a = W[f, f]
+    if kind == BOUNDED:                     # stuck, else held at the bound against the slip
+        p = -u1 / a if a > 0.0 else (-mu if u1 > 0.0 else mu)
+        P[f] = min(max(p, -mu), mu)
+        return
     if kind == BILATERAL or kind == NORMAL:
         p = -u1 / a if a > 0.0 else 0.0
         P[f] = max(0.0, p) if kind == NORMAL else p
@@ -263,6 +326,9 @@ def _states(P, kind, first, mu, state, direction):
         if kind[k] == BILATERAL:
             state[k] = STICK
             continue
+        if kind[k] == BOUNDED:
+            state[k] = STICK if abs(P[f]) < mu[k] * (1.0 - 1e-9) else (SLIP_POS if P[f] < 0.0 else SLIP_NEG)
+            continue
         pn = P[f]
         t1 = P[f + 1] if kind[k] >= PLANAR else 0.0
         t2 = P[f + 2] if kind[k] == SPATIAL else 0.0
@@ -282,26 +348,34 @@ def _states(P, kind, first, mu, state, direction):
 @jit
 def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
     """work[0, :m] <- the impulses the active set `state` (and the sliding spatial contacts' `direction`) fixes;
-    returns whether they satisfy every condition. Its equations' least-norm least-squares solution first (the
+    returns VERIFIED where they satisfy every condition, else FAILED, or ADJUSTED where its answer contradicts a
+    bounded row's state, which is then changed (_adjust; _settle polishes again). Its equations' least-norm
+    least-squares solution first (the
     Python twin's); where they are dependent (redundant rows) and that fails, the solution closest to P (the
     Gauss-Seidel answer, or a warm start's last impulses): the least-norm choice can pull a contact or leave the
     cone where the other solutions include valid ones, as the Gauss-Seidel answer shows.
 
     Column j of the active set is e_r + c1 e_(r+1) + c2 e_(r+2), r = rows[j]: a bilateral or sticking row's own
     impulse (c = 0), or a sliding contact's, its friction riding on its normal impulse (planar: c1 = -+mu;
-    spatial: c = -mu d); its equation is w_r = 0. Without a slide the system is W over the rows, symmetric
+    spatial: c = -mu d); its equation is w_r = 0. A sticking bounded row is a column of its own; a slipping one's
+    impulse is its bound (`fixed`), known, so its effect W fixed moves to the right-hand side. Without a slide the system is W over the rows, symmetric
     positive semidefinite: its least-norm solution by Cholesky first, a fraction of the QR's cost (a robot standing
     on its feet: every step), with diagonal pivoting where plain Cholesky meets a pivot near zero (dependent rows:
     a box resting on four corners, psd_least_norm); should that answer fail a condition, the QR's as ever."""
     m = w0.shape[0]
     cand, w, b, y, z, vn1, vn2, tau = work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7]
     c1, c2, rows, perm = work[8], work[9], work[10], work[11]   # (rows, perm: integers, as floats)
+    fixed, wf = work[12], work[13]      # the slipping bounded rows' impulses (at the bound), w0 + W fixed
     K = work[VECTORS:VECTORS + m]       # the reduced system, K[:n, :n]
     n = np.int64(0)     # (not the literal 0: Numba would compile the calls below once more for it)
+    for i in range(m):
+        fixed[i] = 0.0
     for k in range(kind.shape[0]):
         f, s = first[k], state[k]
-        if kind[k] == BILATERAL or (kind[k] != NORMAL and s == STICK):
-            for r in range(f, f + max(kind[k], 1)):
+        if kind[k] == BOUNDED and (s == SLIP_POS or s == SLIP_NEG):
+            fixed[f] = -mu[k] if s == SLIP_POS else mu[k]
+        elif kind[k] == BILATERAL or kind[k] == BOUNDED or (kind[k] != NORMAL and s == STICK):
+            for r in range(f, f + size(kind[k])):
                 rows[n], c1[n], c2[n] = r, 0.0, 0.0
                 n += 1
         elif s != OPEN:
@@ -314,30 +388,34 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
     symmetric = True
     for j in range(n):
         symmetric = symmetric and c1[j] == 0.0 and c2[j] == 0.0
-    _system(W, w0, rows, c1, c2, n, K, b)
+    for i in range(m):
+        wf[i] = w0[i] + dot(W[i], fixed, 0, m)
+    _system(W, wf, rows, c1, c2, n, K, b)
     if symmetric:                           # no slide: K = W over the rows, symmetric: K^+ b by Cholesky first
         for i in range(n):
             y[i] = b[i]
         unique = cholesky_solve(K, y, n)
         solved = unique
         if not solved:                      # (dependent rows, or near it: a box resting on four corners)
-            _system(W, w0, rows, c1, c2, n, K, b)
+            _system(W, wf, rows, c1, c2, n, K, b)
             for i in range(n):
                 y[i] = b[i]
             solved = psd_least_norm(K, y, n, perm, z, vn1, work[VECTORS + m:])
         if solved:
             for i in range(m):
-                cand[i] = 0.0
+                cand[i] = fixed[i]
             for j in range(n):
                 cand[int(rows[j])] = y[j]
             for i in range(m):
                 w[i] = w0[i] + dot(W[i], cand, 0, m)
             if _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v):
-                return True
-            if not unique and _weighted(W, w0, kind, first, mu, state, direction, tol_v, rows, c1, c2, n, cand, w,
-                                        y, z, vn1, vn2, tau, perm, K, b, work[VECTORS + m:]):
-                return True
-        _system(W, w0, rows, c1, c2, n, K, b)          # (the factor, or a part of it, took K's place)
+                return VERIFIED
+            if _weighted(W, w0, wf, fixed, kind, first, mu, state, direction, tol_v, rows, c1, c2, n,
+                                        cand, w, y, z, vn1, vn2, tau, perm, K, b, work[VECTORS + m:]):
+                return VERIFIED
+            if _adjust(kind, first, mu, state, cand, w, tol_v):
+                return ADJUSTED
+        _system(W, wf, rows, c1, c2, n, K, b)          # (the factor, or a part of it, took K's place)
     rank = qr_factor(K, b, n, vn1, vn2, tau, perm, y, z)
     for closest in (False, True):
         if closest and rank == n:           # (a unique solution: nothing else to try)
@@ -346,7 +424,7 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
             vn1[j] = P[int(rows[j])]
         qr_solution(K, b, y, n, rank, tau, perm, vn1, closest, z)
         for i in range(m):
-            cand[i] = 0.0
+            cand[i] = fixed[i]
         for j in range(n):
             r = int(rows[j])
             cand[r] += y[j]
@@ -357,23 +435,28 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
         for i in range(m):
             w[i] = w0[i] + dot(W[i], cand, 0, m)
         if _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v):
-            return True
-    return False
+            return VERIFIED
+        if not closest and _adjust(kind, first, mu, state, cand, w, tol_v):
+            return ADJUSTED
+    return FAILED
 
 
 @jit
-def _weighted(W, w0, kind, first, mu, state, direction, tol_v, rows, c1, c2, n, cand, w, y, t, u, weight, d2, perm,
-              K, b, G):
+def _weighted(W, w0, wf, fixed, kind, first, mu, state, direction, tol_v, rows, c1, c2, n, cand, w, y, t, u, weight,
+              d2, perm, K, b, G):
     """Whether the active set's solution of least weighted norm sum_j x_j^2 / d2_j satisfies every condition; it is
     then in `cand` (and w). A sticking contact's friction rows are weighted by mu P_n (P_n of `cand`, the
-    least-norm solution, which failed), every other row by the mean of those: x = D2 K (K D2 K)^+ b for K
+    least-norm solution, which failed), a sticking bounded row by its bound (a joint's friction: a robot standing
+    with its joints stuck shares its weight between its joints and feet so), every other row by the mean of those:
+    x = D z with z the least-norm solution of K D z = b, D = D2^1/2 (by QR; the same as D2 K (K D2 K)^+ b) for K
     symmetric (no slide). Of a redundant set's solutions (a box on four corners) the least-norm one splits a
     friction evenly over the contacts that share its direction; this one splits it in proportion to what their
     cones allow, so where the load is uneven (the box held on a slope near its cone's edge: the upper corners
     carry less) it stays inside every cone whenever their total cone holds the total friction.
-    t, u, weight (m,), d2 (n,), perm: scratch; K, G: (m, m) each (K holds the system on return)."""
+    wf: w0 + W fixed, fixed: the slipping bounded rows' impulses (_polish). t, u, weight (m,), d2 (n,), perm:
+    scratch; K, G: (m, m) each (K holds the system on return)."""
     m = w0.shape[0]
-    _system(W, w0, rows, c1, c2, n, K, b)
+    _system(W, wf, rows, c1, c2, n, K, b)
     total, count = 0.0, 0
     for i in range(m):
         weight[i] = -1.0
@@ -386,28 +469,27 @@ def _weighted(W, w0, kind, first, mu, state, direction, tol_v, rows, c1, c2, n, 
                 weight[f + 2] = mu[k] * pn
             total += mu[k] * pn
             count += 1
+        elif kind[k] == BOUNDED and state[k] != SLIP_POS and state[k] != SLIP_NEG:
+            weight[f] = mu[k]                   # (a joint's friction: by its bound)
+            total += mu[k]
+            count += 1
     if count == 0 or not total > 0.0:
         return False
     mean = total / count
     for j in range(n):
         r = int(rows[j])
         d2[j] = weight[r] if weight[r] >= 0.0 else mean
-    for i in range(n):                      # G = K D2 K (K symmetric)
-        for l in range(n):
-            s = 0.0
-            for j in range(n):
-                s += K[i, j] * d2[j] * K[j, l]
-            G[i, l] = s
-    for i in range(n):
-        y[i] = b[i]
-    if not psd_least_norm(G, y, n, perm, t, u, K):
-        _system(W, w0, rows, c1, c2, n, K, b)
-        return False
-    _system(W, w0, rows, c1, c2, n, K, b)
+    for j in range(n):                      # x = D z, z the least-norm solution of (K D) z = b, D = D2^1/2: by QR,
+        d2[j] = math.sqrt(d2[j])            # not through K D2 K (its condition number squared)
+        for i in range(n):
+            K[i, j] *= d2[j]
+    rank = qr_factor(K, b, n, t, u, G[0], perm, y, weight)
+    qr_solution(K, b, y, n, rank, G[0], perm, t, False, weight)
+    _system(W, wf, rows, c1, c2, n, K, b)
     for i in range(m):
-        cand[i] = 0.0
+        cand[i] = fixed[i]
     for j in range(n):
-        cand[int(rows[j])] = d2[j] * dot(K[j], y, 0, n)
+        cand[int(rows[j])] = d2[j] * y[j]
     for i in range(m):
         w[i] = w0[i] + dot(W[i], cand, 0, m)
     return _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v)
@@ -447,7 +529,14 @@ def _holds(kind, first, mu, state, direction, P, w, rows, n, tol_v):
         f, s = first[k], state[k]
         if kind[k] == BILATERAL:
             continue
-        if s == OPEN:
+        if kind[k] == BOUNDED:                      # held at the bound against the slip, or inside it and stuck
+            if s == SLIP_POS:
+                ok = w[f] >= -tol_v
+            elif s == SLIP_NEG:
+                ok = w[f] <= tol_v
+            else:
+                ok = abs(P[f]) <= mu[k] + tol_p
+        elif s == OPEN:
             ok = w[f] >= -tol_v
         elif not P[f] >= -tol_p:
             ok = False

@@ -18,7 +18,7 @@ there (Model holds the rows).
     r      1 row     the energy correction's direction
     coef   1 row     the least-norm solve's coefficients
     ks kd  1 row each   Baumgarte gains of each row (NC)
-    e      1 row     restitution of each jump (NJ)
+    e      1 row     restitution of each jump (NJ), then each joint friction's force
 
 Plain Python: andyc's code generator reads it too.
 """
@@ -26,9 +26,9 @@ Plain Python: andyc's code generator reads it too.
 VECTORS = ("phi", "cv", "kappa", "y", "dv", "r", "coef", "ks", "kd", "e")
 
 
-def scratch_layout(nv: int, nc: int, nj: int) -> dict:
-    """The first row of each block and vector of S, and S's shape ("rows", "width")."""
-    width = max(nv, nc, nj, 1)
+def scratch_layout(nv: int, nc: int, ne: int) -> dict:
+    """The first row of each block and vector of S, and S's shape ("rows", "width"); ne: the entries of e."""
+    width = max(nv, nc, ne, 1)
     rows = {"A": 0, "C": nc, "W": 2 * nc}
     first = 2 * nc + width
     rows.update({name: first + i for i, name in enumerate(VECTORS)})

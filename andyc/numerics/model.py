@@ -296,8 +296,10 @@ def sizes_of(equations) -> dict:
     """The sizes of a generated <name>_equations.py module (NQ, NV, ...), with the scratch layout's "rows" and
     "width", by lower-case name."""
     sizes = {name: int(getattr(equations, name.upper(), 0)) for name in SIZES}
-    layout = scratch_layout(sizes["nv"], sizes["nc"], sizes["nj"])
-    return {**sizes, "na": sizes["nx"] + sizes["nw"], "ng": sizes["nv"] + sizes["nw"], "rows": layout["rows"], "width": layout["width"]}
+    ne = sizes["nj"] + len(getattr(equations, "FRICTIONS", ()))         # the coefficients the restitution leaf gives
+    layout = scratch_layout(sizes["nv"], sizes["nc"], ne)
+    return {**sizes, "na": sizes["nx"] + sizes["nw"], "ng": sizes["nv"] + sizes["nw"], "rows": layout["rows"],
+            "width": layout["width"], "ne": ne}
 
 
 def new_model(equations, stubs, constrained=None) -> Model:
@@ -306,7 +308,7 @@ def new_model(equations, stubs, constrained=None) -> Model:
     (no constraints, no jumps, ...). `constrained`: "dense" or "sparse" overrides the module's CONSTRAINED_SOLVE
     (sparse_rows.py; "sparse" needs its tables: ValueError without)."""
     sizes = sizes_of(equations)
-    layout = scratch_layout(sizes["nv"], sizes["nc"], sizes["nj"])
+    layout = scratch_layout(sizes["nv"], sizes["nc"], sizes["ne"])
     rows = np.array([layout[name] for name in ("A", "C", "W") + VECTORS], dtype=np.int64)
     tables = [np.ascontiguousarray(getattr(equations, name.upper()), dtype=np.int64) for name in TABLES]
     chosen = constrained or getattr(equations, "CONSTRAINED_SOLVE", "dense")

@@ -53,7 +53,7 @@ import numpy as np
 
 from .active import select_rows
 from .compiler import jit
-from .contact_solver import BILATERAL, NORMAL, OPEN, PLANAR, SPATIAL, solve, work_shape
+from .contact_solver import BILATERAL, BOUNDED, NORMAL, OPEN, PLANAR, SPATIAL, STICK, size, solve, work_shape
 from .dynamics import correct_rows, move, normalize, project
 from .integrator import update_inputs
 from .linalg import add_rows_transposed, cholesky, solve_gram, solve_lower, solve_upper
@@ -66,9 +66,11 @@ KEEP = 1e-6             # m: ... or at most this, when it was closed in the last
 #                         lifts a pivot by O((h w)^2) (a corner a block rocks about: 1e-8 m at 0.3 rad/s); out of the
 #                         set for that, it would fall for a step and land again
 PENETRATION = 1e-9      # m: a closed contact's gap further than this from zero after a step is put back on it
+COMPLIANCE = 1e-6       # a joint friction's row: W's diagonal entry times 1 + this (_soften)
 
 Scratch = namedtuple("Scratch", "W w0 X rows owner kind first mu state direction P work v a col xm x0 xdot "
-                                "d_open e cmu total seen guess guess_dir landed speed stats tree span cut runs av")
+                                "d_open e cmu total seen guess guess_dir landed speed stats tree span cut runs av "
+                                "fspeed fslot fbound fguess fwork")
 Scratch.__doc__ = """The arrays of a time-stepping run (new_scratch). The step's problem over at most nc rows: W (nc * nc),
 w0, P (nc,), X (nc * nv) its rows whitened, C = A R^-1 (M = R^T R: _factor), row by row, span (nc, 2) the first
 and one past the last speed where each row of C may be nonzero; rows (nc,) its constraint rows; per block: owner (its contact, -1 bilateral),
@@ -80,23 +82,30 @@ restitution and mu; total (nc,) each row's impulse since the last sample, seen (
 normal speed after the step (those of its problem); stats (4,):
 steps, Gauss-Seidel sweeps, steps whose answer did not verify, push-outs; tree (1,) 1 where M is factored along
 its tree (coefficients); cut (nc + 1,) the first block of each independent part of the step's problem, runs (nc, 2)
-the speeds each part reaches (_parts); av (nc,) A v_k over the problem's rows."""
+the speeds each part reaches (_parts); av (nc,) A v_k over the problem's rows. Per joint friction (frictions,): the
+speed it acts on, its work slot, its force (coefficients), its state in the last step (the warm start), its work in
+the step. (nc here counts the problem's rows at most: the constraint rows and the joint frictions.)"""
 
 
-def new_scratch(nq, nv, nx, nw, nc, nd, contacts) -> Scratch:
-    """The zeroed arrays of a run's steps (Scratch)."""
-    m = max(nc, 1)
+def new_scratch(nq, nv, nx, nw, nc, nd, contacts, friction_speeds=(), friction_slots=()) -> Scratch:
+    """The zeroed arrays of a run's steps (Scratch); the joint frictions' speeds and work slots."""
+    nf = len(friction_speeds)
+    m = max(nc + nf, 1)
     z, i = np.zeros, np.int64
     return Scratch(z(m * m), z(m), z(nv * m), z(m, i), z(m, i), z(m, i), z(m, i), z(m), z(m, i), z(2 * m), z(m),
                    z(work_shape(m)), z(nv), z(nv), z(nv), z(nx + nw), z(nx + nw), z(nx + nw), z(nd), z(contacts),
                    z(contacts), z(m), z(m), np.full(contacts, -1, i), z((contacts, 2)), z(contacts, i), z(contacts), z(4, i),
-                   z(1, i), z((m, 2), i), z(m + 1, i), z((m, 2), i), z(m))
+                   z(1, i), z((m, 2), i), z(m + 1, i), z((m, 2), i), z(m), np.array(friction_speeds, dtype=i),
+                   np.array(friction_slots, dtype=i), z(nf), np.full(nf, STICK, i), z(nf))
 
 
 @jit
 def coefficients(model, w, s, p):
-    """Each contact's restitution (its impact jump's coefficient) and mu (its stop's; 0 without friction), into s."""
+    """Each contact's restitution (its impact jump's coefficient) and mu (its stop's; 0 without friction), and each
+    joint friction's force (the leaf's entry nj + i), into s."""
     call(model.restitution, (p, w.S))
+    for i in range(s.fbound.shape[0]):
+        s.fbound[i] = w.S[model.s_e, model.nj + i]
     for k in range(model.nj):
         i = model.jump_contact[k]
         if i >= 0:
@@ -180,7 +189,7 @@ def _block(s, m, nb, kind, owner, mu, guess, gx, gy):
     s.state[nb] = guess
     s.direction[2 * nb] = gx
     s.direction[2 * nb + 1] = gy
-    return m + max(kind, 1)
+    return m + size(kind)
 
 
 @jit
@@ -247,10 +256,18 @@ def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
             guess = 1                                   # (a slide with no direction yet: try sticking first)
         m = _block(s, m, nb, kind, i, s.cmu[i], guess, s.guess_dir[i, 0], s.guess_dir[i, 1])
         nb += 1
+    for i in range(s.fspeed.shape[0]):                  # each joint friction: |P| <= F h on its speed (row -1 - j)
+        if s.fbound[i] > 0.0:
+            s.rows[m] = -1 - s.fspeed[i]
+            m = _block(s, m, nb, BOUNDED, -2 - i, s.fbound[i] * h, s.fguess[i], 0.0, 0.0)
+            nb += 1
     if m > 0:
         impulse_work = _impulses(model, w, s, m, nb, v, a, tree)
         if model.nj > 0:
             x[nx + model.nw - 1] += impulse_work
+        for i in range(s.fspeed.shape[0]):
+            x[nx + s.fslot[i]] += s.fwork[i]
+            s.fwork[i] = 0.0
     # q_{k+1}, the signals, v_{k+1} (in a)
     for j in range(nq):
         x[j] += h * ((1.0 - theta) * v[j] + theta * a[j])
@@ -271,7 +288,8 @@ def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
 def _impulses(model, w, s, m, nb, v, vel, tree):
     """Solve the step's problem over s.rows' first m rows (nb blocks); vel: the free velocity in, v_{k+1} out;
     v: v_k. Each row's impulse into s.total (and s.seen), its normal speed after into s.w0, the blocks' states into
-    s.state (and s.direction); returns the impulses' work P . (A v_{k+1/2} + b). W = A M^-1 A^T = C C^T with
+    s.state (and s.direction); returns the impulses' work P . (A v_{k+1/2} + b), but the joint frictions' (their
+    rows -1 - j: the speed j), which goes to s.fwork. W = A M^-1 A^T = C C^T with
     C = A R^-1 (one triangular solve a row, the tree's skipping the speeds a row does not reach), each entry over
     the speeds where both rows may be nonzero, the lower triangle mirrored; solved part by part where the blocks
     fall into parts that share no speed (_parts: boxes side by side), each part's W alone."""
@@ -283,11 +301,11 @@ def _impulses(model, w, s, m, nb, v, vel, tree):
         Cr = C[r]
         av, af = 0.0, 0.0
         for j in range(nv):
-            a = S[model.s_a + row, j]
+            a = S[model.s_a + row, j] if row >= 0 else (1.0 if j == -1 - row else 0.0)
             Cr[j] = a
             av += a * v[j]
             af += a * vel[j]
-        w0[r] = af + S[model.s_cv, row] - av
+        w0[r] = af + (S[model.s_cv, row] if row >= 0 else av) - av
         s.av[r] = av
         span[r, 0], span[r, 1] = _lower(model, M, Cr, tree)
     for k in range(nb):                                 # Newton's law: u_n,k+1 + e min(u_n,k, 0) >= 0
@@ -297,6 +315,7 @@ def _impulses(model, w, s, m, nb, v, vel, tree):
     if parts == 1:
         W = s.W[:m * m].reshape((m, m))
         _gram(C, span, W, 0, m)
+        _soften(s, W, 0, nb, 0)
         sweeps, verified = solve(W, w0, s.kind[:nb], s.first[:nb], s.mu[:nb], s.state[:nb],
                                  s.direction[:2 * nb].reshape((nb, 2)), s.P[:m], s.work)
     else:
@@ -319,6 +338,9 @@ def _impulses(model, w, s, m, nb, v, vel, tree):
     work = 0.0
     for r in range(m):                                  # A v_{k+1} + b, and P . (A v_{k+1/2} + b), b = c - A v_k
         row = s.rows[r]
+        if row < 0:                                     # (a joint friction: its speed's own)
+            w0[r] = vel[-1 - row]
+            continue
         after = 0.0
         for j in range(nv):
             after += S[model.s_a + row, j] * vel[j]
@@ -327,6 +349,10 @@ def _impulses(model, w, s, m, nb, v, vel, tree):
         work += s.P[r] * (0.5 * (s.av[r] + after) + b)
         s.total[row] += s.P[r]
         s.seen[row] = 1.0
+    for k in range(nb):
+        if s.owner[k] <= -2:
+            r = s.first[k]
+            s.fwork[-2 - s.owner[k]] += s.P[r] * 0.5 * (s.av[r] + w0[r])
     return work
 
 
@@ -346,17 +372,32 @@ def _gram(C, span, W, r0, n):
             W[q, r] = total
 
 
+@jit(inline="always")
+def _soften(s, W, k0, k1, r0):
+    """Each joint friction's diagonal entry of W (blocks k0 .. k1 - 1, whose rows start at r0) times 1 + COMPLIANCE:
+    a stuck joint creeps at COMPLIANCE times the speed its load would give it in a step (MuJoCo regularizes its
+    frictionloss rows alike). Why: a robot standing with its joints stuck has more rows than speeds, and some
+    nearly dependent (a hip's friction beside a foot's tangent rows: W's singular values down to 1e-15 of the
+    largest), whose least-squares answers leave 1e-9 inconsistent and share the load by rounding; softened, the
+    step's problem is regular and its answer the one that asks the joints' friction the least."""
+    for k in range(k0, k1):
+        if s.kind[k] == BOUNDED:
+            f = s.first[k] - r0
+            W[f, f] *= 1.0 + COMPLIANCE
+
+
 @jit
 def _solve_parts(s, C, span, w0, parts):
     """The step's problem part by part (_parts), each part's W alone; returns (sweeps, verified) over them all."""
     used, sweeps, verified = 0, 0, True
     for c in range(parts):
         k0, k1 = s.cut[c], s.cut[c + 1]
-        r0, r1 = s.first[k0], s.first[k1 - 1] + max(s.kind[k1 - 1], 1)
+        r0, r1 = s.first[k0], s.first[k1 - 1] + size(s.kind[k1 - 1])
         n = r1 - r0
         W = s.W[used:used + n * n].reshape((n, n))
         used += n * n
         _gram(C, span, W, r0, n)
+        _soften(s, W, k0, k1, r0)
         for k in range(k0, k1):
             s.first[k] -= r0
         part_sweeps, part_verified = solve(W, w0[r0:r1], s.kind[k0:k1], s.first[k0:k1], s.mu[k0:k1], s.state[k0:k1],
@@ -377,7 +418,7 @@ def _parts(s, nb, nv):
     parts = 0
     for k in range(nb):
         lo, hi = nv, 0
-        for r in range(s.first[k], s.first[k] + max(s.kind[k], 1)):
+        for r in range(s.first[k], s.first[k] + size(s.kind[k])):
             if s.span[r, 0] < s.span[r, 1]:
                 lo, hi = min(lo, s.span[r, 0]), max(hi, s.span[r, 1])
         for c in range(parts - 1):
@@ -406,6 +447,8 @@ def _modes(model, s, nb, d):
             s.landed[i] = 0
     for k in range(nb):
         i = s.owner[k]
+        if i <= -2:                                     # (a joint friction's: its warm start)
+            s.fguess[-2 - i] = s.state[k]
         if i < 0:
             continue
         state = s.state[k]

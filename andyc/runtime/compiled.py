@@ -73,12 +73,20 @@ class CompiledModel:
     contact_tangents: tuple = ()  # per contact: 0 frictionless, 1 planar, 2 spatial friction (stick rows t, t + 1)
     jump_kinds: tuple = ()      # per jump: (kind, contact) of a contact's jump (andyc.spec.contacts), ("", -1) else
     jump_modes: tuple = ()      # per jump: (index in d of its contact's mode, mask of the modes it leaves); (-1, 0)
+    friction_names: tuple = ()  # joint frictions (dampers of law coulomb): only the moreau method applies them
+    friction_speeds: tuple = ()  # ... the speed each acts on
+    friction_slots: tuple = ()  # ... its work slot
 
     @property
     def stepping(self) -> ModuleType:
         """The build's time-stepping module (andyc_numerics' timestepping.py), imported when first asked for: a run
         of another method does not load it."""
         return importlib.import_module(f"{self.numerics.__name__}.timestepping")
+
+    def stepping_scratch(self):
+        """The zeroed arrays of a time-stepping run of this model (the stepping module's new_scratch)."""
+        return self.stepping.new_scratch(self.nq, self.nv, self.nx, self.nw, self.nc, self.nd, len(self.contact_names),
+                                         self.friction_speeds, self.friction_slots)
 
     @property
     def tangents(self) -> list:
@@ -301,9 +309,9 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
         if not free:
             integrator.advance(m, w.ref, opts, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1,
                                log, 1, *full_variant(model))
-    if (every or method in TIME_STEPPING) and model.contact_names:
+    if (every or method in TIME_STEPPING) and (model.contact_names or model.friction_names):
         stepping = model.stepping
-        s = stepping.new_scratch(model.nq, model.nv, model.nx, model.nw, model.nc, model.nd, len(model.contact_names))
+        s = model.stepping_scratch()
         stepping.coefficients(m, w.ref, s, p)
         stepping.advance(m, w.ref, s, 0.5, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1,
                          log, np.zeros((1, model.nc)), 1)

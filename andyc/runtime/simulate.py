@@ -58,7 +58,7 @@ from andyc.runtime.options import Events, Init, Projection, TimeStepping
 from andyc.runtime.progress import Progress
 from andyc.runtime.run import Run, unit_quaternions
 from andyc.runtime.status import lost_constraints
-from andyc.runtime.timestepping import check_model, run_moreau
+from andyc.runtime.timestepping import check_model, refuse_friction, run_moreau
 
 
 def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str = "rk4", *,
@@ -104,6 +104,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
         raise SimulationError(f"unknown method '{method}'; available: {', '.join(METHODS)}")
     if method == "moreau":
         check_model(model, stepping.theta)
+    refuse_friction(model, method)
     projection = _energy_correction(model, method, projection)
     if not (math.isfinite(t_end) and math.isfinite(dt) and t_end > 0 and dt > 0 and every >= 1):
         raise SimulationError(f"need t_end > 0, dt > 0 and every >= 1, got t_end={t_end}, dt={dt}, every={every}")
@@ -322,12 +323,16 @@ def _close_sunk(model: CompiledModel, x, u, p, d) -> bool:
 def _check_coefficients(model: CompiledModel, p, given: dict | None) -> None:
     """The coefficients the model file checks at its defaults (andyc.spec.hybrid.restitution,
     andyc.spec.contacts.friction_coefficient), checked again at the run's parameters: a restitution in [0, 1] (more
-    would add energy at every impact), a friction coefficient >= 0. SimulationError naming the contact or jump and
-    the parameters given."""
-    if not model.nj:
+    would add energy at every impact), a friction coefficient >= 0, a joint friction's force >= 0. SimulationError
+    naming the contact, jump or friction and the parameters given."""
+    if not model.nj and not model.friction_names:
         return
     values = model.module.restitutions(p)
     at = ", ".join(f"{k} = {float(v):g}" for k, v in (given or {}).items()) or "the defaults"
+    for i, name in enumerate(model.friction_names):
+        if not values[model.nj + i] >= 0.0:
+            raise SimulationError(f"joint friction '{name}': its force is {values[model.nj + i]:g} at {at}, negative; "
+                                  "give a force (a torque on a rotation) >= 0")
     for k, (kind, i) in enumerate(model.jump_kinds):
         owner = f"contact '{model.contact_names[i]}'" if kind else f"jump '{model.jump_names[k]}'"
         if kind == "stop" and not values[k] >= 0.0:

@@ -12,7 +12,8 @@ of the `every` steps since the last sample (the impulse of each step is multipli
 rows and units the event-driven methods log their multipliers, so that plots and analyses read them alike (NaN:
 a row in no step's problem since the last sample). Sample 0 has the ideal multipliers of the initial modes.
 
-Not covered: hand-written jumps (refused with one line: check_model; the event-driven methods run contacts
+Joint friction (dampers of law coulomb) is a bounded row of each step's problem, on its speed: |P| <= F dt,
+sticking inside the bound (andyc_numerics' contact_solver); its work goes to its own slot. Not covered: hand-written jumps (refused with one line: check_model; the event-driven methods run contacts
 beside a hand-written automaton), sensitivities (refused by andyc.runtime.sensitivities).
 """
 
@@ -35,9 +36,10 @@ def check_model(model, theta: float) -> None:
     if not (0.5 <= theta <= 1.0):
         raise SimulationError(f"the moreau method's theta is {theta:g}; use a value in [0.5, 1] (0.5: the "
                               "trapezoidal scheme, second order in smooth motion; 1: backward Euler in the speeds)")
-    if not model.contact_names:
-        raise SimulationError(f"{model.source}: the moreau method needs contacts (a contacts: section), and this "
-                              "model has none; use another --method (rk4, projection, ...)")
+    if not model.contact_names and not model.friction_names:
+        raise SimulationError(f"{model.source}: the moreau method needs contacts (a contacts: section) or joint "
+                              "friction (a damper of law coulomb), and this model has neither; use another --method "
+                              "(rk4, projection, ...)")
     own = [name for name, (kind, _) in zip(model.jump_names, model.jump_kinds) if not kind]
     if own:
         raise SimulationError(f"{model.source}: jump '{own[0]}' is written by hand, and the moreau method handles "
@@ -60,7 +62,7 @@ def run_moreau(model, x, source, p, d, flow, t_end, dt, every, theta, bar, inter
     forces = np.full((rows, model.nc), np.nan)
     out_t, out_x, out_u, out_f, out_d = log
     w = work(model)
-    s = stepping.new_scratch(model.nq, model.nv, nx, model.nw, model.nc, model.nd, len(model.contact_names))
+    s = model.stepping_scratch()
     stepping.coefficients(model.ref, w.ref, s, p)
     s.guess[:] = [m if m > 0 else -1 for m in model.contact_states(d)]     # the initial modes: the warm start
     fn, data = source.function_data
@@ -102,6 +104,20 @@ def run_moreau(model, x, source, p, d, flow, t_end, dt, every, theta, bar, inter
             out_u[row] = np.nan
         row += 1
     return tuple(a[:row].copy() for a in log), ending(message, row, _NoJumps), figures(), forces[:row].copy()
+
+
+def refuse_friction(model, method: str, fix: str = "run with --method moreau, or ", error=SimulationError) -> None:
+    """`error` (one line) when `model` (compiled, or its Spec) has joint friction, which only the moreau method
+    applies, and `method` is another: stick and slip are decided by the time step's contact problem; the
+    event-driven methods and the analyses built on them (linearization, cycles, sensitivities) have no such
+    decision. fix: what to do first (the message then says how to leave the friction out)."""
+    names = [d.name for d in model.joint_frictions] if hasattr(model, "joint_frictions") else model.friction_names
+    if names and method != "moreau":
+        shown = ", ".join(names[:4]) + (" ..." if len(names) > 4 else "")
+        where = model.source + ": " if isinstance(getattr(model, "source", None), str) else ""   # (a Spec's: the caller's)
+        raise error(f"{where}joint friction ({shown}: dampers of law coulomb) is applied by the moreau method "
+                    f"only, not by {method}; {fix}leave it out (a URDF's: urdf: {{joint_friction: false}}; a "
+                    "damper: another law)")
 
 
 class _NoJumps:

@@ -175,7 +175,7 @@ def _actuator(i: int, x: dict, scope: Scope) -> Actuator:
 
 def _damper(i: int, x: dict, scope: Scope, offset_frames: list) -> Damper:
     where = ("dampers", i)
-    coef, _ = scope.constant(x["coefficient"], where + ("coefficient",))
+    coef, value = scope.constant(x["coefficient"], where + ("coefficient",))
     speed = x.get("speed")
     damped = [c.name for c in scope.coordinates] + [s.name for s in scope.speeds]
     if speed is not None and speed not in damped:
@@ -190,6 +190,13 @@ def _damper(i: int, x: dict, scope: Scope, offset_frames: list) -> Damper:
     for key in ("angular", "point"):
         if key in x and "frame" not in x:
             scope.report.error(where + (key,), f"'{key}' goes with 'frame'", "remove it, or damp a frame")
+    if x.get("law") == "coulomb":
+        if frame is not None:
+            scope.report.error(where + ("frame",), "a coulomb damper acts on one speed, not on a frame",
+                               "give 'speed: <coordinate or speed>' (a joint's dry friction) instead of 'frame'")
+        elif value < 0:
+            scope.report.error(where + ("coefficient",), f"the friction force is {value:g}, negative",
+                               "give a force (a torque on a rotation) >= 0: a number or an expression of parameters")
     return Damper(x["name"], coef, x.get("law", "linear"), speed, frame, bool(x.get("angular", False)), where)
 
 

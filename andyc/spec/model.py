@@ -119,7 +119,7 @@ class Load:
 class Damper:
     name: str
     coefficient: sp.Expr
-    law: str                    # "linear" | "quadratic"
+    law: str                    # "linear" | "quadratic" | "coulomb" (dry friction of magnitude coefficient)
     speed: str | None           # coordinate name, or
     frame: str | None           # frame whose velocity is damped
     angular: bool
@@ -285,6 +285,12 @@ class Spec:
     @property
     def speed_names(self) -> list:
         return [f"{c.name}_dot" for c in self.coordinates] + [s.name for s in self.speeds]
+
+    @property
+    def joint_frictions(self) -> list:
+        """The dampers of law coulomb: dry friction on one speed, which the moreau method's contact problem
+        applies (andyc.numerics.contact_solver's bounded rows); the smooth equations leave them out."""
+        return [d for d in self.dampers if d.law == "coulomb"]
 
     def parameter_values(self) -> dict:
         return {name: value for name, (_, value) in self.parameters.items()}

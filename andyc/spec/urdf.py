@@ -27,6 +27,9 @@ How URDF maps onto andyc:
                             the mimicked coordinate; it adds no degree of freedom
     dynamics damping b      a linear damper on the joint's coordinate (on a mimic joint,
                             b * multiplier^2 on the mimicked coordinate: the same power)
+    dynamics friction f     dry friction: a damper <joint>_friction of law coulomb on the coordinate (a
+                            mimic joint's: f * |multiplier| on the mimicked one), which the moreau
+                            method applies; urdf: {joint_friction: false} leaves it out
     inertial                a body at the link's frame: com = origin xyz, inertia R I R^T
                             with R from origin rpy (about the COM, in the link's axes); an
                             inertia no rigid body has (not positive semi-definite, triangle
@@ -38,7 +41,7 @@ How URDF maps onto andyc:
                             (andyc.spec.urdfcontacts, andyc.spec.geometry)
 
 Gravity is [0, 0, -g] with a parameter g = 9.81 (URDF has none). Everything
-else a URDF may hold (effort and velocity limits, friction, safety controllers,
+else a URDF may hold (effort and velocity limits, safety controllers,
 calibration, other collision geometry, transmissions, gazebo tags, materials,
 unknown tags) is counted and named in one warning; nothing is dropped silently.
 
@@ -53,7 +56,7 @@ initial pose), root (keep the subtree of this link), lock (joint: value, held
 at that value, no degree of freedom), package_paths (folders searched for
 `package://` files), collide (links or fnmatch patterns whose <collision> shapes
 touch the YAML's `ground:`) with friction and restitution (their contacts'),
-and limits (joint limits as stops; default true).
+limits (joint limits as stops; default true) and joint_friction (<dynamics friction> applied; default true).
 """
 
 from __future__ import annotations
@@ -108,13 +111,14 @@ class _Options:
     restitution: object = None  # their contacts' restitution (an expression), None: 0
     limits: bool = True         # joint limits as stops (andyc.spec.urdfcontacts)
     actuators: bool = False     # a motor (input tau_<joint>, actuator <joint>_motor) on every moving joint
+    joint_friction: bool = True  # <dynamics friction> as a damper of law coulomb (andyc.spec.urdflinks)
 
 
 def _options(raw, links: dict, tree_root: str | None, option_error) -> _Options:
     """The options given (defaults for the others). A root link that does not exist is reported and
     ignored; a floating 'world' is reported, and stays fixed."""
     given = ({k: raw[k] for k in ("base", "position", "quaternion", "root", "lock", "package_paths", "collide",
-                                  "friction", "restitution", "limits", "actuators") if k in raw}
+                                  "friction", "restitution", "limits", "actuators", "joint_friction") if k in raw}
              if isinstance(raw, dict) else {})
     root = given.get("root")
     if root is not None and root not in links:
@@ -129,7 +133,7 @@ def _options(raw, links: dict, tree_root: str | None, option_error) -> _Options:
     return _Options(base, given.get("position", [0, 0, 0]), given.get("quaternion", [1, 0, 0, 0]), root,
                     dict(given.get("lock") or {}), given.get("package_paths", []), list(given.get("collide", [])),
                     given.get("friction"), given.get("restitution"), bool(given.get("limits", LIMITS_DEFAULT)),
-                    bool(given.get("actuators", False)))
+                    bool(given.get("actuators", False)), bool(given.get("joint_friction", True)))
 
 
 def _convert(reader: XmlReader, robot, links: dict, joints: dict, parent_joint: dict, tree_root: str,
@@ -212,7 +216,8 @@ def read(path, options=None, option_error=None, raw: bytes | None = None, ground
     problems = reader.problems + option_problems
     if problems:
         raise SpecError(sorted(problems, key=lambda d: (d.file, d.line)))
-    warnings = [w for w in [reader.unused(contacts.stops, set(contacts.colliding), o.actuators)] if w is not None]
+    warnings = [w for w in [reader.unused(contacts.stops, set(contacts.colliding), o.actuators, o.joint_friction)]
+                if w is not None]
     if contacts.mesh_links:
         n = len(contacts.mesh_links)
         line, _ = contacts.mesh_links[0]

@@ -197,7 +197,8 @@ class LinkWriter:
         bodies.append(body)
 
     def dampers(self, order, root):
-        """A linear damper on the coordinate of each joint with <dynamics damping> (not fixed, not locked)."""
+        """A linear damper on the coordinate of each joint with <dynamics damping> (not fixed, not locked), and
+        with urdf: {joint_friction: true} a coulomb one with its <dynamics friction>."""
         for link in order:
             if link == root:
                 continue
@@ -207,7 +208,8 @@ class LinkWriter:
             if dyn is None or j.get("type") not in ONE_DOF or jname in self.options.lock:
                 continue
             b = float(dyn.get("damping", "0") or 0)
-            if b == 0:
+            f = float(dyn.get("friction", "0") or 0) if self.options.joint_friction else 0.0
+            if b == 0 and f == 0:
                 continue
             speed, gain = self.coordinate_of[jname], 1.0
             if jname in self.mimics:                    # the power b (m v)^2 on the mimicked coordinate
@@ -216,11 +218,14 @@ class LinkWriter:
                 if speed not in self.draft.data["coordinates"]:
                     continue                            # follows a locked joint: no motion, no damping
             label = f"joint[{jname}].dynamics"
-            path = ("dampers", len(self.draft.data["dampers"]))
-            self.draft.entry(path, dyn, label)
-            name = self.draft.name(f"{identifier(jname, 'joint')}_damping", dyn, label)
-            self.draft.data["dampers"].append({"name": name, "coefficient": as_written(b * gain * gain),
-                                               "speed": speed})
+            for kind, entry in (("damping", {"coefficient": as_written(b * gain * gain)} if b else None),
+                                ("friction", {"coefficient": as_written(f * abs(gain)), "law": "coulomb"} if f else None)):
+                if entry is None:       # (friction f |v_joint| = f |gain| |v|: the same power on the mimicked one)
+                    continue
+                path = ("dampers", len(self.draft.data["dampers"]))
+                self.draft.entry(path, dyn, label)
+                name = self.draft.name(f"{identifier(jname, 'joint')}_{kind}", dyn, label)
+                self.draft.data["dampers"].append({"name": name, **entry, "speed": speed})
 
     def check_moving_mass(self, order, root, children):
         """Each degree of freedom must move some mass, or the mass matrix is singular."""

@@ -276,10 +276,11 @@ class XmlReader:
         return parent_joint, (roots[0] if roots else None)
 
     def unused(self, limits: bool = False, colliding: frozenset = frozenset(),
-               efforts: bool = False) -> Diagnostic | None:
+               efforts: bool = False, friction: bool = False) -> Diagnostic | None:
         """One warning naming every kind of element andyc does not use, with counts. `limits`: joint limits
         are stops (their lower and upper are used, effort and velocity not); `colliding`: the links whose
-        <collision> elements touch the ground; `efforts`: the joints' motors are clamped to their <limit effort>."""
+        <collision> elements touch the ground; `efforts`: the joints' motors are clamped to their <limit effort>;
+        `friction`: one-degree-of-freedom joints' <dynamics friction> is applied."""
         counts, first = {}, None
         joint_types = {j.get("name"): j.get("type") for j in self.root.findall("joint")}
 
@@ -306,8 +307,10 @@ class XmlReader:
                 if child.tag == "mimic" and joint_types.get(element.get("name")) == "fixed":
                     note("<mimic> on fixed joints", child)
                 if child.tag == "dynamics":
-                    if float(child.get("friction", "0") or 0) != 0:
-                        note("<dynamics friction>", child)
+                    if float(child.get("friction", "0") or 0) != 0 and \
+                            (not friction or joint_types.get(element.get("name")) not in ONE_DOF):
+                        note("<dynamics friction>" if not friction else
+                             f"<dynamics friction> on {joint_types.get(element.get('name'))} joints", child)
                     if float(child.get("damping", "0") or 0) != 0 and \
                             joint_types.get(element.get("name")) not in ONE_DOF:
                         note(f"<dynamics damping> on {joint_types.get(element.get('name'))} joints", child)

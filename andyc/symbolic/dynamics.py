@@ -114,6 +114,8 @@ def element_terms(spec: Spec, kin: dict[str, FrameKinematics], emit: Emitter) ->
         force = a.force if a.limit is None else sp.Min(sp.Max(a.force, -a.limit), a.limit)
         out.append(ElementTerms(a.name, loads=[(J, sp.Matrix([force]))], power=force * v[j]))
     for d in spec.dampers:
+        if d.law == "coulomb":          # (dry friction: the moreau method's bounded rows, not a smooth force)
+            continue
         if d.speed is not None:
             j = damped.index(d.speed)
             J = sp.zeros(1, n)

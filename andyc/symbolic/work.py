@@ -60,7 +60,7 @@ def work_slots(spec: Spec, terms: list, constraints) -> tuple[list, list, list, 
     """The work slots of the model: (names, powers, row_slot). names: every element that does work, in the
     model's order (forces and torques, dampers, springs and potentials that depend on t: `terms`, the
     ElementTerms), then each constraint with a working row, then 'baumgarte' when a constraint has gains (the
-    baumgarte method's forces off the manifold), then 'friction' when a contact has friction (the power of its
+    baumgarte method's forces off the manifold), then each joint friction (a coulomb damper), then 'friction' when a contact has friction (the power of its
     sliding force, which the numerics compute: integrator.stage_powers), then 'jumps' when the model has jumps. powers: the
     power of each element slot (the first len(powers) names), which the dynamics leaf writes after G. row_slot:
     for each velocity-level row of `constraints`, the slot its power -lam (c - A v) goes to, or -1 (the
@@ -97,6 +97,7 @@ def work_slots(spec: Spec, terms: list, constraints) -> tuple[list, list, list, 
         # add it in that method only, integrator.stage_powers).
         row_slot = [-2 - len(names) if slot < 0 else slot for slot in row_slot]
         names.append(BAUMGARTE)
+    names += [d.name for d in spec.joint_frictions]     # (their work: the moreau method's, timestepping.step)
     if any(c.friction is not None for c in spec.contacts):
         names.append(FRICTION)
     if spec.jumps:
