@@ -368,12 +368,14 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
     fixed, wf = work[12], work[13]      # the slipping bounded rows' impulses (at the bound), w0 + W fixed
     K = work[VECTORS:VECTORS + m]       # the reduced system, K[:n, :n]
     n = np.int64(0)     # (not the literal 0: Numba would compile the calls below once more for it)
+    held = False
     for i in range(m):
         fixed[i] = 0.0
     for k in range(kind.shape[0]):
         f, s = first[k], state[k]
         if kind[k] == BOUNDED and (s == SLIP_POS or s == SLIP_NEG):
             fixed[f] = -mu[k] if s == SLIP_POS else mu[k]
+            held = True
         elif kind[k] == BILATERAL or kind[k] == BOUNDED or (kind[k] != NORMAL and s == STICK):
             for r in range(f, f + size(kind[k])):
                 rows[n], c1[n], c2[n] = r, 0.0, 0.0
@@ -389,7 +391,7 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
     for j in range(n):
         symmetric = symmetric and c1[j] == 0.0 and c2[j] == 0.0
     for i in range(m):
-        wf[i] = w0[i] + dot(W[i], fixed, 0, m)
+        wf[i] = w0[i] + dot(W[i], fixed, 0, m) if held else w0[i]
     _system(W, wf, rows, c1, c2, n, K, b)
     if symmetric:                           # no slide: K = W over the rows, symmetric: K^+ b by Cholesky first
         for i in range(n):

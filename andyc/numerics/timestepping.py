@@ -299,13 +299,21 @@ def _impulses(model, w, s, m, nb, v, vel, tree):
     for r in range(m):                                  # C = A R^-1, row by row; w0 = A v_free + b (b = c - A v_k)
         row = s.rows[r]
         Cr = C[r]
+        if row < 0:                                     # (a joint friction's: its speed -1 - row)
+            for j in range(nv):
+                Cr[j] = 0.0
+            Cr[-1 - row] = 1.0
+            s.av[r] = v[-1 - row]
+            w0[r] = vel[-1 - row]
+            span[r, 0], span[r, 1] = _lower(model, M, Cr, tree)
+            continue
         av, af = 0.0, 0.0
         for j in range(nv):
-            a = S[model.s_a + row, j] if row >= 0 else (1.0 if j == -1 - row else 0.0)
+            a = S[model.s_a + row, j]
             Cr[j] = a
             av += a * v[j]
             af += a * vel[j]
-        w0[r] = af + (S[model.s_cv, row] if row >= 0 else av) - av
+        w0[r] = af + S[model.s_cv, row] - av
         s.av[r] = av
         span[r, 0], span[r, 1] = _lower(model, M, Cr, tree)
     for k in range(nb):                                 # Newton's law: u_n,k+1 + e min(u_n,k, 0) >= 0
