@@ -137,6 +137,16 @@ def test_bounded_rows_solve_the_box_constrained_problem(seed):
         assert verified and np.max(np.abs(best.x - P)) <= 1e-5
 
 
+def test_one_gauss_seidel_sweep_clips_a_bounded_row_exactly():
+    """A bounded row alone is solved exactly by its local problem (Gauss-Seidel's step): P = -w0 / W clipped to
+    [-b, b]: W = 2, w0 = -3 gives 1.5 within a bound 2 and 1 at a bound 1 (-1 for w0 = 3)."""
+    W = np.array([[2.0]])
+    for w0, bound, expected in ((-3.0, 2.0, 1.5), (-3.0, 1.0, 1.0), (3.0, 1.0, -1.0)):
+        P = np.zeros(1)
+        cs._sweep(W, np.array([w0]), np.array([cs.BOUNDED]), np.array([0]), np.array([bound]), P)
+        assert P[0] == expected
+
+
 def test_a_bounded_row_beside_a_contact_meets_both_laws():
     """A unit point mass in the plane pressed onto the ground (normal speed -1) while sliding at 2, its tangent
     speed also held by a bounded row (friction F h = 0.3, as a wheel's bearing would): Coulomb (mu = 0.5) and the

@@ -412,7 +412,7 @@ def _polish(W, w0, kind, first, mu, state, direction, tol_v, P, work):
                 w[i] = w0[i] + dot(W[i], cand, 0, m)
             if _holds(kind, first, mu, state, direction, cand, w, rows, n, tol_v):
                 return VERIFIED
-            if _weighted(W, w0, wf, fixed, kind, first, mu, state, direction, tol_v, rows, c1, c2, n,
+            if not unique and _weighted(W, w0, wf, fixed, kind, first, mu, state, direction, tol_v, rows, c1, c2, n,
                                         cand, w, y, z, vn1, vn2, tau, perm, K, b, work[VECTORS + m:]):
                 return VERIFIED
             if _adjust(kind, first, mu, state, cand, w, tol_v):
@@ -448,8 +448,7 @@ def _weighted(W, w0, wf, fixed, kind, first, mu, state, direction, tol_v, rows, 
               d2, perm, K, b, G):
     """Whether the active set's solution of least weighted norm sum_j x_j^2 / d2_j satisfies every condition; it is
     then in `cand` (and w). A sticking contact's friction rows are weighted by mu P_n (P_n of `cand`, the
-    least-norm solution, which failed), a sticking bounded row by its bound (a joint's friction: a robot standing
-    with its joints stuck shares its weight between its joints and feet so), every other row by the mean of those:
+    least-norm solution, which failed), every other row by the mean of those:
     x = D z with z the least-norm solution of K D z = b, D = D2^1/2 (by QR; the same as D2 K (K D2 K)^+ b) for K
     symmetric (no slide). Of a redundant set's solutions (a box on four corners) the least-norm one splits a
     friction evenly over the contacts that share its direction; this one splits it in proportion to what their
@@ -470,10 +469,6 @@ def _weighted(W, w0, wf, fixed, kind, first, mu, state, direction, tol_v, rows, 
             if kind[k] == SPATIAL:
                 weight[f + 2] = mu[k] * pn
             total += mu[k] * pn
-            count += 1
-        elif kind[k] == BOUNDED and state[k] != SLIP_POS and state[k] != SLIP_NEG:
-            weight[f] = mu[k]                   # (a joint's friction: by its bound)
-            total += mu[k]
             count += 1
     if count == 0 or not total > 0.0:
         return False
