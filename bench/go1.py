@@ -29,7 +29,7 @@ the ratios within a round):
     python bench/go1.py                         everything (a few minutes once Go1 is built; its first build takes
                                                 about 6 minutes on a loaded 2-core machine)
     python bench/go1.py --only speed --rounds 9
-    python bench/go1.py --only accuracy|speed|scaling
+    python bench/go1.py --only accuracy|speed|friction|scaling
 """
 
 from __future__ import annotations
@@ -274,12 +274,12 @@ def _andyc_event(model, method: str, dt: float, settle: float) -> Variant:
     return Variant(f"andyc {method}", run)
 
 
-def _mujoco(dt, cone, kind: str, settle: float) -> Variant:
+def _mujoco(dt, cone, kind: str, settle: float, **options) -> Variant:
     """MuJoCo variants from bench/mujoco_go1.py: c_pd (position actuators, nstep), python_pd (motor actuators, PD in
     Python), trot_c_ref (position actuators, the trot's reference set from Python), trot_python_pd."""
     import mujoco
     position = kind in ("c_pd", "trot_c_ref")
-    m = mj.model(dt, cone, MU, actuators="position") if position else mj.model(dt, cone, MU)
+    m = mj.model(dt, cone, MU, actuators="position", **options) if position else mj.model(dt, cone, MU, **options)
     pd = None if position else mj.PD(mj.KP, mj.KD)
     gait = mj.Trot()
     trotting = kind.startswith("trot")
@@ -341,6 +341,44 @@ def speed(model, dts=(1e-3, 2e-3), rounds: int = 7, seconds: float = 1.0, settle
                 r = ratio(a, b)
                 print(f"    {a} / {b}: {min(r):.2f} .. {max(r):.2f}")
     return out
+
+
+def friction(build: Path, tmp: Path, dt: float = 1e-3, rounds: int = 7, seconds: float = 1.0,
+             settle: float = 1.0) -> None:
+    """Go1 standing with its URDF's joint friction (0.2 N m on 12 joints): andyc's moreau (models/go1.yaml with
+    joint_friction: true: a bounded row a joint) against MuJoCo with the same frictionloss, position actuators;
+    steps/s in interleaved rounds, the ratio within each, and what each does to the stance."""
+    text = (ROOT / "models" / "go1.yaml").read_text().replace("name: go1\n", "name: go1_joint_friction\n")
+    text = text.replace("file: go1/go1.urdf", f"file: {ROOT / 'models' / 'go1' / 'go1.urdf'}")
+    source = tmp / "go1_joint_friction.yaml"
+    source.write_text(text.replace("joint_friction: false", "joint_friction: true"))
+    model, _ = andyc.compile_model(source, build, integrator=False)
+    variants = [_andyc_moreau(model, dt, False, settle)]
+    variants += [_mujoco(dt, cone, "c_pd", settle, frictionloss=True) for cone in CONES]
+    for v in variants:
+        v.run(0.1)
+    gc.collect()
+    for _ in range(rounds):
+        for v in variants:
+            v.rates.append(v.run(seconds))
+    print(f"\njoint friction: Go1 standing with 0.2 N m of dry friction on each joint, dt = {dt:g}, {rounds} "
+          f"interleaved rounds of {seconds:g} s from {settle:g} s of settling")
+    for v in variants:
+        extra = ""
+        if hasattr(v, "runner"):
+            st = v.runner.stats
+            extra = (f"   ({st['sweeps'] / max(st['steps'], 1):.2f} Gauss-Seidel sweeps a step, "
+                     f"{st['unverified']} unverified steps)")
+        print(f"    {v.label:34s} {min(v.rates):>9,.0f} .. {max(v.rates):>9,.0f} steps/s{extra}")
+    for b in variants[1:]:
+        r = [x / y for x, y in zip(variants[0].rates, b.rates)]
+        print(f"    andyc moreau / {b.label}: {min(r):.2f} .. {max(r):.2f}")
+    run = andyc.simulate(model, 3.0, dt=dt, method="moreau", progress=False)
+    late = run.time >= 1.0
+    z = run.column("base_z")[late]
+    speeds = np.array([run.column(n)[late] for n in run.state_names if n.endswith("_joint_dot")])
+    print(f"    andyc: base z {z.mean():.5f} m, moving {z.max() - z.min():.1e} m over [1, 3] s; joints below "
+          f"{np.abs(speeds).max():.1e} rad/s")
 
 
 # ------------------------------------------------------------------------------------------ contacts' scale
@@ -457,14 +495,14 @@ def machine() -> str:
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--only", choices=("accuracy", "speed", "scaling"), action="append")
+    ap.add_argument("--only", choices=("accuracy", "speed", "friction", "scaling"), action="append")
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--seconds", type=float, default=1.0, help="simulated seconds per timed round")
     ap.add_argument("--build-dir", default=None, help="where andyc builds Go1 and the boxes (default: a temporary "
                     "folder; pass one to keep the builds between runs)")
     ap.add_argument("--boxes", type=int, nargs="*", default=[1, 2, 4, 8])
     a = ap.parse_args(argv)
-    only = set(a.only or ("accuracy", "speed", "scaling"))
+    only = set(a.only or ("accuracy", "speed", "friction", "scaling"))
     print("machine:", machine())
     with tempfile.TemporaryDirectory() as tmp:
         build = Path(a.build_dir) if a.build_dir else Path(tmp) / "build"
@@ -478,6 +516,8 @@ def main(argv=None) -> None:
             accuracy(model)
         if "speed" in only:
             speed(model, rounds=a.rounds, seconds=a.seconds)
+        if "friction" in only:
+            friction(build, Path(tmp), rounds=a.rounds, seconds=a.seconds)
         if "scaling" in only:
             scaling(build, Path(tmp), tuple(a.boxes), rounds=a.rounds, seconds=a.seconds)
 

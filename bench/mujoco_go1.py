@@ -117,7 +117,8 @@ def _axis(joint) -> np.ndarray:
 
 
 def mjcf(dt: float = 1e-3, cone: str = "pyramidal", mu: float = 0.8, actuators: str = "motor",
-         kp: float = KP, kd: float = KD, damping: bool = True, limits: bool = False, solref=None) -> str:
+         kp: float = KP, kd: float = KD, damping: bool = True, limits: bool = False, solref=None,
+         frictionloss: bool = False) -> str:
     """The MJCF text of Go1 (see the module's docstring). solref (timeconst, dampratio): the contacts' solref
     (on the feet and the floor) instead of MuJoCo's default 0.02 1, e.g. (0.005, 1) for stiffer contacts."""
     if cone not in ("pyramidal", "elliptic"):
@@ -143,6 +144,8 @@ def mjcf(dt: float = 1e-3, cone: str = "pyramidal", mu: float = 0.8, actuators: 
             extra = ""
             if damping:
                 extra += f' damping="{float(pm.damping[jm.idx_v])!r}"'
+            if frictionloss:            # (the URDF's <dynamics friction>: MuJoCo's dry joint friction)
+                extra += f' frictionloss="{float(pm.friction[jm.idx_v])!r}"'
             if limits:
                 extra += (f' limited="true" range="{float(pm.lowerPositionLimit[jm.idx_q])!r} '
                           f'{float(pm.upperPositionLimit[jm.idx_q])!r}"')
@@ -184,7 +187,7 @@ def mjcf(dt: float = 1e-3, cone: str = "pyramidal", mu: float = 0.8, actuators: 
 
 def model(dt: float = 1e-3, cone: str = "pyramidal", mu: float = 0.8, **options):
     """mujoco.MjModel of Go1 on a freejoint, the four foot spheres and a floor (see the module's docstring).
-    options: actuators ("motor" | "position"), kp, kd (position actuators), damping, limits, solref."""
+    options: actuators ("motor" | "position"), kp, kd (position actuators), damping, limits, solref, frictionloss."""
     import mujoco
     return mujoco.MjModel.from_xml_string(mjcf(dt, cone, mu, **options))
 
