@@ -87,7 +87,7 @@ def find_cycle(model, section: str, period: int = 1, parameters: dict | None = N
     The Cycle says whether it converged and, if not, why (the section never reached, no convergence), with the
     residual of every iterate. start: a first iterate y = (x, d) just before the jump instead (put on the section;
     andyc.analysis.continuation starts a branch of period 2 so)."""
-    refuse_friction(model, "andyc cycle", "", CycleError)
+    refuse_friction(model.friction_names, "andyc cycle", f"{model.source}: ", "", CycleError)
     if section not in model.jump_names:
         raise CycleError(f"{model.name}: no jump named '{section}'; jumps: {', '.join(model.jump_names) or 'none'}")
     if period < 1:

@@ -39,7 +39,7 @@ def linearize_at(model: SymbolicModel, at: dict | None = None, parameters: dict 
     LinearizeError for an unknown flow, input, parameter, coordinate or speed, and for a point the
     linearization does not handle; the message names what exists."""
     spec = model.spec
-    refuse_friction(spec, "andyc linearize", "", LinearizeError)
+    refuse_friction([d.name for d in spec.joint_frictions], "andyc linearize", fix="", error=LinearizeError)
     flows = model.hybrid.flows
     if flow is not None and flow not in flows:
         raise LinearizeError(f"{spec.name}: no flow named '{flow}'; flows: {', '.join(flows)}")

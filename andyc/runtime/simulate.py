@@ -104,7 +104,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
         raise SimulationError(f"unknown method '{method}'; available: {', '.join(METHODS)}")
     if method == "moreau":
         check_model(model, stepping.theta)
-    refuse_friction(model, method)
+    refuse_friction(model.friction_names, method, f"{model.source}: ")
     projection = _energy_correction(model, method, projection)
     if not (math.isfinite(t_end) and math.isfinite(dt) and t_end > 0 and dt > 0 and every >= 1):
         raise SimulationError(f"need t_end > 0, dt > 0 and every >= 1, got t_end={t_end}, dt={dt}, every={every}")

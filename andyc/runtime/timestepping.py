@@ -106,15 +106,14 @@ def run_moreau(model, x, source, p, d, flow, t_end, dt, every, theta, bar, inter
     return tuple(a[:row].copy() for a in log), ending(message, row, _NoJumps), figures(), forces[:row].copy()
 
 
-def refuse_friction(model, method: str, fix: str = "run with --method moreau, or ", error=SimulationError) -> None:
-    """`error` (one line) when `model` (compiled, or its Spec) has joint friction, which only the moreau method
+def refuse_friction(names, method: str, where: str = "", fix: str = "run with --method moreau, or ",
+                    error=SimulationError) -> None:
+    """`error` (one line, after `where`) when there are joint frictions (`names`), which only the moreau method
     applies, and `method` is another: stick and slip are decided by the time step's contact problem; the
     event-driven methods and the analyses built on them (linearization, cycles, sensitivities) have no such
     decision. fix: what to do first (the message then says how to leave the friction out)."""
-    names = [d.name for d in model.joint_frictions] if hasattr(model, "joint_frictions") else model.friction_names
     if names and method != "moreau":
         shown = ", ".join(names[:4]) + (" ..." if len(names) > 4 else "")
-        where = model.source + ": " if isinstance(getattr(model, "source", None), str) else ""   # (a Spec's: the caller's)
         raise error(f"{where}joint friction ({shown}: dampers of law coulomb) is applied by the moreau method "
                     f"only, not by {method}; {fix}leave it out (a URDF's: urdf: {{joint_friction: false}}; a "
                     "damper: another law)")
