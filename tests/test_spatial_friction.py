@@ -334,3 +334,38 @@ def test_a_puck_pushed_harder_and_harder_sticks_then_slips_along_the_push(puck, 
     # damps as the slip grows: 1e-10 at 1 s
     assert np.max(np.abs(friction[after] + 0.4 * G * push)) < 2e-4
     assert np.max(np.abs(friction[-1] + 0.4 * G * push)) < 1e-10
+
+
+def test_the_held_slip_direction_solves_the_implicit_step():
+    """numerics.slipping.held_direction, the direction a fixed step holds a slow spatial slip in: an implicit step
+    s1 = z - H s1 / |s1| (H = h mu lam_n J_t M^-1 J_t^T). Against SciPy's root finder on that equation, for random
+    anisotropic H (condition numbers to 1e6): the same direction (1e-9), and no slip (False) exactly where
+    |H^-1 z| <= 1, where the equation has no root with |s1| > 0. A z of the form (beta I + H) d, beta > 0, a slip
+    whose acceleration keeps its direction d, gives d back; an isotropic H gives z / |z|."""
+    from scipy.optimize import root
+
+    from andyc.numerics.slipping import held_direction
+    rng = np.random.default_rng(38)
+    slips = 0
+    for _ in range(200):
+        Q = np.linalg.qr(rng.normal(size=(2, 2)))[0]
+        H = Q @ np.diag([1.0, 10.0 ** rng.uniform(-6, 0)]) @ Q.T * 10.0 ** rng.uniform(-3, 3)
+        z = rng.normal(size=2) * np.linalg.norm(H) * 10.0 ** rng.uniform(-1, 1)
+        ok, u1, u2 = held_direction(H[0, 0], H[0, 1], H[1, 1], *z)
+        inside = np.linalg.norm(np.linalg.solve(H, z))
+        if abs(inside - 1.0) < 1e-6:
+            continue
+        assert ok == (inside > 1.0)
+        if ok:
+            slips += 1
+            s1 = root(lambda s: s + H @ s / np.linalg.norm(s) - z, z, method="lm", tol=1e-15).x
+            assert np.linalg.norm(s1 + H @ s1 / np.linalg.norm(s1) - z) < 1e-10 * np.linalg.norm(z)
+            assert np.linalg.norm([u1, u2] - s1 / np.linalg.norm(s1)) < 1e-9
+        d = rng.normal(size=2)
+        d /= np.linalg.norm(d)
+        beta = np.linalg.norm(H) * 10.0 ** rng.uniform(-6, 2)
+        ok, u1, u2 = held_direction(H[0, 0], H[0, 1], H[1, 1], *((beta * np.eye(2) + H) @ d))
+        assert ok and np.linalg.norm([u1 - d[0], u2 - d[1]]) < 1e-9
+    assert slips > 50
+    ok, u1, u2 = held_direction(2.0, 0.0, 2.0, 3.0, -4.0)
+    assert ok and abs(u1 - 0.6) < 1e-15 and abs(u2 + 0.8) < 1e-15

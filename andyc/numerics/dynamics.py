@@ -15,7 +15,7 @@ from .linalg import (add_rows_transposed, cholesky, correction, ltdl, ltdl_solve
                      whiten)
 from .active import select_rows
 from .model import call
-from .slipping import slip_rows, solve_slipping
+from .slipping import held_direction, slip_rows, solve_slipping
 from .sparse_rows import (add_rows_transposed_sparse, correction_sparse, rows_times, solve_gram_sparse, tree_factor,
                           tree_lower, tree_times, tree_upper, whiten_rows)
 from .status import BAUMGARTE, DEPENDENT, HOLD, IDEAL, OK, PAINLEVE, SINGULAR_MASS, SLIP_TINY
@@ -237,11 +237,14 @@ def slip_direction(model, w, t, x, u, p, d, flow, h, mode):
     With a fixed step h > 0 it may hold a direction over the step instead (d[k + 2] = 1, slip_unit): the
     direction relaxes towards the slip at the rate mu lam_n |J_t M^-1 J_t^T| / |s| (the friction's pull on a
     sideways slip, over the slip), which near |s| = 0 is far beyond an explicit step's stability bound. Where h
-    times that rate exceeds HOLD, the step holds the direction of s + h a_free, a_free the slip's acceleration
-    less the friction's (a_free = a + mu lam_n J_t M^-1 J_t^T u): the friction then opposes the slip at the step's
-    end, as an implicit (backward Euler) step of the direction would have it, which is stable. A slip that keeps
-    its direction (a ball's, a_free = 0) is then exact; one that turns (a block across a slope) is followed to
-    first order over the few steps before it stops, or after it starts."""
+    times that rate exceeds HOLD, the step holds the direction in which an implicit (backward Euler) step of the
+    slip ends, which is stable: slipping.held_direction, from s + h a_free, a_free the slip's acceleration less
+    the friction's (a_free = a + mu lam_n G d_ref, G = J_t M^-1 J_t^T, d_ref the direction held in the evaluation).
+    A slip whose implicit step ends (the friction that stops it inside the cone) holds d_ref to the stop's event,
+    as a planar slip keeps its sign to its stop. A slip whose acceleration
+    keeps its direction (a ball's; a box sliding straight; a slip started at the cone's edge, a = 0) keeps d_ref to
+    rounding, whatever G's anisotropy; one that turns (a block across a slope) is followed to first order over the
+    few steps before it stops, or after it starts."""
     found = False
     S, nq, nv = w.S, model.nq, model.nv
     for r in range(select_rows(model, w, flow, d)):
@@ -282,12 +285,15 @@ def slip_direction(model, w, t, x, u, p, d, flow, h, mode):
         if h * abs(pull) * (g11 + g22) <= HOLD * n:
             d[k + 2] = 0.0
             continue
-        p1 = s1 + h * (a1 + pull * (g11 * d[k] + g12 * d[k + 1]))
-        p2 = s2 + h * (a2 + pull * (g12 * d[k] + g22 * d[k + 1]))
-        size = math.sqrt(p1 * p1 + p2 * p2)
-        if size > SLIP_TINY:
-            d[k] = p1 / size
-            d[k + 1] = p2 / size
+        if pull <= 0.0:
+            continue
+        hp = h * pull
+        f1 = s1 + h * a1 + hp * (g11 * d[k] + g12 * d[k + 1])      # s + h a_free
+        f2 = s2 + h * a2 + hp * (g12 * d[k] + g22 * d[k + 1])
+        slips, u1, u2 = held_direction(hp * g11, hp * g12, hp * g22, f1, f2)
+        if slips:
+            d[k] = u1
+            d[k + 1] = u2
     return found
 
 

@@ -220,7 +220,10 @@ def locate(model, w, opts, inputs, data, jump_index, tol, t, h, x, u, p, d, flow
     Illinois (modified regula falsi) with a bisection whenever the bracket does not halve (illinois_trial,
     illinois_bracket; the adaptive methods use the same two on SciPy's dense output). Returns (a, status)
     with w.xb the state at t + a: the near side of zero, so that a guard reset to move back (a bounce)
-    starts the next step on the side from which it can cross again.
+    starts the next step on the side from which it can cross again. A guard of forces (a contact's normal
+    force, its cone's edge) returns (b, status), the far side: the modes chosen there see the force past its
+    bound, so that a slip begun at the cone's edge accelerates along its direction (on the near side, still a
+    rounding inside the cone, it would slow down and end at once, its stop and its start in turn without end).
     """
     xb, xc = w.xb, w.xc
     s = 1.0 if g_start > 0.0 else -1.0
@@ -242,6 +245,9 @@ def locate(model, w, opts, inputs, data, jump_index, tol, t, h, x, u, p, d, flow
         a, ga, b, gb, side = illinois_bracket(s, a, ga, b, gb, side, c, gc)
         if side == -1:
             xb[:] = xc
+    if model.jump_multipliers[jump_index]:
+        status = rk4_step(model, w, opts, inputs, data, t, b, x, u, p, d, flow, xb, scale)
+        return b, status
     return a, OK
 
 

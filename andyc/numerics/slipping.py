@@ -98,3 +98,53 @@ def solve_slipping(model, w, nr):
         if w.active[1, r] != 0 and not K[r, r] > 0.0:
             return False
     return True
+
+
+@jit
+def held_direction(h11, h12, h22, z1, z2):
+    """The direction an implicit (backward Euler) step of a spatial slip ends in: s1 = z - H s1 / |s1|, with
+    z = s0 + h a_free (the slip at the step's end without this contact's friction) and H = h mu lam_n G, G the
+    contact's tangential inverse inertia J_t M^-1 J_t^T (2 x 2, symmetric, positive semi-definite): the friction
+    -mu lam_n s1 / |s1| taken at the step's end. With sigma = |s1|, s1 = sigma (sigma I + H)^-1 z, so sigma > 0
+    solves |(sigma I + H)^-1 z| = 1 (phi(sigma), decreasing; the secular equation of a trust region, solved here
+    by Newton's method on 1 / phi - 1, which is nearly linear, within the bracket (0, |z|]: phi(|z|) <= 1).
+    Returns (slips, u1, u2): slips False when |H^-1 z| <= 1 (the step's slip ends: the friction needed to stop it
+    is inside the cone), else the unit s1 / sigma. An anisotropic G (a box's corner, a foot on a leg) turns
+    s1 away from z: unlike normalising z, this keeps a direction that the slip really keeps (z = (beta I + H) d,
+    beta > 0, gives d), so that a straight slide stays straight and a slip started at the cone's edge along the
+    sticking force's opposite is not turned at once into one that stops."""
+    m, r = 0.5 * (h11 + h22), math.hypot(0.5 * (h11 - h22), h12)
+    l1, l2 = m + r, max(m - r, 0.0)             # H's eigenvalues, l1 >= l2 >= 0
+    q1, q2 = 1.0, 0.0                           # its first eigenvector (any, H isotropic)
+    if r > 0.0:
+        a1, a2 = h12, l1 - h11                  # (two forms of it: the larger is the accurate one)
+        b1, b2 = l1 - h22, h12
+        if a1 * a1 + a2 * a2 < b1 * b1 + b2 * b2:
+            a1, a2 = b1, b2
+        size = math.hypot(a1, a2)
+        q1, q2 = a1 / size, a2 / size
+    w1, w2 = q1 * z1 + q2 * z2, q1 * z2 - q2 * z1       # z in H's eigenbasis
+    if w1 == 0.0 and w2 == 0.0:
+        return False, 0.0, 0.0
+    if l2 > 0.0 and (w1 / l1) ** 2 + (w2 / l2) ** 2 <= 1.0:
+        return False, 0.0, 0.0
+    lo, hi = 0.0, math.hypot(z1, z2)
+    sigma = hi
+    for _ in range(100):
+        e1, e2 = w1 / (sigma + l1), w2 / (sigma + l2)
+        phi = math.sqrt(e1 * e1 + e2 * e2)
+        if phi > 1.0:
+            lo = sigma
+        else:
+            hi = sigma
+        slope = (e1 * e1 / (sigma + l1) + e2 * e2 / (sigma + l2)) / phi ** 3    # d(1 / phi) / d sigma
+        step = sigma - (1.0 / phi - 1.0) / slope
+        if not lo < step < hi:
+            step = 0.5 * (lo + hi)
+        if abs(step - sigma) <= 4e-16 * sigma or hi - lo <= 4e-16 * hi:
+            sigma = step
+            break
+        sigma = step
+    e1, e2 = w1 / (sigma + l1), w2 / (sigma + l2)
+    size = math.hypot(e1, e2)
+    return True, (q1 * e1 - q2 * e2) / size, (q2 * e1 + q1 * e2) / size
