@@ -137,21 +137,26 @@ def build(path, out_dir="build", force: bool = False) -> BuildResult:
     return result
 
 
-def compile_model(path, out_dir="build", force: bool = False, integrator: bool = True):
+def compile_model(path, out_dir="build", force: bool = False, integrator: bool = True, method: str | None = None):
     """Build (if needed), import a model and compile all that a run needs (its functions and its
     integrator, or load them from Numba's cache); returns (CompiledModel, BuildResult), with the
     number of functions Numba compiled (not loaded) in result.compiled. integrator=False leaves the
     integrator to simulate(), which compiles (or loads) only what its run calls: what one `andyc sim`
-    does, where loading the rest from the cache would be most of a warm run's time."""
+    does, where loading the rest from the cache would be most of a warm run's time. method: None, what
+    a run of any method calls; a method's name, what a run of that one calls (andyc.runtime.simulate.compile_run);
+    "model", the model's own method (its simulate: section's, else rk4), as `andyc build` does."""
     from andyc.runtime.compiled import compilations, compile_integrator, load_compiled
+    from andyc.runtime.simulate import compile_run
 
     result = build(path, out_dir, force)
     t0 = time.perf_counter()
     before = _compiled_so_far(result)
     compiled = load_compiled(result.module_path)
-    if integrator:
+    if integrator and method is not None:
+        compile_run(compiled, compiled.simulate.get("method", "rk4") if method == "model" else method)
+    elif integrator:
         compile_integrator(compiled)
-    if integrator and compiled.input_expressions:          # the integrator's variant that calls the model's input callback
+    if integrator and method is None and compiled.input_expressions:    # the variant that calls the model's inputs
         data = np.zeros(compiled.nf * len(compiled.input_names) + 3 + compiled.nx)
         compile_integrator(compiled, compiled.numerics.inputs.callbacks(compiled.module.MODEL_INPUTS), data)
     result.timings["compile"] = time.perf_counter() - t0

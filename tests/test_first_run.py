@@ -88,3 +88,33 @@ def test_which_loop_each_run_takes():
     assert variant(rows, "projection", Projection()) == (True, None)
     assert variant(jumps, "rk4", Projection()) == ()
     assert variant(SimpleNamespace(nc=0, nj=3, contact_names=("foot",), quaternions=()), "rk4", Projection()) == ()
+
+
+BUILD_PROBE = """
+import json, sys
+from andyc.cli import main
+from numba.core.dispatcher import Dispatcher
+
+try:
+    main(["build", sys.argv[1], "--build-dir", sys.argv[2], *sys.argv[3:]], standalone_mode=False)
+except SystemExit as exc:
+    assert not exc.code, exc.code
+numerics = sys.modules[next(n for n in sys.modules if n.startswith("andyc_numerics_") and n.count(".") == 0)]
+print(json.dumps({"advance": sorted([str(a) for a in s[-2:]] for s in numerics.integrator.advance.signatures)}))
+"""
+
+
+def test_andyc_build_compiles_what_the_models_own_method_calls(shipped_build):
+    """`andyc build` of the double pendulum (no simulate: method: rk4) compiles the integrator's free variant alone,
+    as its first `andyc sim` would (make demo's build on a fresh install: seconds, not the full loop's minute or
+    more); `--method DOP853` no fixed-step loop at all; `--method all` every variant, so that no later run
+    compiles."""
+    def advance(*options):
+        out = subprocess.run([sys.executable, "-c", BUILD_PROBE, str(MODELS / "double_pendulum.yaml"),
+                              str(shipped_build), *options], cwd=ROOT, capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr
+        return json.loads(out.stdout.strip().splitlines()[-1])["advance"]
+
+    assert advance() == [["none", "omitted(default=True)"]]
+    assert advance("--method", "DOP853") == []                              # (adaptive: SciPy's loop, not advance)
+    assert ["none", "omitted(default=True)"] in advance("--method", "all") and len(advance("--method", "all")) >= 2

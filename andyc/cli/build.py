@@ -9,6 +9,7 @@ from andyc.cli.common import build_dir_option, compiled, report_jumps_file
 from andyc.cli.formats import Report, format_option
 from andyc.errors import SpecError, plural
 from andyc.outputs import check_folder
+from andyc.runtime.methods import METHODS
 
 
 @click.command()
@@ -59,12 +60,16 @@ def check(files, fmt):
 @build_dir_option("-o", "--out-dir")
 @click.option("--force", is_flag=True, help="Derive, generate and compile again, even if the equations are "
               "unchanged; replaces the build of another model file of the same name.")
+@click.option("--method", type=click.Choice(METHODS + ("all",)), default=None,
+              help="Compile what runs of this method call [default: the model's own, its simulate: method, else rk4]; "
+                   "all: every method's, so that no later run compiles (a run compiles what it lacks, once for "
+                   "this installation).")
 @format_option
-def build(file, build_dir, force, fmt):
+def build(file, build_dir, force, method, fmt):
     """Derive the equations of motion of FILE and generate its module, DIR/<name>/<name>.py."""
     report = Report("build", fmt)
     check_folder(build_dir, [file], write=False)     # (an up-to-date build is only read)
-    model, result = compiled(file, build_dir, force, report)
+    model, result = compiled(file, build_dir, force, report, method=None if method == "all" else method or "model")
     t = result.timings
     compile = (f"compile {t['compile']:.2f} s ({plural(result.compiled, 'function')} compiled)" if result.compiled
                else f"loaded from Numba's cache in {t['compile']:.2f} s")

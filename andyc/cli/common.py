@@ -75,9 +75,9 @@ def derived(file):
         fail_spec(exc)
 
 
-def compiled(file, out_dir, force: bool = False, report=None, integrator: bool = True):
+def compiled(file, out_dir, force: bool = False, report=None, integrator: bool = True, method: str | None = None):
     """(CompiledModel, BuildResult) of FILE; a model error is printed as andyc check does (exit 1; to
-    `report`, a andyc.cli.formats.Report, when given). integrator: as andyc.compile_model's."""
+    `report`, a andyc.cli.formats.Report, when given). integrator, method: as andyc.compile_model's."""
     from andyc.codegen.buildfiles import numerics_compiled
 
     if sys.stderr.isatty() and not numerics_compiled():
@@ -85,7 +85,7 @@ def compiled(file, out_dir, force: bool = False, report=None, integrator: bool =
                    "for a model without constraints, jumps or contacts, up to a minute with them; a new model then "
                    "compiles in seconds) ...", err=True)
     try:
-        return andyc.compile_model(file, out_dir, force, integrator)
+        return andyc.compile_model(file, out_dir, force, integrator, method)
     except SpecError as exc:
         fail_spec(exc, report)
     except SimulationError as exc:
