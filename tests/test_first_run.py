@@ -1,6 +1,6 @@
 """A fresh install's first run compiles only what its method and model call (issue 39): a fixed-step run of a
 model without constraint rows, jumps or contacts takes the integrator's free variant (andyc_numerics'
-integrator.advance with full=None, andyc.runtime.compiled.free_run), which Numba compiles without the
+integrator.advance with full=None and free=True, andyc.runtime.compiled.free_run), which Numba compiles without the
 constrained solves, projection, event location, jumps, the contact solver and time-stepping. Asserted by what
 Numba compiled (or loaded from its cache) in a fresh process, not by time."""
 
@@ -26,7 +26,9 @@ numerics = model.numerics
 loaded = {name: module for name, module in sys.modules.items() if name.startswith(numerics.__name__ + ".")}
 compiled = sorted(f"{name.rpartition('.')[2]}.{key}" for name, module in loaded.items()
                   for key, value in vars(module).items() if isinstance(value, Dispatcher) and value.signatures)
-print(json.dumps({"compiled": compiled, "advance": [[str(a) for a in s[-2:]] for s in numerics.integrator.advance.signatures],
+print(json.dumps({"compiled": compiled, "advance": [[str(a) for a in s[-3:]] for s in numerics.integrator.advance.signatures],
+                  "rows": [[str(a) for a in s[-2:]] for s in numerics.integrator.evaluate_rows.signatures],
+                  "power": dict(zip(run.work_names, run.power[-1].tolist())), "state": run.state[-1].tolist(),
                   "status": run.status}))
 """
 
@@ -41,12 +43,31 @@ def test_a_run_without_contacts_compiles_neither_the_constrained_solves_nor_the_
     assert out.returncode == 0, out.stderr
     probe = json.loads(out.stdout.strip().splitlines()[-1])
     assert probe["status"] == "finished"
-    # the free variant only (full=None), not the full one (full omitted: True)
-    assert probe["advance"] == [["none", "omitted(default=True)"]]
+    # the free variant only (full, events, free = None, None, True), not the full one (full omitted: True)
+    assert probe["advance"] == [["none", "none", "bool"]]
     # (a function compiled as another's callee, or loaded with it from the cache, has no signature of its own; the
     # full advance would be one of those callers: hence the check of advance's own signatures above)
     assert not [name for name in probe["compiled"] if name in NEVER or name.split(".")[0] in
                 ("contact_solver", "timestepping")], probe["compiled"]
+
+
+def test_a_free_run_with_work_slots_evaluates_their_powers_on_the_free_right_hand_side(shipped_build):
+    """The shaken pendulum (a damper's and the shaker's work slots, no rows, jumps or contacts) by rk4: its loop is
+    the free variant, and so is the evaluation of the logged powers (evaluate_rows with free=True), which before
+    compiled the constrained right-hand side (the rows' solves) for them alone. The hinge damper's power is
+    -c th'^2 at the last sample (c = 0.1 in the model file), from the run's own state."""
+    out = subprocess.run([sys.executable, "-c", PROBE.replace("dt=1e-3)", "dt=1e-3, method='rk4')"),
+                          str(MODELS / "shaken_pendulum.yaml"), str(shipped_build)], cwd=ROOT, capture_output=True,
+                         text=True)
+    assert out.returncode == 0, out.stderr
+    probe = json.loads(out.stdout.strip().splitlines()[-1])
+    assert probe["status"] == "finished"
+    assert probe["advance"] == [["none", "none", "bool"]]
+    assert probe["rows"] == [["none", "bool"]]          # (full, free = None, True: not the full evaluation)
+    th_dot = probe["state"][1]
+    assert abs(th_dot) > 0.01
+    assert abs(probe["power"]["hinge"] - -0.1 * th_dot ** 2) <= 1e-12 * th_dot ** 2, probe["power"]
+    assert not [name for name in probe["compiled"] if name in NEVER], probe["compiled"]
 
 
 def test_a_constrained_run_without_jumps_compiles_no_event_location_nor_jumps(shipped_build):
@@ -58,7 +79,7 @@ def test_a_constrained_run_without_jumps_compiles_no_event_location_nor_jumps(sh
     assert out.returncode == 0, out.stderr
     probe = json.loads(out.stdout.strip().splitlines()[-1])
     assert probe["status"] == "finished"
-    assert probe["advance"] == [["bool", "none"]]
+    assert probe["advance"] == [["bool", "none", "omitted(default=None)"]]
     skipped = ("dynamics.jump", "dynamics.impact", "dynamics.slip_direction", "integrator.locate", "integrator.instant")
     assert not [name for name in probe["compiled"] if name in skipped or name.split(".")[0] in
                 ("contact_solver", "timestepping")], probe["compiled"]
@@ -83,7 +104,7 @@ def test_which_loop_each_run_takes():
     free = SimpleNamespace(nc=0, nj=0, contact_names=(), quaternions=())
     rows = SimpleNamespace(nc=2, nj=0, contact_names=(), quaternions=())
     jumps = SimpleNamespace(nc=2, nj=1, contact_names=(), quaternions=())
-    assert variant(free, "rk4", Projection()) == (None,)
+    assert variant(free, "rk4", Projection()) == (None, None, True)
     assert variant(free, "rk4", Projection(energy_correction=True)) == (True, None)     # projects: not free
     assert variant(rows, "projection", Projection()) == (True, None)
     assert variant(jumps, "rk4", Projection()) == ()
@@ -100,7 +121,7 @@ try:
 except SystemExit as exc:
     assert not exc.code, exc.code
 numerics = sys.modules[next(n for n in sys.modules if n.startswith("andyc_numerics_") and n.count(".") == 0)]
-print(json.dumps({"advance": sorted([str(a) for a in s[-2:]] for s in numerics.integrator.advance.signatures)}))
+print(json.dumps({"advance": sorted([str(a) for a in s[-3:]] for s in numerics.integrator.advance.signatures)}))
 """
 
 
@@ -115,7 +136,7 @@ def test_andyc_build_compiles_what_the_models_own_method_calls(shipped_build):
         assert out.returncode == 0, out.stderr
         return json.loads(out.stdout.strip().splitlines()[-1])["advance"]
 
-    assert advance() == [["none", "omitted(default=True)"]]
+    assert advance() == [["none", "none", "bool"]]
     assert advance("--method", "DOP853") == []                              # (adaptive: SciPy's loop, not advance)
     every = advance("--method", "all")
-    assert ["none", "omitted(default=True)"] in every and len(every) >= 2
+    assert ["none", "none", "bool"] in every and len(every) >= 2

@@ -136,6 +136,7 @@ def whiten_flow(model, w, M, m):
 @jit(inline="always")
 def solve_flow_gram(model, w, m, least_norm):
     """y <- (C C^T)^+ y over the first m active rows (linalg.solve_gram; sparse_rows.solve_gram_sparse)."""
+    least_norm = bool(least_norm)       # (a literal True would compile a copy of its own: linalg.correction)
     if sparse(model):
         return solve_gram_sparse(model, w.S, w.active, 0, m, least_norm, w.envelope)
     return solve_gram(model, w.S, m, least_norm)

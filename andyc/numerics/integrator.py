@@ -123,9 +123,9 @@ def stage_powers(model, w, t, x, u, p, d, flow, xdot, mode):
 
 
 @jit
-def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale, full=True):
-    """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status. `full`: as
-    advance's (not None: no rows, no projection; the step compiles without them).
+def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale, full=True, free=None):
+    """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status. `full`, `free`:
+    as advance's (full None and free True: no rows, no projection; the step compiles without them).
 
     x is the state (NX) followed by the work of each slot (NW, andyc/symbolic/work.py): their rates are the
     powers (stage_powers), so the work is RK4's own quadrature of the power along the step's stages, and the
@@ -146,15 +146,16 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale, f
             xt[j] = x[j] if s == 0 else x[j] + rk4.A[s] * h * k[s - 1, j]
         if update_inputs(inputs, t + c * h, xt, p, d, flow, u, data) != OK:
             return INPUT_FAILED
+        status = OK
         if full is not None:
             status = rhs_mode_into(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
-        else:
+        if free is not None:
             status = rhs_free_into(model, w, t + c * h, xt, u, p, d, k[s])
         if status != OK:
             return status
         if full is not None:
             stage_powers(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
-        elif model.nw > 0:
+        if free is not None and model.nw > 0:
             element_powers(model, w, t + c * h, xt, u, p, d, k[s])
     total = 0.0
     grown = 0.0
@@ -168,7 +169,7 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale, f
         return NONFINITE
     if grown > GROWTH_LIMIT * scale:
         return DIVERGED
-    if full is None:
+    if free is not None:
         return OK
     if opts.project:
         if update_inputs(inputs, t + h, out, p, d, flow, u, data) != OK:
@@ -253,7 +254,7 @@ def locate(model, w, opts, inputs, data, jump_index, tol, t, h, x, u, p, d, flow
 
 @jit(nogil=True)
 def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, every, log, row, full=True,
-            events=True):
+            events=True, free=None):
     """Integrate from time t (on step i: t0 + i dt <= t < t0 + (i + 1) dt) to the grid point i_end,
     stopping early at a jump or a failure. x, d, w.g0 and the log are updated in place; every
     `every`-th grid point is logged at log[row] (log.u: the inputs there, w.u the latest inputs).
@@ -264,12 +265,13 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
     Returns (i, row, status, t, flow, jump): jump is the index of the jump applied at t (w.x_event
     holds the state just before it), or -1.
 
-    full: True (the default), or None for the free variant, for a model without constraint rows, jumps or
-    contacts (NC = NJ = 0) run without projection (not opts.project; opts.mode then changes nothing): the same
-    steps, operation for operation, but Numba compiles it without the constrained solves, projection, event
-    location and jumps, its branches on `full is not None` pruned at compile time as those on `inputs` (Numba
-    prunes on an argument that is None, not on a boolean's value). andyc.runtime.compiled.free_run says when a
-    run takes it. events: True, or None for a model without jumps (NJ = 0, hence no contacts): the guards, their
+    full, free: (True, None) (the default), or (None, True) for the free variant, for a model without constraint
+    rows, jumps or contacts (NC = NJ = 0) run without projection (not opts.project; opts.mode then changes nothing):
+    the same steps, operation for operation, but Numba compiles it without the constrained solves, projection,
+    event location and jumps, its branches on `full is not None` pruned at compile time as those on `inputs`. Two
+    flags, since Numba prunes `arg is not None` only where arg is None, never on a boolean's value: the full loop's
+    `free is not None` branches (the free step) are pruned by its free = None. andyc.runtime.compiled.free_run
+    says when a run takes it. events: True, or None for a model without jumps (NJ = 0, hence no contacts): the guards, their
     location and the jumps pruned likewise (andyc.runtime.compiled.variant).
     """
     u, g0, x1, xb, x_event, counts = w.u, w.g0, w.x1, w.xb, w.x_event, w.counts
@@ -310,10 +312,11 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
                     for n in range(model.nj):
                         if model.jump_contact[n] == SLIP_STOP and in_mode(model, n, flow, d):
                             g0[n] = guard_value(model, w, n, t, x, u, p, d, flow)
+            status = OK
             if full is not None:
                 status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale)
-            else:
-                status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale, None)
+            if free is not None:
+                status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale, None, True)
             if status != OK:
                 return i, row, status, t, flow, -1
             if full is not None and events is not None:
@@ -452,36 +455,43 @@ def evaluate_frames(model, log, p, out):
 
 
 @jit
-def evaluate_constraints(model, w, log, p, phi, c, lam):
-    """Residuals phi (N, NH), c (N, NC) and multipliers lam (N, NC) at the logged samples; NaN for the rows
-    not active in the sample's flow."""
-    S = w.S
-    for r in range(log.t.shape[0]):
-        flow = log.flow[r]
-        x, u, d = log.x[r], log.u[r], log.d[r]
-        call(model.constraints_into, (log.t[r], x, u, p, d, S))
-        phi[r, :] = math.nan
-        c[r, :] = math.nan
-        for n in range(select_rows(model, w, flow, d)):
-            i = w.active[0, n]
-            c[r, i] = S[model.s_cv, i]
-            if i < model.nh:
-                phi[r, i] = S[model.s_phi, i]
-        if multipliers(model, w, log.t[r], x, u, p, d, flow, lam[r]) != OK:
-            lam[r, :] = math.nan
+def evaluate_rows(model, w, log, p, phi, c, lam, power, mode, full=True, free=None):
+    """At the logged samples: the residuals phi (N, NH), c (N, NC) and multipliers lam (N, NC), NaN for the rows
+    not active in the sample's flow (where NC > 0); the power of each work slot, power (N, NW), from the
+    right-hand side in the run's `mode` (a constraint's with its multipliers, soft terms included in the BAUMGARTE
+    mode; the drive's with dv/dt), the jumps' 0 (where NW > 0). full, free: as advance's, (None, True) for a run
+    of its free variant: the free right-hand side, which is the same there, and Numba compiles neither the
+    constraint rows' nor the constrained solves.
 
-
-@jit
-def evaluate_powers(model, w, log, p, out, mode):
-    """The power of each work slot at the logged samples, out (N, NW), from the right-hand side in the run's `mode`
-    (a constraint's with its multipliers, soft terms included in the BAUMGARTE mode; the drive's with dv/dt), the
-    jumps' 0."""
-    nx, xdot = model.nx, w.k[0]
+    One function for both (rather than one each): every compiled function links and optimizes again everything it
+    calls, here the whole constrained right-hand side, which is most of the compiled loop; once is enough."""
+    S, nx, xdot = w.S, model.nx, w.k[0]
     for r in range(log.t.shape[0]):
         t, x, u, d, flow = log.t[r], log.x[r], log.u[r], log.d[r], log.flow[r]
-        if rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode) != OK:
-            out[r, :] = math.nan
+        if full is not None and model.nc > 0:
+            call(model.constraints_into, (t, x, u, p, d, S))
+            phi[r, :] = math.nan
+            c[r, :] = math.nan
+            for n in range(select_rows(model, w, flow, d)):
+                i = w.active[0, n]
+                c[r, i] = S[model.s_cv, i]
+                if i < model.nh:
+                    phi[r, i] = S[model.s_phi, i]
+            if multipliers(model, w, t, x, u, p, d, flow, lam[r]) != OK:
+                lam[r, :] = math.nan
+        if model.nw == 0:
             continue
-        stage_powers(model, w, t, x, u, p, d, flow, xdot, mode)
+        status = OK
+        if full is not None:
+            status = rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode)
+        if free is not None:
+            status = rhs_free_into(model, w, t, x, u, p, d, xdot)
+        if status != OK:
+            power[r, :] = math.nan
+            continue
+        if full is not None:
+            stage_powers(model, w, t, x, u, p, d, flow, xdot, mode)
+        if free is not None:
+            element_powers(model, w, t, x, u, p, d, xdot)
         for i in range(model.nw):
-            out[r, i] = xdot[nx + i]
+            power[r, i] = xdot[nx + i]

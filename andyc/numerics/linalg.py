@@ -225,7 +225,9 @@ def solve_gram(model, S, m, least_norm):
     """
     gram(model, S, m)
     w0 = model.s_w
-    W, y = S[w0:w0 + m, :m], S[model.s_y, :m]
+    # W: the block's whole rows, of which the kernels read [:m, :m]: a C-contiguous array as M is elsewhere, so that
+    # Numba compiles one cholesky and one pair of solves for both (S[w0:w0 + m, :m] would be another layout, 'A')
+    W, y = S[w0:w0 + m], S[model.s_y, :m]
     if cholesky(W, m, RANK_TOL * RANK_TOL):
         solve_lower(W, y, m)
         solve_upper(W, y, m)
@@ -280,7 +282,7 @@ def add_rows_transposed(model, S, m, scale, out):
 def correction(model, L, S, m):
     """S's dv row <- L^-T C^+ y for the first m rows of C and y in S (M = L L^T): the least M-norm change of
     speed with A dv = y (C = A L^-T), as the projections and the impact map use it."""
-    solve_gram(model, S, m, True)
+    solve_gram(model, S, m, bool(True))     # (bool(): not the literal True, a copy of its own; one solve_gram serves all)
     dv = S[model.s_dv, :model.nv]
     for i in range(model.nv):
         dv[i] = 0.0

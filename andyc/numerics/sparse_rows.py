@@ -274,7 +274,7 @@ def _least_norm_blocks(model, S, table, k, m, envelope, scale):
 @jit
 def correction_sparse(model, M, S, table, k, m, envelope):
     """S's dv row <- R^-1 C^+ y for the first m rows of C and y in S (as linalg.correction)."""
-    solve_gram_sparse(model, S, table, k, m, True, envelope)
+    solve_gram_sparse(model, S, table, k, m, bool(True), envelope)   # (bool(): see linalg.correction)
     dv = S[model.s_dv, :model.nv]
     for i in range(model.nv):
         dv[i] = 0.0

@@ -524,7 +524,7 @@ def _correct_tree(model, w, nr):
             S[c0 + r, j] = S[model.s_a + row, j]
         _lower(model, M, S[c0 + r], True)
         S[model.s_y, r] = -S[model.s_phi, row]
-    solve_gram(model, S, nr, True)
+    solve_gram(model, S, nr, bool(True))        # (bool(): see linalg.correction)
     dv = S[model.s_dv, :nv]
     for j in range(nv):
         dv[j] = 0.0

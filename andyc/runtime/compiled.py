@@ -268,10 +268,13 @@ def free_run(model: CompiledModel, method: str, projection) -> bool:
 
 
 def variant(model: CompiledModel, method: str, projection) -> tuple:
-    """The trailing arguments (full, events) of the integrator's advance for a run (see its docstring): () for
-    the full loop, (None,) for the free variant (free_run), (True, None) for a model without jumps, whose loop
+    """The trailing arguments (full, events, free) of the integrator's advance for a run (see its docstring): ()
+    for the full loop, FREE for the free variant (free_run), (True, None) for a model without jumps, whose loop
     compiles without guards, event location and jumps. Each is compiled once per andyc and cached."""
-    return (None,) if free_run(model, method, projection) else full_variant(model)
+    return FREE if free_run(model, method, projection) else full_variant(model)
+
+
+FREE = (None, None, True)       # (advance's trailing arguments full, events, free for its free variant)
 
 
 def full_variant(model: CompiledModel) -> tuple:
@@ -305,7 +308,7 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
         opts = integrator.options(IDEAL, False, False, 0.0, -1.0, 1e-12)
         if free or (every and free_model(model)):
             integrator.advance(m, w.ref, opts, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1,
-                               log, 1, None)
+                               log, 1, *FREE)
         if not free:
             integrator.advance(m, w.ref, opts, function, data, p, d.copy(), x.copy(), 0.0, flow, 0, 0, 0.0, 1e-3, 1,
                                log, 1, *full_variant(model))
@@ -324,11 +327,12 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
     model.flow_inputs(u, p)
     if frames:
         integrator.evaluate_frames(m, log, p, np.zeros((1, len(model.frame_names), 12)))
-    if model.nw or every:
-        integrator.evaluate_powers(m, w.ref, log, p, np.zeros((1, model.nw)), IDEAL)
+    rows = (np.zeros((1, model.nh)), np.zeros((1, model.nc)), np.zeros((1, model.nc)), np.zeros((1, model.nw)))
+    if (model.nc or model.nw) and not free:
+        integrator.evaluate_rows(m, w.ref, log, p, *rows, IDEAL)
+    if model.nw and (free or every) and free_model(model):
+        integrator.evaluate_rows(m, w.ref, log, p, *rows, IDEAL, None, True)
     if model.nc or every:
-        integrator.evaluate_constraints(m, w.ref, log, p, np.zeros((1, model.nh)), np.zeros((1, model.nc)),
-                                        np.zeros((1, model.nc)))
         module = model.module
         module.constraints(0.0, x, u, p, d, np.empty(model.nh), np.empty(model.nc),
                            np.empty((model.nc, model.nv)), np.empty(model.nc))

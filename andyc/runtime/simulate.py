@@ -140,7 +140,7 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     interrupts = interrupts or Interrupts()
     start = time.perf_counter()
     run_of = _Assembly(model, method, dt, rtol, atol, t_end, p, source, frame_names, jumps,
-                       projection.energy_correction, initial, start)
+                       projection.energy_correction, initial, start, free)
     try:
         with interrupts.watching():
             forces = None
@@ -262,6 +262,7 @@ class _Assembly:
     energy_correction: bool
     initial: dict               # figures of the initial state's consistency (consistent_initial_state)
     start: float                # perf_counter() when the run started
+    free: bool                  # the run took the integrator's free variant (free_run): so do its log's powers
 
     def __call__(self, log, status: str, stats: dict, forces=None) -> Run:
         """forces: the moreau method's mean contact forces (N, nc), its multipliers from the second sample on."""
@@ -275,8 +276,10 @@ class _Assembly:
         log = integrator.Log(t_log, x_log, u_log, f_log, d_log)
         integrator.evaluate_energy(model.ref, log, p, energy)
         phi, c, lam = np.empty((n, model.nh)), np.empty((n, model.nc)), np.empty((n, model.nc))
-        if model.nc:
-            integrator.evaluate_constraints(model.ref, work(model).ref, log, p, phi, c, lam)
+        power = np.empty((n, model.nw))
+        if model.nc or model.nw:
+            integrator.evaluate_rows(model.ref, work(model).ref, log, p, phi, c, lam, power,
+                                     MODE.get(self.method, IDEAL), *((None, True) if self.free else ()))
         if forces is not None:
             lam[1:] = forces[1:]
         slip, slip_2 = slip_speeds(model, t_log, x_log, u_log, p, d_log) if model.contact_names else (None, None)
@@ -287,9 +290,6 @@ class _Assembly:
             at = {name: model.frame_names.index(name) for name in frame_names}
             frames_out = {name: poses[:, k, :3].copy() for name, k in at.items()}
             rotations = {name: unit_quaternions(poses[:, k, 3:].reshape(n, 3, 3)) for name, k in at.items()}
-        power = np.empty((n, model.nw))
-        if model.nw:
-            integrator.evaluate_powers(model.ref, work(model).ref, log, p, power, MODE.get(self.method, IDEAL))
         status = lost_constraints(self.method, status, phi, c, t_log)
         held = u_log[0] if n else self.source.held(model.initial_flow)
         return Run(model=model.name, spec_sha256=model.spec_sha256, method=self.method, dt=self.dt, nq=model.nq,
