@@ -15,8 +15,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 from andyc.codegen.buildfiles import (BuildResult, build_key, equations_path, jumps_path, library_present, module_name,
                                      module_path, numerics_package, numerics_path, recorded_back,
                                      written_constant)
@@ -145,20 +143,15 @@ def compile_model(path, out_dir="build", force: bool = False, integrator: bool =
     does, where loading the rest from the cache would be most of a warm run's time. method: None, what
     a run of any method calls; a method's name, what a run of that one calls (andyc.runtime.simulate.compile_run);
     "model", the model's own method (its simulate: section's, else rk4), as `andyc build` does."""
-    from andyc.runtime.compiled import compilations, compile_integrator, load_compiled
+    from andyc.runtime.compiled import compilations, load_compiled
     from andyc.runtime.simulate import compile_run
 
     result = build(path, out_dir, force)
     t0 = time.perf_counter()
     before = _compiled_so_far(result)
     compiled = load_compiled(result.module_path)
-    if integrator and method is not None:
+    if integrator:
         compile_run(compiled, compiled.simulate.get("method", "rk4") if method == "model" else method)
-    elif integrator:
-        compile_integrator(compiled)
-    if integrator and method is None and compiled.input_expressions:    # the variant that calls the model's inputs
-        data = np.zeros(compiled.nf * len(compiled.input_names) + 3 + compiled.nx)
-        compile_integrator(compiled, compiled.numerics.inputs.callbacks(compiled.module.MODEL_INPUTS), data)
     result.timings["compile"] = time.perf_counter() - t0
     result.compiled = compilations(compiled) - before
     return compiled, result

@@ -481,7 +481,7 @@ def _weighted(W, w0, wf, fixed, kind, first, mu, state, direction, tol_v, rows, 
         for i in range(n):
             K[i, j] *= d2[j]
     rank = qr_factor(K, b, n, t, u, G[0], perm, y, weight)
-    qr_solution(K, b, y, n, rank, G[0], perm, t, False, weight)
+    qr_solution(K, b, y, n, rank, G[0], perm, t, bool(False), weight)     # (bool(): one qr_solution, as _settle's)
     _system(W, wf, rows, c1, c2, n, K, b)
     for i in range(m):
         cand[i] = fixed[i]

@@ -130,7 +130,7 @@ def whiten_flow(model, w, M, m):
     if sparse(model):
         whiten_rows(model, M, w.S, w.active, 0, m)
     else:
-        whiten(model, M, w.S, w.active, 0, m)
+        whiten(model, M, w.S, w.active, int(0), m)      # (int(): the impact's k is an int64, not the literal 0)
 
 
 @jit(inline="always")
@@ -138,7 +138,7 @@ def solve_flow_gram(model, w, m, least_norm):
     """y <- (C C^T)^+ y over the first m active rows (linalg.solve_gram; sparse_rows.solve_gram_sparse)."""
     least_norm = bool(least_norm)       # (a literal True would compile a copy of its own: linalg.correction)
     if sparse(model):
-        return solve_gram_sparse(model, w.S, w.active, 0, m, least_norm, w.envelope)
+        return solve_gram_sparse(model, w.S, w.active, int(0), m, least_norm, w.envelope)
     return solve_gram(model, w.S, m, least_norm)
 
 
@@ -394,7 +394,7 @@ def correct_rows(model, w, nr, residual, L):
     for r in range(nr):
         S[y0, r] = -S[residual, rows[0, r]]
     if sparse(model):
-        correction_sparse(model, L, S, rows, 0, nr, w.envelope)
+        correction_sparse(model, L, S, rows, int(0), nr, w.envelope)     # (int(): as the impact's k, one copy)
     else:
         correction(model, L, S, nr)
 

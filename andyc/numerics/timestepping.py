@@ -262,7 +262,8 @@ def step(model, w, s, theta, inputs, data, t, h, x, u, p, d, flow):
             m = _block(s, m, nb, BOUNDED, -2 - i, s.fbound[i] * h, s.fguess[i], 0.0, 0.0)
             nb += 1
     if m > 0:
-        impulse_work = _impulses(model, w, s, m, nb, v, a, tree)
+        # (int(): m and nb start as the literal 0, and Numba would compile a second _impulses for Literal[int](0))
+        impulse_work = _impulses(model, w, s, int(m), int(nb), v, a, tree)
         if model.nj > 0:
             x[nx + model.nw - 1] += impulse_work
         for i in range(s.fspeed.shape[0]):
@@ -485,7 +486,7 @@ def _corrections(model, w, s, t, h_step, x, u, p, d, flow, tree):
     for i in range(nc):
         d_open[model.contact_mode[i]] = 0.0
     if model.flow_nrows[flow] > 0:
-        status = project(model, w, t, x, u, p, d_open, flow, True, 0.0, -1.0)
+        status = project(model, w, t, x, u, p, d_open, flow, bool(True), 0.0, -1.0)   # (bool(): linalg.correction)
         if status != OK:
             return status
         tree = False                                    # (w.M: project's dense factor at the step's end)
@@ -522,7 +523,7 @@ def _correct_tree(model, w, nr):
         row = w.active[0, r]
         for j in range(nv):
             S[c0 + r, j] = S[model.s_a + row, j]
-        _lower(model, M, S[c0 + r], True)
+        _lower(model, M, S[c0 + r], bool(True))     # (bool(): one compiled _lower for this and step's, linalg.correction)
         S[model.s_y, r] = -S[model.s_phi, row]
     solve_gram(model, S, nr, bool(True))        # (bool(): see linalg.correction)
     dv = S[model.s_dv, :nv]

@@ -168,15 +168,16 @@ def _check_option(name: str, value, kind: type) -> None:
                         f"got {value!r}")
 
 
-def compile_run(model: CompiledModel, method: str = "rk4") -> None:
+def compile_run(model: CompiledModel, method: str | None = "rk4") -> None:
     """Compile, or load from Numba's cache, what a run of `method` with its default options calls on `model`, its
     frames and its input expressions included, as simulate() does before it starts its clock: what `andyc build`
     compiles for the model's own method. A first build then waits for that alone (a model without constraint
     rows, jumps or contacts run by rk4: the integrator's free variant, seconds; the full loop: a minute or more,
-    once per installation), not for every method's."""
-    if method not in METHODS:
+    once per installation), not for every method's. method None: what a run of any method may call (`andyc
+    build --method all`), so that no later run compiles."""
+    if method is not None and method not in METHODS:
         raise SimulationError(f"unknown method '{method}'; available: {', '.join(METHODS)}")
-    free = free_run(model, method, _energy_correction(model, method, Projection()))
+    free = method is not None and free_run(model, method, _energy_correction(model, method, Projection()))
     compile_integrator(model, method=method, free=free)
     source = input_source(model, model.parameter_defaults)
     if source.function_data[0] is not None:
