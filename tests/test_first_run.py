@@ -37,12 +37,18 @@ NEVER = ("dynamics.rhs_mode_into", "dynamics.multipliers", "dynamics.project", "
          "sparse_rows.solve_gram_sparse", "slipping.solve_slipping")
 
 
-def test_a_run_without_contacts_compiles_neither_the_constrained_solves_nor_the_contact_solver(shipped_build):
-    out = subprocess.run([sys.executable, "-c", PROBE, str(MODELS / "double_pendulum.yaml"), str(shipped_build)],
-                         cwd=ROOT, capture_output=True, text=True)
+def run_probe(build, model: str, method: str = "rk4") -> dict:
+    """What a run of `model` by `method` compiled or loaded, in a fresh process (PROBE); the run finished."""
+    out = subprocess.run([sys.executable, "-c", PROBE.replace("dt=1e-3)", f"dt=1e-3, method={method!r})"),
+                          str(MODELS / f"{model}.yaml"), str(build)], cwd=ROOT, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     probe = json.loads(out.stdout.strip().splitlines()[-1])
     assert probe["status"] == "finished"
+    return probe
+
+
+def test_a_run_without_contacts_compiles_neither_the_constrained_solves_nor_the_contact_solver(shipped_build):
+    probe = run_probe(shipped_build, "double_pendulum")
     # the free variant only (full, events, free = None, None, True), not the full one (full omitted: True)
     assert probe["advance"] == [["none", "none", "bool"]]
     # (a function compiled as another's callee, or loaded with it from the cache, has no signature of its own; the
@@ -56,12 +62,7 @@ def test_a_free_run_with_work_slots_evaluates_their_powers_on_the_free_right_han
     the free variant, and so is the evaluation of the logged powers (evaluate_rows with free=True), which before
     compiled the constrained right-hand side (the rows' solves) for them alone. The hinge damper's power is
     -c th'^2 at the last sample (c = 0.1 in the model file), from the run's own state."""
-    out = subprocess.run([sys.executable, "-c", PROBE.replace("dt=1e-3)", "dt=1e-3, method='rk4')"),
-                          str(MODELS / "shaken_pendulum.yaml"), str(shipped_build)], cwd=ROOT, capture_output=True,
-                         text=True)
-    assert out.returncode == 0, out.stderr
-    probe = json.loads(out.stdout.strip().splitlines()[-1])
-    assert probe["status"] == "finished"
+    probe = run_probe(shipped_build, "shaken_pendulum")         # (its own method is projection: rk4 asked for)
     assert probe["advance"] == [["none", "none", "bool"]]
     assert probe["rows"] == [["none", "bool"]]          # (full, free = None, True: not the full evaluation)
     th_dot = probe["state"][1]
@@ -73,12 +74,7 @@ def test_a_free_run_with_work_slots_evaluates_their_powers_on_the_free_right_han
 def test_a_constrained_run_without_jumps_compiles_no_event_location_nor_jumps(shipped_build):
     """The slider-crank (constraint rows, no jumps) with projection: the full loop with events=None, so neither the
     guards' location, nor the jumps, nor the spatial slip's direction, nor the contact solver are compiled."""
-    out = subprocess.run([sys.executable, "-c", PROBE.replace("dt=1e-3)", "dt=1e-3, method='projection')"),
-                          str(MODELS / "slider_crank.yaml"), str(shipped_build)], cwd=ROOT, capture_output=True,
-                         text=True)
-    assert out.returncode == 0, out.stderr
-    probe = json.loads(out.stdout.strip().splitlines()[-1])
-    assert probe["status"] == "finished"
+    probe = run_probe(shipped_build, "slider_crank", "projection")
     assert probe["advance"] == [["bool", "none", "omitted(default=None)"]]
     skipped = ("dynamics.jump", "dynamics.impact", "dynamics.slip_direction", "integrator.locate", "integrator.instant")
     assert not [name for name in probe["compiled"] if name in skipped or name.split(".")[0] in
