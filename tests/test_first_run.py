@@ -136,3 +136,39 @@ def test_andyc_build_compiles_what_the_models_own_method_calls(shipped_build):
     assert advance("--method", "DOP853") == []                              # (adaptive: SciPy's loop, not advance)
     every = advance("--method", "all")
     assert ["none", "none", "bool"] in every and len(every) >= 2
+
+
+SWEEP_PROBE = """
+import json, sys
+from andyc.cli import main
+
+try:
+    main(["sweep", sys.argv[1], "--build-dir", sys.argv[2], "-o", sys.argv[3], "--t-end", "0.01", *sys.argv[4:]],
+         standalone_mode=False)
+    refused = None
+except Exception as exc:            # (click's standalone_mode=False: the refusal is raised, not printed)
+    refused = str(exc)
+numerics = sys.modules[next(n for n in sys.modules if n.startswith("andyc_numerics_") and n.count(".") == 0)]
+print(json.dumps({"refused": refused,
+                  "advance": sorted([str(a) for a in s[-3:]] for s in numerics.integrator.advance.signatures)}))
+"""
+
+
+def test_andyc_sweep_checks_its_names_before_compiling_and_compiles_its_method_alone(shipped_build, tmp_path):
+    """A sweep of an unknown name is refused before any of the integrator is compiled or loaded (a typo on a fresh
+    install answered at once, not after the compile of every method's loop); a sweep of the double pendulum
+    (rk4) compiles the loop its points run, the free variant, and no other."""
+    def sweep(*grid):
+        out = subprocess.run([sys.executable, "-c", SWEEP_PROBE, str(MODELS / "double_pendulum.yaml"),
+                              str(shipped_build), str(tmp_path / "store.zarr"), *grid], cwd=ROOT,
+                             capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr
+        return json.loads(out.stdout.strip().splitlines()[-1])
+
+    typo = sweep("--grid", "mass=1:2:2")
+    assert "unknown name 'mass'" in typo["refused"]
+    assert typo["advance"] == []
+    swept = sweep("--grid", "m1=1:2:2")
+    assert swept["refused"] is None
+    assert swept["advance"] == [["none", "none", "bool"]]
+    assert (tmp_path / "store.zarr").is_dir()

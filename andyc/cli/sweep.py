@@ -99,7 +99,7 @@ def sweep(file, grids, samples, dists, sampler, seed, points_file, metrics, out,
         raise Refused(str(exc)) from None
     fixed = parse_sets(sets)
     stops = stop_counts(stop_after)
-    model, result = compiled(file, build_dir)
+    model, result = compiled(file, build_dir, integrator=False)    # (the names are checked before compiling the run)
     out = Path(out or f"runs/{model.name}_sweep.zarr")
     read = [file, points_file, model.path, result.jumps_path]
     if not out.is_dir():
@@ -120,6 +120,9 @@ def sweep(file, grids, samples, dists, sampler, seed, points_file, metrics, out,
         if name not in model.jump_names:
             raise Refused(f"--stop-after {name}: {model.name} has no jump '{name}'; jumps: "
                           f"{', '.join(model.jump_names) or 'none'}")
+    from andyc.runtime.simulate import compile_run
+
+    compile_run(model, method)      # what each point's run calls (its method's alone), once, before the first point
     _run(model, points, settings, out, scheduler, engine, workers, batch, read)
 
 
