@@ -172,3 +172,16 @@ def test_andyc_sweep_checks_its_names_before_compiling_and_compiles_its_method_a
     assert swept["refused"] is None
     assert swept["advance"] == [["none", "none", "bool"]]
     assert (tmp_path / "store.zarr").is_dir()
+
+
+def test_andyc_cycle_checks_its_section_before_compiling_anything(shipped_build):
+    """`andyc cycle` of a jump the model does not have is refused before any of the integrator is compiled or
+    loaded; its runs (rk4) compile what they call when they start, not every method's loop up front."""
+    probe = SWEEP_PROBE.replace('"sweep", sys.argv[1], "--build-dir", sys.argv[2], "-o", sys.argv[3], "--t-end", "0.01"',
+                                '"cycle", sys.argv[1], "--build-dir", sys.argv[2]')
+    out = subprocess.run([sys.executable, "-c", probe, str(MODELS / "compass_gait.yaml"), str(shipped_build), "-",
+                          "--section", "no_such_jump"], cwd=ROOT, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout.strip().splitlines()[-1])
+    assert "no jump 'no_such_jump'" in result["refused"]
+    assert result["advance"] == []

@@ -90,7 +90,7 @@ def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, 
         check_output(out, [file], "cycle file")
     check_folder(build_dir, [file], write=False)     # (an up-to-date build is only read)
     _refuse_contacts(file)
-    model, _ = compiled(file, build_dir)
+    model, _ = compiled(file, build_dir, integrator=False)   # (its runs, rk4, compile what they call: not every method)
     if section not in model.jump_names:
         raise click.BadParameter(f"{model.name} has no jump '{section}'; jumps: {', '.join(model.jump_names) or 'none'}",
                                  param_hint="--section")
