@@ -267,14 +267,15 @@ def free_run(model: CompiledModel, method: str, projection) -> bool:
     return method in FIXED_STEP and free_model(model) and not projects(model, method, projection)
 
 
+FREE = (None, None, True)       # advance's trailing arguments (full, events, free) for its free variant
+FREE_ROWS = (None, True)        # evaluate_rows' (full, free) after a run of the free variant
+
+
 def variant(model: CompiledModel, method: str, projection) -> tuple:
     """The trailing arguments (full, events, free) of the integrator's advance for a run (see its docstring): ()
     for the full loop, FREE for the free variant (free_run), (True, None) for a model without jumps, whose loop
     compiles without guards, event location and jumps. Each is compiled once per andyc and cached."""
     return FREE if free_run(model, method, projection) else full_variant(model)
-
-
-FREE = (None, None, True)       # (advance's trailing arguments full, events, free for its free variant)
 
 
 def full_variant(model: CompiledModel) -> tuple:
@@ -331,7 +332,7 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
     if (model.nc or model.nw) and not free:
         integrator.evaluate_rows(m, w.ref, log, p, *rows, IDEAL)
     if model.nw and (free or every) and free_model(model):
-        integrator.evaluate_rows(m, w.ref, log, p, *rows, IDEAL, None, True)
+        integrator.evaluate_rows(m, w.ref, log, p, *rows, IDEAL, *FREE_ROWS)
     if model.nc or every:
         module = model.module
         module.constraints(0.0, x, u, p, d, np.empty(model.nh), np.empty(model.nc),
