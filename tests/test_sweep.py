@@ -278,8 +278,9 @@ def test_tasks_carry_the_build_path_and_each_worker_loads_the_model_once(client,
 
 
 def test_a_worker_killed_mid_sweep_loses_no_point(client, pendulum, tmp_path):
-    """One worker process ends itself (os._exit) in the middle of its second batch; the scheduler reruns
-    that batch elsewhere; every point is in the store once, each equal to its serial run."""
+    """One worker process ends itself (os._exit) in the middle of its second batch (its points run, their
+    results not yet sent); the scheduler reruns that batch elsewhere; every point is in the store once, each
+    equal to its serial run."""
     pts = P.grid(["q1=0.1:1.2:24"])
     settings = Settings.of(pendulum, pts.names, 0.05)
     victim = sorted(client.scheduler_info(n_workers=-1)["workers"])[0]
@@ -287,19 +288,19 @@ def test_a_worker_killed_mid_sweep_loses_no_point(client, pendulum, tmp_path):
 
     def die_after(points):          # (a local function: sent by value to the worker)
         import os as os_
-        from andyc.analysis.sweeps import worker
+        from andyc.analysis.sweeps import batch
 
-        original, seen = worker.record, [0]
+        original, seen = batch.run_batched, [0]
 
-        def record(*args, **kwargs):
-            seen[0] += 1
+        def run_batched(out, model, settings, values):
+            original(out, model, settings, values)
+            seen[0] += len(values)
             if seen[0] > points:
                 os_._exit(1)
-            return original(*args, **kwargs)
 
-        worker.record = record
+        batch.run_batched = run_batched
 
-    client.run(die_after, 3, workers=[victim])
+    client.run(die_after, 2, workers=[victim])
     summary = run_sweep(pendulum, pts, settings, tmp_path / "killed.zarr", client=client, batch=2)
     with pytest.raises(ProcessLookupError):
         os.kill(victim_pid, 0)                  # the worker did die during the sweep

@@ -25,6 +25,7 @@ content (compiler.py), wherever the copy sits.
     dense_solves.py    the polish's dense solves: Cholesky, pivoted Cholesky, pivoted QR least squares
     timestepping.py    Moreau-Jean's time-stepping: one step's impulses from the contact problem
     integrator.py  RK4 with event location, the hybrid step, evaluations over a run's log
+    batch.py       many runs of one model in one compiled call (the sweeps' batched engine)
     inputs.py      input callbacks: the model's and the run's, held values, tables
     api.py         the generated module's Python functions (rhs, mass_matrix, energy, ...)
 

@@ -226,7 +226,7 @@ def numerics_compilations(numerics: ModuleType) -> int:
     """How many functions of a numerics package (a build's andyc_numerics) Numba has compiled in this process."""
     total = 0
     for name in ("model", "stubs", "linalg", "active", "dynamics", "integrator", "inputs", "api", "contact_solver",
-                 "timestepping"):
+                 "timestepping", "batch"):
         for value in vars(getattr(numerics, name, None) or ModuleType(name)).values():
             misses = getattr(getattr(value, "stats", None), "cache_misses", None)
             if misses is not None:

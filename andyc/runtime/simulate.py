@@ -96,40 +96,12 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     z = (x0, d0, p): then only the derivatives along them are carried (cheaper when k is small), in
     Run.sensitivities["directions"] = dx(T)/dz Z, and "time", "discrete" and "before_jump" with k columns.
     """
-    _check_option("events", events, Events)
-    _check_option("init", init, Init)
-    _check_option("projection", projection, Projection)
-    _check_option("stepping", stepping, TimeStepping)
-    if method not in METHODS:
-        raise SimulationError(f"unknown method '{method}'; available: {', '.join(METHODS)}")
-    if method == "moreau":
-        check_model(model, stepping.theta)
-    refuse_friction(model.friction_names, method, f"{model.source}: ")
-    projection = _energy_correction(model, method, projection)
-    if not (math.isfinite(t_end) and math.isfinite(dt) and t_end > 0 and dt > 0 and every >= 1):
-        raise SimulationError(f"need t_end > 0, dt > 0 and every >= 1, got t_end={t_end}, dt={dt}, every={every}")
-    _check_size(model, t_end, dt, every)
-    p = model.parameters(parameters)
-    _check_coefficients(model, p, parameters)
-    source = input_source(model, p, inputs, controller, t_end)
-    x, d, flow = initial_state(model, p, x0, d0, flow0)
-    jumps = EventLog(model, events)
     frame_names = _frame_selection(model, frames)
-    free = free_run(model, method, projection)
-    compile_integrator(model, method=method, frames=bool(frame_names), free=free)
-    compile_integrator(model, *source.function_data, method=method, free=free)
-    u = inputs_at(model, source, 0.0, x, p, d, flow)
-    if d0 is None and model.contact_names:      # contacts touching at rest start closed
-        initial_mode(model, 0.0, x, u, p, d, flow)
-        sunk = _close_sunk(model, x, u, p, d)   # (a contact that starts inside its surface: see _close_sunk)
-    initial = consistent_initial_state(model, x, u, p, d, flow, init) if model.nc else {}
-    if d0 is None and model.contact_names and sunk:
-        initial_mode(model, 0.0, x, u, p, d, flow)
-    if method in ("lagrange", "baumgarte") and model.nc:
-        require_independent_rows(model, method, x, u, p, d, flow)
-    if projection.energy_correction:
-        _require_free_speed(model, x, u, p, d, flow)
-        _check_declared_law(model, x, u, p, d, flow, init)
+    ready = start_run(model, t_end, dt, method, parameters=parameters, inputs=inputs, x0=x0, d0=d0, flow0=flow0,
+                      every=every, controller=controller, events=events, init=init, projection=projection,
+                      stepping=stepping, frames=bool(frame_names))
+    projection, p, source, x, d, flow = ready.projection, ready.p, ready.source, ready.x, ready.d, ready.flow
+    jumps, initial, free = ready.jumps, ready.initial, ready.free
     tangent = None
     directions = None if isinstance(sensitivities, bool) else np.asarray(sensitivities, float)
     if directions is not None or sensitivities:
@@ -160,6 +132,68 @@ def simulate(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str =
     if tangent is not None:
         run.sensitivities = tangent.result()
     return run
+
+
+@dataclass
+class Start:
+    """What a run starts from, checked (start_run): the resolved projection options, the parameters, the input
+    source, the initial state (x, d, flow; x on the constraints as init asked), the event log, the initial state's
+    figures (run stats) and whether the run takes the integrator's free variant."""
+    projection: Projection
+    p: np.ndarray
+    source: InputSource
+    x: np.ndarray
+    d: np.ndarray
+    flow: int
+    jumps: EventLog
+    initial: dict
+    free: bool
+
+
+def start_run(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str = "rk4", *,
+              parameters: dict | None = None, inputs: dict | None = None, x0=None, d0=None, flow0=None,
+              every: int = 1, controller=None, events: Events = Events(), init: Init = Init(),
+              projection: Projection = Projection(), stepping: TimeStepping = TimeStepping(), frames: bool = False,
+              compile: bool = True) -> Start:
+    """Check simulate()'s options and set up the start of its run (the arguments are simulate's; frames: whether
+    the run logs frames). SimulationError (InitialStateError) where simulate would refuse the run. compile: also
+    compile what the run calls (simulate); a caller that compiled it already (the batched sweep engine,
+    andyc.analysis.sweeps.batch) passes False."""
+    _check_option("events", events, Events)
+    _check_option("init", init, Init)
+    _check_option("projection", projection, Projection)
+    _check_option("stepping", stepping, TimeStepping)
+    if method not in METHODS:
+        raise SimulationError(f"unknown method '{method}'; available: {', '.join(METHODS)}")
+    if method == "moreau":
+        check_model(model, stepping.theta)
+    refuse_friction(model.friction_names, method, f"{model.source}: ")
+    projection = _energy_correction(model, method, projection)
+    if not (math.isfinite(t_end) and math.isfinite(dt) and t_end > 0 and dt > 0 and every >= 1):
+        raise SimulationError(f"need t_end > 0, dt > 0 and every >= 1, got t_end={t_end}, dt={dt}, every={every}")
+    _check_size(model, t_end, dt, every)
+    p = model.parameters(parameters)
+    _check_coefficients(model, p, parameters)
+    source = input_source(model, p, inputs, controller, t_end)
+    x, d, flow = initial_state(model, p, x0, d0, flow0)
+    jumps = EventLog(model, events)
+    free = free_run(model, method, projection)
+    if compile:
+        compile_integrator(model, method=method, frames=frames, free=free)
+        compile_integrator(model, *source.function_data, method=method, free=free)
+    u = inputs_at(model, source, 0.0, x, p, d, flow)
+    if d0 is None and model.contact_names:      # contacts touching at rest start closed
+        initial_mode(model, 0.0, x, u, p, d, flow)
+        sunk = _close_sunk(model, x, u, p, d)   # (a contact that starts inside its surface: see _close_sunk)
+    initial = consistent_initial_state(model, x, u, p, d, flow, init) if model.nc else {}
+    if d0 is None and model.contact_names and sunk:
+        initial_mode(model, 0.0, x, u, p, d, flow)
+    if method in ("lagrange", "baumgarte") and model.nc:
+        require_independent_rows(model, method, x, u, p, d, flow)
+    if projection.energy_correction:
+        _require_free_speed(model, x, u, p, d, flow)
+        _check_declared_law(model, x, u, p, d, flow, init)
+    return Start(projection, p, source, x, d, flow, jumps, initial, free)
 
 
 def _check_option(name: str, value, kind: type) -> None:

@@ -188,16 +188,19 @@ def _run_inline(model, points, settings, store_path, todo, progress, summary, th
                     summary.batches += 1
                     seconds += float(np.nansum(results["wall"]))
                     bar(summary.computed)
-                if not batch:   # batches of about BATCH_SECONDS: a Ctrl-C loses little, the store is written rarely
-                    size = int(min(MAX_BATCH, max(1, BATCH_SECONDS * summary.computed / max(seconds, 1e-9))))
+                if not batch:   # batches of about BATCH_SECONDS: a Ctrl-C loses little, the store is written rarely;
+                    # and, as OpenMP's guided schedule, at most a share of what is left, so that the threads end together
+                    left = math.ceil((len(todo) - submitted) / (2 * threads))
+                    size = int(min(MAX_BATCH, left, BATCH_SECONDS * summary.computed / max(seconds, 1e-9)))
+                    size = max(1, size)
         except BaseException:
-            worker.STOP.set()           # the points running now end at their next look; the rest never start
+            worker.stop()               # the points running now end at their next look; the rest never start
             for future in pending:
                 future.cancel()
             raise
         finally:
             pool.shutdown(wait=True)
-            worker.STOP.clear()
+            worker.resume()
 
 
 def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> dict:

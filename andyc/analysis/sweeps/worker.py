@@ -22,6 +22,7 @@ import numpy as np
 
 from andyc.errors import SimulationError, printable
 
+ROUNDOFF = 1e-12            # relative: a sample time and a logged time this close are the same instant
 MESSAGE_CHARS = 8192        # a status message is kept whole up to this many characters (a variable-length string)
 
 
@@ -109,11 +110,16 @@ def remember(model, settings: Settings) -> None:
 def run_batch(settings: Settings, indices: np.ndarray, values: np.ndarray) -> dict:
     """Run the points `indices` (their values: one row each) and return their results, stacked (see
     empty_results for the fields); also the process's id (the tests kill workers by it)."""
+    from andyc.analysis.sweeps.batch import batched, run_batched
+
     model, metrics = loaded(settings)
     out = empty_results(model, settings, len(indices))
     out["index"] = np.asarray(indices, dtype=np.int64)
-    for row, point in enumerate(values):
-        record(out, row, model, metrics, settings, point)
+    if batched(model, settings):
+        run_batched(out, model, settings, values)
+    else:
+        for row, point in enumerate(values):
+            record(out, row, model, metrics, settings, point)
     out["pid"] = os.getpid()
     return out
 
@@ -134,6 +140,19 @@ def empty_results(model, settings: Settings, n: int) -> dict:
 
 
 STOP = threading.Event()    # set: every point running in this process stops (the inline engine's Ctrl-C)
+STOP_FLAG = np.zeros(1, np.int64)   # ... as the batched engine's compiled loop reads it (stop(), resume())
+
+
+def stop() -> None:
+    """End every point running in this process at its next look, and start no other (the inline engine's Ctrl-C)."""
+    STOP.set()
+    STOP_FLAG[0] = 1
+
+
+def resume() -> None:
+    """Let points run again (after stop())."""
+    STOP.clear()
+    STOP_FLAG[0] = 0
 
 
 def interrupts(timeout: float | None):
@@ -148,8 +167,8 @@ def interrupts(timeout: float | None):
     return Stoppable(timeout)
 
 
-def simulate_point(model, settings: Settings, point, frames=()):
-    """The Run of one point: andyc.simulate with the point's values over the settings' fixed ones."""
+def point_arguments(model, settings: Settings, point) -> dict:
+    """simulate()'s arguments of one point: its values over the settings' fixed ones, and the run options."""
     import andyc
 
     parameters, inputs, states = {}, {}, {}
@@ -157,11 +176,18 @@ def simulate_point(model, settings: Settings, point, frames=()):
         (inputs if name in model.input_names else parameters)[name] = value
     for (kind, i), name, value in zip(settings.kinds, settings.names, point):
         {"parameter": parameters, "input": inputs, "state": states}[kind][name] = float(value)
-    return andyc.simulate(model, settings.t_end, dt=settings.dt, method=settings.method, parameters=parameters,
-                          inputs=inputs, x0=states or None,     # (the others at the model's: `andyc sim --at`)
-                          rtol=settings.rtol, atol=settings.atol, frames=list(frames),
-                          progress=False, interrupts=interrupts(settings.timeout), init=andyc.Init(settings.init),
-                          events=andyc.Events(stop_after=dict(settings.stop_after) or None))
+    return dict(dt=settings.dt, method=settings.method, parameters=parameters, inputs=inputs,
+                x0=states or None,      # (the others at the model's: `andyc sim --at`)
+                init=andyc.Init(settings.init), events=andyc.Events(stop_after=dict(settings.stop_after) or None))
+
+
+def simulate_point(model, settings: Settings, point, frames=()):
+    """The Run of one point: andyc.simulate with the point's values over the settings' fixed ones."""
+    import andyc
+
+    return andyc.simulate(model, settings.t_end, **point_arguments(model, settings, point), rtol=settings.rtol,
+                          atol=settings.atol, frames=list(frames), progress=False,
+                          interrupts=interrupts(settings.timeout))
 
 
 def record(out: dict, row: int, model, metrics: list, settings: Settings, point) -> None:
@@ -200,8 +226,15 @@ def record(out: dict, row: int, model, metrics: list, settings: Settings, point)
             out["metrics"][row, j] = math.nan
     if settings.trajectory and len(run.time):
         times = sample_times(settings)
-        # the last sample at or before each time (a jump is not smeared); NaN past the run's end
-        at = np.clip(np.searchsorted(run.time, times, side="right") - 1, 0, len(run.time) - 1)
-        reached = times <= run.time[-1] * (1 + 1e-12)
+        at, reached = sample_rows(run.time, times)
         out["trajectory_time"][row] = np.where(reached, times, math.nan)
         out["trajectory"][row] = np.where(reached[:, None], run.state[at], math.nan)
+
+
+def sample_rows(logged: np.ndarray, times: np.ndarray) -> tuple:
+    """(rows, reached): the row of a run's logged times that each sample time takes, the last at or before it
+    within round-off (so a jump is not smeared, and the grid's 0.7000000000000001 is the sample 0.7); and whether
+    the run reached each time (NaN is kept past its end)."""
+    slack = times + ROUNDOFF * np.maximum(1.0, np.abs(times))
+    rows = np.clip(np.searchsorted(logged, slack, side="right") - 1, 0, len(logged) - 1)
+    return rows, times <= logged[-1] + ROUNDOFF * max(1.0, abs(logged[-1]))

@@ -1,0 +1,120 @@
+"""The batched sweep engine (issue 42): a batch of points in one compiled call (andyc_numerics/batch.py), each
+point's answer compared with a plain andyc.simulate of that point, bit for bit: its final state and the
+trajectory's samples (the run's own logged states at the sample times), on a free model (parameters and
+initial states swept), a rheonomic one with work slots, a constrained one under projection with the energy
+correction, and inputs held per point or driven by an expression. Points the batch cannot finish (a start the
+single run refuses, a run that blows up) get the single run's outcome and message; a stop ends the batch."""
+
+import numpy as np
+import pytest
+
+import andyc
+from andyc.analysis.sweeps import batch, worker
+from andyc.analysis.sweeps import points as P
+from andyc.analysis.sweeps.worker import Settings, empty_results, run_batch, sample_times
+from andyc.errors import SimulationError
+from andyc.runtime.status import FINISHED, FINISHED_CODE, OUTCOMES
+
+
+def alone(model, settings: Settings, point):
+    """The point's Run by andyc.simulate, as a user calls it (x0 as a mapping, `andyc sim --at`)."""
+    parameters, inputs, states = {}, dict(settings.fixed), {}
+    for name, value, (kind, _) in zip(settings.names, point, settings.kinds):
+        {"parameter": parameters, "input": inputs, "state": states}[kind][name] = float(value)
+    return andyc.simulate(model, settings.t_end, dt=settings.dt, method=settings.method, parameters=parameters,
+                          inputs=inputs, x0=states or None, progress=False)
+
+
+def run_counting(monkeypatch, settings, values):
+    """run_batch over the points, with the number of points it ran alone (worker.record)."""
+    calls = []
+    original = worker.record
+    monkeypatch.setattr(worker, "record", lambda *a: (calls.append(a[1]), original(*a)))
+    return run_batch(settings, np.arange(len(values)), values), calls
+
+
+def check_against_single_runs(model, settings, values, out):
+    times = sample_times(settings)
+    for k, point in enumerate(values):
+        run = alone(model, settings, point)
+        assert run.status == FINISHED and out["message"][k] == FINISHED and out["outcome"][k] == FINISHED_CODE
+        assert np.array_equal(out["final"][k], run.state[-1]), point
+        assert out["t_final"][k] == run.time[-1] and out["final_flow"][k] == run.flow[-1]
+        assert np.array_equal(out["final_discrete"][k], run.discrete[-1])
+        # each sample: the run's state at the grid point nearest its time (times on the grid of dt)
+        at = [np.argmin(np.abs(run.time - t)) for t in times]
+        assert np.array_equal(out["trajectory"][k], run.state[at]), point
+        assert np.array_equal(out["trajectory_time"][k], times)
+
+
+@pytest.mark.parametrize("name, method, t_end, grid, fixed", [
+    ("double_pendulum", "rk4", 0.7, ["m2=0.5:2:3", "q1=0.1:1.2:2", "q2_dot=-1:1:2"], ()),
+    ("shaken_pendulum", "rk4", 0.6, ["w=2:8:3", "th=0.1:1:2"], ()),
+    ("fourbar", "projection", 0.4, ["m2=1:3:3", "a=0.8:1.2:2"], ()),
+    ("cart_pole", "rk4", 0.5, ["F=-2:2:3", "th=0.1:0.4:2"], ()),
+    ("cart_pole", "rk4", 0.5, ["th=0.1:0.4:3"], (("F", "2*sin(3*t) + th"),)),
+], ids=["free", "rheonomic-work", "projection-energy", "held-inputs", "driven-inputs"])
+def test_a_batch_gives_each_point_its_single_runs_answer_bit_for_bit(compiled, monkeypatch, name, method, t_end, grid,
+                                                                     fixed):
+    model = compiled(name)
+    pts = P.grid(grid)
+    settings = Settings.of(model, pts.names, t_end, method=method, trajectory=5, fixed=fixed)
+    worker.remember(model, settings)
+    assert batch.batched(model, settings)
+    out, ran_alone = run_counting(monkeypatch, settings, pts.values)
+    assert ran_alone == []                                  # every point in the one compiled call
+    check_against_single_runs(model, settings, pts.values, out)
+    assert (out["cpu"] > 0).all() and len(set(out["wall"])) == 1      # (a batch's time, shared by its points)
+
+
+def test_a_point_the_batch_cannot_finish_gets_the_single_runs_outcome_and_message(compiled, monkeypatch):
+    """A point that blows up mid-batch, and one whose start the single run refuses (off the four-bar's closure),
+    among points that finish: only those two run alone, with the single run's status."""
+    pendulum = compiled("double_pendulum")
+    values = np.array([[0.3], [1e10], [0.5]])
+    settings = Settings.of(pendulum, ("q1_dot",), 1.0)
+    worker.remember(pendulum, settings)
+    out, ran_alone = run_counting(monkeypatch, settings, values)
+    assert ran_alone == [1]
+    assert OUTCOMES[int(out["outcome"][1])] == "blew up"
+    assert out["message"][1] == alone(pendulum, settings, values[1]).status
+    assert list(out["outcome"][[0, 2]]) == [FINISHED_CODE] * 2
+    assert np.array_equal(out["final"][2], alone(pendulum, settings, values[2]).state[-1])
+
+    fourbar = compiled("fourbar")
+    settings = Settings.of(fourbar, ("th3",), 0.2, method="projection")
+    worker.remember(fourbar, settings)
+    values = np.array([[-np.pi / 2], [-1.0]])
+    out, ran_alone = run_counting(monkeypatch, settings, values)
+    assert ran_alone == [1] and OUTCOMES[int(out["outcome"][1])] == "failed"
+    with pytest.raises(SimulationError) as refused:       # (the single run's own refusal)
+        alone(fourbar, settings, values[1])
+    assert out["message"][1] == str(refused.value) and np.isnan(out["final"][1]).all()
+    assert out["outcome"][0] == FINISHED_CODE
+
+
+def test_sweeps_a_single_run_answers_with_more_than_its_end_run_alone(compiled):
+    """Jumps, metrics, a wall-clock limit and a drifting method on constraint rows need the whole run."""
+    pendulum, ball, fourbar = compiled("double_pendulum"), compiled("bouncing_ball"), compiled("fourbar")
+    assert batch.batched(pendulum, Settings.of(pendulum, ("m1",), 1.0))
+    assert batch.batched(fourbar, Settings.of(fourbar, ("m1",), 1.0, method="baumgarte"))
+    assert not batch.batched(ball, Settings.of(ball, ("e",), 1.0))
+    assert not batch.batched(pendulum, Settings.of(pendulum, ("m1",), 1.0, metrics=(("e", "max(energy)"),)))
+    assert not batch.batched(pendulum, Settings.of(pendulum, ("m1",), 1.0, timeout=5.0))
+    assert not batch.batched(pendulum, Settings.of(pendulum, ("m1",), 1.0, method="RK45"))
+    assert not batch.batched(fourbar, Settings.of(fourbar, ("m1",), 1.0, method="rk4"))
+
+
+def test_a_stopped_batch_runs_no_point_and_is_not_kept(compiled):
+    pendulum = compiled("double_pendulum")
+    settings = Settings.of(pendulum, ("m1",), 10.0)
+    worker.remember(pendulum, settings)
+    worker.stop()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run_batch(settings, np.arange(2), np.array([[1.0], [2.0]]))
+    finally:
+        worker.resume()
+    out = empty_results(pendulum, settings, 1)
+    batch.run_batched(out, pendulum, settings, np.array([[1.0]]))        # (resumed: runs again)
+    assert out["outcome"][0] == FINISHED_CODE
