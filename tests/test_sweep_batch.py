@@ -45,6 +45,12 @@ def check_against_single_runs(model, settings, values, out):
         at = [np.argmin(np.abs(run.time - t)) for t in times]
         assert np.array_equal(out["trajectory"][k], run.state[at]), point
         assert np.array_equal(out["trajectory_time"][k], times)
+        jumps = run.events["jump"]
+        assert list(out["jump_count"][k]) == [np.count_nonzero(jumps == n) for n in range(model.nj)]
+        kept = min(len(jumps), settings.max_events)
+        assert np.array_equal(out["event_time"][k][:kept], run.events["time"][:kept])
+        assert np.array_equal(out["event_jump"][k][:kept], jumps[:kept])
+        assert np.isnan(out["event_time"][k][kept:]).all()
 
 
 @pytest.mark.parametrize("name, method, t_end, grid, fixed", [
@@ -53,7 +59,12 @@ def check_against_single_runs(model, settings, values, out):
     ("fourbar", "projection", 0.4, ["m2=1:3:3", "a=0.8:1.2:2"], ()),
     ("cart_pole", "rk4", 0.5, ["F=-2:2:3", "th=0.1:0.4:2"], ()),
     ("cart_pole", "rk4", 0.5, ["th=0.1:0.4:3"], (("F", "2*sin(3*t) + th"),)),
-], ids=["free", "rheonomic-work", "projection-energy", "held-inputs", "driven-inputs"])
+    ("bouncing_ball", "projection", 1.6, ["e=0.8:0.9:2", "h0=0.5:1:2"], ()),
+    ("compass_gait", "projection", 1.6, ["w_stance0=-1.15:-1.05:3"], ()),
+    ("bouncing_ball_contact", "projection", 1.2, ["e=0.5:0.8:2"], ()),
+    ("rimless_wheel_contact", "projection", 2.5, ["w0=0.35:0.45:3"], ()),
+], ids=["free", "rheonomic-work", "projection-energy", "held-inputs", "driven-inputs", "jumps", "walker-jumps",
+        "contact", "contact-friction"])
 def test_a_batch_gives_each_point_its_single_runs_answer_bit_for_bit(compiled, monkeypatch, name, method, t_end, grid,
                                                                      fixed):
     model = compiled(name)
@@ -68,8 +79,8 @@ def test_a_batch_gives_each_point_its_single_runs_answer_bit_for_bit(compiled, m
 
 
 def test_a_point_the_batch_cannot_finish_gets_the_single_runs_outcome_and_message(compiled, monkeypatch):
-    """A point that blows up mid-batch, and one whose start the single run refuses (off the four-bar's closure),
-    among points that finish: only those two run alone, with the single run's status."""
+    """A point that blows up mid-batch, one that ends at a jump (Zeno), and one whose start the single run refuses
+    (off the four-bar's closure), among points that finish: only those run alone, with the single run's status."""
     pendulum = compiled("double_pendulum")
     values = np.array([[0.3], [1e10], [0.5]])
     settings = Settings.of(pendulum, ("q1_dot",), 1.0)
@@ -80,6 +91,15 @@ def test_a_point_the_batch_cannot_finish_gets_the_single_runs_outcome_and_messag
     assert out["message"][1] == alone(pendulum, settings, values[1]).status
     assert list(out["outcome"][[0, 2]]) == [FINISHED_CODE] * 2
     assert np.array_equal(out["final"][2], alone(pendulum, settings, values[2]).state[-1])
+
+    ball = compiled("bouncing_ball")        # e = 0.5: Zeno within the run (its message counts the samples kept)
+    settings = Settings.of(ball, ("e",), 1.6, method="projection")
+    worker.remember(ball, settings)
+    values = np.array([[0.85], [0.5]])
+    out, ran_alone = run_counting(monkeypatch, settings, values)
+    assert ran_alone == [1] and OUTCOMES[int(out["outcome"][1])] == "Zeno"
+    assert out["message"][1] == alone(ball, settings, values[1]).status
+    assert out["outcome"][0] == FINISHED_CODE and out["jump_count"][0, 0] == 2
 
     fourbar = compiled("fourbar")
     settings = Settings.of(fourbar, ("th3",), 0.2, method="projection")
@@ -94,11 +114,13 @@ def test_a_point_the_batch_cannot_finish_gets_the_single_runs_outcome_and_messag
 
 
 def test_sweeps_a_single_run_answers_with_more_than_its_end_run_alone(compiled):
-    """Jumps, metrics, a wall-clock limit and a drifting method on constraint rows need the whole run."""
+    """Metrics, a wall-clock limit and a drifting method on constraint rows need the whole run."""
     pendulum, ball, fourbar = compiled("double_pendulum"), compiled("bouncing_ball"), compiled("fourbar")
     assert batch.batched(pendulum, Settings.of(pendulum, ("m1",), 1.0))
     assert batch.batched(fourbar, Settings.of(fourbar, ("m1",), 1.0, method="baumgarte"))
-    assert not batch.batched(ball, Settings.of(ball, ("e",), 1.0))
+    assert batch.batched(ball, Settings.of(ball, ("e",), 1.0, method="projection"))
+    assert not batch.batched(ball, Settings.of(ball, ("e",), 1.0, method="projection", metrics=(("n", "count(bounce)"),)))
+    assert not batch.batched(ball, Settings.of(ball, ("e",), 1.0))      # (rk4, and a resting flow's row)
     assert not batch.batched(pendulum, Settings.of(pendulum, ("m1",), 1.0, metrics=(("e", "max(energy)"),)))
     assert not batch.batched(pendulum, Settings.of(pendulum, ("m1",), 1.0, timeout=5.0))
     assert not batch.batched(pendulum, Settings.of(pendulum, ("m1",), 1.0, method="RK45"))

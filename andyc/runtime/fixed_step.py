@@ -62,10 +62,8 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
         return run_of(tuple(a[:n].copy() for a in log), INTERRUPTED, stats(counts, constrain))
 
     interrupts.partial = partial
-    balance = JumpWork(model, x, out_u[0], p, d, t)
-    flow, message = follow_instant_jumps(model, t, state, source, p, d, flow, jumps, w, mode)
+    flow, message, e0 = start_flow(model, x, out_u[0], source, p, d, flow, jumps, w, mode)
     _no_instant_jump(tangent, jumps, 0)
-    e0 = law_offset(model, flow, balance.add(x, inputs_at(model, source, t, state, p, d, flow), d))
     while i < n_steps and status == OK and message is None:
         message = interrupts.reason()
         if message is not None:
@@ -85,15 +83,9 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
             if status != OK:
                 message = in_jump(model, status, k, t)
                 break
-            balance = JumpWork(model, w.x_event, w.u, p, d_before, t)
             n_jumps = len(jumps.times)
-            flow, message = finish_jump(model, k, t, w.x_event[:nx], state, w.u, p, d, flow0, flow, jumps)
-            if message is None:
-                flow, message = follow_instant_jumps(model, t, state, source, p, d, flow, jumps, w, mode)
+            flow, message, status, e0 = after_jump(model, k, t, x, source, p, d, d_before, flow0, flow, jumps, w, mode)
             _no_instant_jump(tangent, jumps, n_jumps + 1)
-            if message is None and source.into(model, t, state, p, d, flow, w.u) != OK:
-                status = INPUT_FAILED
-            e0 = law_offset(model, flow, balance.add(x, w.u, d))
         elif i > i0:
             elapsed = time.perf_counter() - tic
             target = interrupts.budget(0.25)       # (a quarter of a second, or what is left of --timeout)
@@ -110,6 +102,33 @@ def run_fixed_step(model, method, x, source, p, d, flow, t_end, dt, every, proje
             out_u[row] = np.nan
         row += 1
     return tuple(a[:row] for a in log), ending(message, row, jumps), stats(counts, constrain)
+
+
+def start_flow(model, x, u, source, p, d, flow, jumps, w, mode) -> tuple:
+    """Before a fixed-step run's first step (x the augmented state, u the inputs at the start; x, d in place): the
+    jumps that happen at once there, and the energy correction's offset then. Returns (flow, stop message or None,
+    e0)."""
+    balance = JumpWork(model, x, u, p, d, 0.0)
+    state = x[:model.nx]
+    flow, message = follow_instant_jumps(model, 0.0, state, source, p, d, flow, jumps, w, mode)
+    return flow, message, law_offset(model, flow, balance.add(x, inputs_at(model, source, 0.0, state, p, d, flow), d))
+
+
+def after_jump(model, k, t, x, source, p, d, d_before, flow0, flow, jumps, w, mode) -> tuple:
+    """After advance applied jump k at t, from flow0 into `flow` (x the augmented state, d in place; w.x_event the
+    state just before it, w.u the inputs there, d_before the discrete states before it): the contact's resolution
+    and the user's function (finish_jump), the jumps that follow at once, the inputs in the new flow (into w.u),
+    the jump's energy into the `jumps` slot. Returns (flow, stop message or None, status, e0 of the energy
+    correction after it)."""
+    balance = JumpWork(model, w.x_event, w.u, p, d_before, t)
+    state = x[:model.nx]
+    flow, message = finish_jump(model, k, t, w.x_event[:model.nx], state, w.u, p, d, flow0, flow, jumps)
+    if message is None:
+        flow, message = follow_instant_jumps(model, t, state, source, p, d, flow, jumps, w, mode)
+    status = OK
+    if message is None and source.into(model, t, state, p, d, flow, w.u) != OK:
+        status = INPUT_FAILED
+    return flow, message, status, law_offset(model, flow, balance.add(x, w.u, d))
 
 
 def _no_instant_jump(tangent, jumps, expected: int) -> None:

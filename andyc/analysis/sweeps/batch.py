@@ -1,19 +1,21 @@
-"""The batched engine: a batch of sweep points in one compiled call, not one andyc.simulate each.
+"""The batched engine: a batch of sweep points in compiled calls, not one andyc.simulate each.
 
 A point run alone pays, around its compiled loop, a Python simulate() call: its checks, the run's log of every
 step, then the energy, residuals and powers at every logged sample (`_Assembly`), most of it holding the GIL, so
 that threads scale poorly and a short run costs more around its loop than in it. Here each point's start is still
 set up and checked by simulate's own code (andyc.runtime.simulate.start_run: its parameters, inputs, initial
-state on the constraints), then the whole batch runs in one call of andyc_numerics' batch.run_points, without
-the GIL, keeping only what the store keeps: the final state and the trajectory's samples. The steps are the
-single run's integrator.advance on the same grid, so each point's states equal `andyc sim`'s bit for bit.
+state on the constraints), then the batch runs in calls of andyc_numerics' batch.run_points, without the GIL,
+keeping only what the store keeps: the final state, the jumps and the trajectory's samples. A call returns a
+point at its jumps, which Python finishes as a single run does (andyc.runtime.fixed_step.after_jump: a contact's
+resolution, the user's function, the event log), and the next call takes the points that go on. The steps are
+the single run's integrator.advance on the same grid, so each point's states equal `andyc sim`'s bit for bit.
 
-It takes the sweeps a single run would answer with nothing but those (batched): a fixed-step method, a model
-without jumps (hence without contacts), no metric (a metric reads the whole run), no per-point wall-clock limit,
-and no drifting method on constrained rows (rk4 and lagrange: the run's status then depends on the residuals at
-every sample, andyc.runtime.status.lost_constraints). Any other sweep, and any point the batch could not take to
-its end (a start simulate refuses, a run that stops or blows up), runs alone through worker.record, so that its
-outcome and message are the single run's.
+It takes the sweeps a single run would answer with nothing but those (batched): a fixed-step method, no metric
+(a metric reads the whole run), no per-point wall-clock limit, and no drifting method on constraint rows (rk4 and
+lagrange: the run's status then depends on the residuals at every sample, andyc.runtime.status.lost_constraints).
+Any other sweep, and any point the batch could not take to the end of its time (a start simulate refuses, a run
+that stops, blows up or ends at a jump: Zeno, stop_after, the user's function), runs alone through
+worker.record, so that its outcome and message are the single run's.
 """
 
 from __future__ import annotations
@@ -24,21 +26,22 @@ import time
 import numpy as np
 
 from andyc.numerics.status import OK
+from andyc.runtime.fixed_step import MODE
 from andyc.runtime.methods import FIXED_STEP
 from andyc.runtime.status import DRIFTING_METHODS, FINISHED, FINISHED_CODE
 
 
 def batched(model, settings) -> bool:
     """Whether the points of a sweep with these Settings run batched (see the module's docstring)."""
-    return (settings.method in FIXED_STEP and model.nj == 0 and not settings.metrics and settings.timeout is None
+    return (settings.method in FIXED_STEP and not settings.metrics and settings.timeout is None
             and settings.basin is None and not (model.nc and settings.method in DRIFTING_METHODS))
 
 
 def run_batched(out: dict, model, settings, values) -> None:
     """Run the points `values` (one row each) into the rows of `out` (worker.empty_results): those whose start
-    simulate accepts in one compiled call, the others, and those that did not finish there, one by one
+    simulate accepts in compiled calls (Batch), the others, and those that did not reach the end there, one by one
     (worker.record). KeyboardInterrupt when worker.stop() ended the batch (its results are not kept)."""
-    from andyc.analysis.sweeps.worker import STOP_FLAG, point_arguments, record, sample_rows, sample_times
+    from andyc.analysis.sweeps.worker import point_arguments, record
     from andyc.runtime.simulate import start_run
 
     rows, starts, alone = [], [], []
@@ -53,63 +56,117 @@ def run_batched(out: dict, model, settings, values) -> None:
     if not whole or len({tuple(sorted(s.source.drives.items())) for s in starts}) > 1:
         rows, starts, alone = [], [], list(range(len(values)))      # (each run alone says why, or differs)
     if starts:
-        grid = np.arange(steps + 1) * settings.dt        # the run's logged times: 0.0 + i dt, as advance sums them
-        times = sample_times(settings)
-        marks, reached = sample_rows(grid, times)
-        status, done, samples, X, F, D, wall, cpu = _run(model, settings, starts, steps, marks.astype(np.int64),
-                                                           STOP_FLAG)
-        if np.any(status == _compiled(model).NOT_RUN):
-            raise KeyboardInterrupt     # the sweep's end, not the points' (as record() takes an interrupted run)
-        finished = status == OK
-        share_wall, share_cpu = wall / len(starts), cpu / len(starts)
+        batch = Batch(model, settings, starts, steps)
+        tic, cpu = time.perf_counter(), time.thread_time()
+        finished = batch.run()
+        share_wall, share_cpu = (time.perf_counter() - tic) / len(starts), (time.thread_time() - cpu) / len(starts)
         for j, row in enumerate(rows):
-            if not finished[j]:
+            if finished[j]:
+                batch.record(out, row, j)
+                out["wall"][row], out["cpu"][row] = share_wall, share_cpu
+            else:
                 alone.append(row)
-                continue
-            out["outcome"][row], out["message"][row] = FINISHED_CODE, FINISHED
-            out["wall"][row], out["cpu"][row] = share_wall, share_cpu
-            out["t_final"][row], out["final"][row] = grid[-1], X[j, :model.nx]
-            out["final_discrete"][row], out["final_flow"][row] = D[j], F[j]
-            out["jump_count"][row] = 0
-            if settings.trajectory:
-                out["trajectory_time"][row] = np.where(reached, times, math.nan)
-                out["trajectory"][row] = np.where(reached[:, None], samples[j], math.nan)
     for row in sorted(alone):
         record(out, row, model, [], settings, values[row])
 
 
-def _run(model, settings, starts, steps: int, marks: np.ndarray, stop: np.ndarray):
-    """One call of batch.run_points over the started points: (status, done, samples, X, F, D, wall s, CPU s)."""
-    from andyc.numerics.status import OK
-    from andyc.runtime.compiled import projects, variant, work
-    from andyc.runtime.fixed_step import MODE
-    from andyc.runtime.inputs import inputs_at
-    from andyc.runtime.work import JumpWork, law_offset, with_work
+class Batch:
+    """The started points of a batch (andyc.runtime.simulate.Start each) as the arrays of batch.run_points, run
+    to their ends: compiled between jumps, each jump finished in Python (fixed_step.after_jump), as run_fixed_step
+    finishes it in a single run."""
 
-    first = starts[0]
-    method, projection = settings.method, first.projection      # (resolved alike for every point of the model)
-    X = np.stack([with_work(model, s.x) for s in starts])
-    P = np.stack([s.p for s in starts])
-    D = np.stack([s.d for s in starts]).reshape(len(starts), model.nd)
-    F = np.array([s.flow for s in starts], dtype=np.int64)
-    U = np.stack([s.source.held(s.flow) for s in starts]).reshape(len(starts), len(model.input_names))
-    function = first.source.function_data[0]
-    data = None if function is None else np.stack([s.source.function_data[1] for s in starts])
-    E0 = np.empty(len(starts))
-    for j, s in enumerate(starts):      # the energy correction's offset at the start, as run_fixed_step finds it
-        u = inputs_at(model, s.source, 0.0, s.x, s.p, s.d, s.flow)
-        E0[j] = law_offset(model, s.flow, JumpWork(model, X[j], u, s.p, s.d, 0.0).add(X[j], u, s.d))
-    status, done = np.full(len(starts), OK, np.int64), np.zeros(len(starts), np.int64)
-    samples = np.full((len(starts), len(marks), model.nx), math.nan)
-    etol = projection.energy_tol if projection.energy_correction else -1.0
-    w = work(model)
-    tic, cpu = time.perf_counter(), time.thread_time()
-    _compiled(model).run_points(
-        model.ref, w.ref, int(MODE[method]), bool(projects(model, method, projection)),
-        bool(method == "projection" and model.nc > 0), float(etol), float(first.jumps.event_tol), function, data, P, U,
-        D, X, F, E0, int(steps), float(settings.dt), marks, stop, status, done, samples,
-        *variant(model, method, projection))
-    return status, done, samples, X, F, D, time.perf_counter() - tic, time.thread_time() - cpu
+    def __init__(self, model, settings, starts: list, steps: int):
+        from andyc.analysis.sweeps.worker import sample_rows, sample_times
+        from andyc.runtime.compiled import projects, work
+        from andyc.runtime.work import with_work
+
+        n, first = len(starts), starts[0]
+        self.model, self.settings, self.starts, self.steps = model, settings, starts, steps
+        self.projection = first.projection          # (resolved alike for every point of the model)
+        self.grid = np.arange(steps + 1) * settings.dt      # the run's logged times: 0.0 + i dt, as advance sums them
+        self.times = sample_times(settings)
+        marks, self.reached = sample_rows(self.grid, self.times)
+        self.marks = marks.astype(np.int64)
+        self.X = np.stack([with_work(model, s.x) for s in starts])
+        self.P = np.stack([s.p for s in starts])
+        self.D = np.stack([s.d for s in starts]).reshape(n, model.nd)
+        self.F = np.array([s.flow for s in starts], dtype=np.int64)
+        self.U = np.zeros((n, len(model.input_names)))
+        self.function = first.source.function_data[0]
+        self.data = None if self.function is None else np.stack([s.source.function_data[1] for s in starts])
+        self.E0, self.T = np.zeros(n), np.zeros(n)
+        self.I, self.M = np.zeros(n, np.int64), np.zeros(n, np.int64)
+        self.status, self.jumped = np.zeros(n, np.int64), np.full(n, -1, np.int64)
+        self.XE, self.UE = np.zeros_like(self.X), np.zeros_like(self.U)
+        self.samples = np.full((n, len(self.marks), model.nx), math.nan)
+        self.w = work(model)
+        method = settings.method
+        self.mode = MODE[method]
+        self.options = (int(self.mode), bool(projects(model, method, self.projection)),
+                        bool(method == "projection" and model.nc > 0),
+                        float(self.projection.energy_tol if self.projection.energy_correction else -1.0),
+                        float(first.jumps.event_tol))
+
+    def run(self) -> np.ndarray:
+        """Run every point to its end; whether each finished there (the others stopped: a failure, a stop
+        message, a jump's failure). KeyboardInterrupt when stop() ended it."""
+        from andyc.analysis.sweeps.worker import STOP_FLAG
+        from andyc.runtime.compiled import variant
+        from andyc.runtime.fixed_step import start_flow
+        from andyc.runtime.inputs import inputs_at
+
+        model = self.model
+        finished = np.zeros(len(self.starts), bool)
+        todo = []
+        for j, s in enumerate(self.starts):         # the jumps at once at the start, the energy offset
+            u = inputs_at(model, s.source, 0.0, s.x, s.p, s.d, s.flow)
+            flow, message, self.E0[j] = start_flow(model, self.X[j], u, s.source, self.P[j], self.D[j], s.flow,
+                                                   s.jumps, self.w, self.mode)
+            self.F[j] = flow
+            if message is None:
+                todo.append(j)
+        trailing = variant(model, self.settings.method, self.projection)
+        run_points = _compiled(model).run_points
+        while todo:
+            todo = np.array(todo, dtype=np.int64)
+            before_d, before_flow = self.D[todo].copy(), self.F[todo].copy()
+            for j in todo:
+                self.U[j] = self.starts[j].source.held(self.F[j])
+            run_points(model.ref, self.w.ref, *self.options, self.function, self.data, todo, self.P, self.U, self.D,
+                       self.X, self.F, self.E0, self.I, self.T, int(self.steps), float(self.settings.dt), self.marks,
+                       self.M, STOP_FLAG, self.status, self.jumped, self.XE, self.UE, self.samples, *trailing)
+            if np.any(self.status[todo] == _compiled(model).NOT_RUN):
+                raise KeyboardInterrupt     # the sweep's end, not the points' (as record() takes an interrupted run)
+            finished[todo] = self.status[todo] == OK
+            todo = [j for j, d, flow in zip(todo, before_d, before_flow)
+                    if self.status[j] == _compiled(model).JUMPED and self._finish_jump(j, d, flow)]
+        return finished
+
+    def _finish_jump(self, j: int, d_before, flow0: int) -> bool:
+        """Finish point j's jump (as after_jump does in a single run); whether it goes on (not stopped)."""
+        from andyc.runtime.fixed_step import after_jump
+
+        s, w = self.starts[j], self.w
+        w.x_event[:], w.u[:] = self.XE[j], self.UE[j]
+        flow, message, status, self.E0[j] = after_jump(self.model, int(self.jumped[j]), float(self.T[j]), self.X[j],
+                                                       s.source, self.P[j], self.D[j], d_before, int(flow0),
+                                                       int(self.F[j]), s.jumps, w, self.mode)
+        self.F[j] = flow
+        return message is None and status == OK
+
+    def record(self, out: dict, row: int, j: int) -> None:
+        """Point j's results (it finished) into row `row` of out, as worker.record keeps a single run's."""
+        from andyc.analysis.sweeps.worker import record_events
+
+        model = self.model
+        out["outcome"][row], out["message"][row] = FINISHED_CODE, FINISHED
+        out["t_final"][row], out["final"][row] = self.T[j], self.X[j, :model.nx]
+        out["final_discrete"][row], out["final_flow"][row] = self.D[j], self.F[j]
+        jumps = self.starts[j].jumps.table()
+        record_events(out, row, model, self.settings, jumps["time"], jumps["jump"])
+        if self.settings.trajectory:
+            out["trajectory_time"][row] = np.where(self.reached, self.times, math.nan)
+            out["trajectory"][row] = np.where(self.reached[:, None], self.samples[j], math.nan)
 
 
 def _compiled(model):

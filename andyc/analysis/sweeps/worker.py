@@ -215,10 +215,7 @@ def record(out: dict, row: int, model, metrics: list, settings: Settings, point)
     if len(run.time):
         out["t_final"][row], out["final"][row] = run.time[-1], run.state[-1]
         out["final_discrete"][row], out["final_flow"][row] = run.discrete[-1], run.flow[-1]
-    jumps = run.events["jump"]
-    out["jump_count"][row] = np.bincount(jumps, minlength=model.nj)[:model.nj] if model.nj else []
-    k = min(len(jumps), settings.max_events)
-    out["event_time"][row, :k], out["event_jump"][row, :k] = run.events["time"][:k], jumps[:k]
+    record_events(out, row, model, settings, run.events["time"], run.events["jump"])
     for j, metric in enumerate(metrics):
         try:
             out["metrics"][row, j] = evaluate(metric, run)
@@ -229,6 +226,13 @@ def record(out: dict, row: int, model, metrics: list, settings: Settings, point)
         at, reached = sample_rows(run.time, times)
         out["trajectory_time"][row] = np.where(reached, times, math.nan)
         out["trajectory"][row] = np.where(reached[:, None], run.state[at], math.nan)
+
+
+def record_events(out: dict, row: int, model, settings: Settings, times, jumps) -> None:
+    """A run's jumps (their times and indices, in order) into row `row`: the count of each, the first max_events."""
+    out["jump_count"][row] = np.bincount(jumps, minlength=model.nj)[:model.nj] if model.nj else []
+    k = min(len(jumps), settings.max_events)
+    out["event_time"][row, :k], out["event_jump"][row, :k] = times[:k], jumps[:k]
 
 
 def sample_rows(logged: np.ndarray, times: np.ndarray) -> tuple:
