@@ -1,21 +1,27 @@
-"""Many runs of one model (issue 42): andyc's sweep engine against MuJoCo's batched `mujoco.rollout`, on the same
-planar chain of n uniform rods (bench/large_models.py: the same masses, inertias and gravity, no contacts), the
-same RK4 at dt = 1e-3, from the same N initial states (a Latin hypercube over the joint angles, +-0.5 rad about
-0.3, at rest).
+"""Many runs of one model (issue 42): andyc's batched sweep engine against one andyc.simulate per point and against
+MuJoCo's batched `mujoco.rollout`, on the same planar chain of n uniform rods (bench/large_models.py: the same
+masses, inertias and gravity, no contacts; n = 2 is a double pendulum of rods), the same RK4 at dt = 1e-3, from
+the same N initial states (a Latin hypercube over the joint angles, +-0.5 rad about 0.3, at rest).
 
-First the answers: every point's state after 0.2 s, andyc's against MuJoCo's (their RK4s take the same steps of
-the same equations; MuJoCo gives each rod an inertia of 1e-9 about its long axis where andyc's is 0, which a
-planar motion never turns: measured, they agree to 1e-13). Then, in `--rounds` rounds with the variants alternated, the wall time of the
-whole batch of T seconds each:
+First the answers: every point's state after 0.2 s by the batched engine, by a loop of andyc.simulate and by
+MuJoCo (their RK4s take the same steps of the same equations; MuJoCo gives each rod an inertia of 1e-9 about its
+long axis where andyc's is 0, which a planar motion never turns: they agree to 1e-13; the two andyc paths to the
+bit). Then, in `--rounds` rounds with the variants alternated, the wall time of the whole batch of T seconds each:
 
-    andyc 1 thread      andyc.analysis.sweeps.run_sweep(engine="inline", workers=1): the points one after the other
-                        in this process, each andyc.simulate (its compiled loop), final states into a Zarr store
-    andyc 2 threads     the same on two threads (the compiled loop runs without the GIL)
+    batched 1 thread    andyc.analysis.sweeps.run_sweep(engine="inline", workers=1): the points in compiled calls
+                        of andyc_numerics/batch.run_points (andyc.analysis.sweeps.batch), final states into a Zarr
+                        store
+    batched 2 threads   the same on two threads (the compiled calls run without the GIL)
+    per point 1 thread  the same sweep with each point one andyc.simulate (what sweeps did before the batched
+                        engine, and what they still do with a metric)
+    python loop         a plain loop of andyc.simulate over the points, in this process: what a user writes
     mujoco 1 thread     mujoco.rollout.rollout over the batch on one thread (C, no Python per step or point),
                         keeping every step's state as rollout does
     mujoco 2 threads    the same on two threads (one MjData each)
 
-and the steps per second each reaches (N T / dt over the wall time).
+and the steps per second each reaches (N T / dt over the wall time), beside one run's: the compiled loop of a
+single andyc.simulate of the first point (its own wall time, best of the rounds), times the cores, the ceiling
+issue 42 measures the batched engine against (target: 0.8 of it).
 
     python bench/sweep_rollout.py [--links 6] [--points 200] [--t-end 5] [--rounds 3]
 """
@@ -23,6 +29,7 @@ and the steps per second each reaches (N T / dt over the wall time).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import tempfile
 import time
@@ -35,6 +42,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import andyc  # noqa: E402
+from andyc.analysis.sweeps import batch  # noqa: E402
 from andyc.analysis.sweeps import points as P  # noqa: E402
 from andyc.analysis.sweeps.run import run_sweep  # noqa: E402
 from andyc.analysis.sweeps.worker import Settings  # noqa: E402
@@ -43,14 +51,22 @@ from large_models import planar_chain_mjcf, planar_chain_yaml  # noqa: E402
 DT = 1e-3
 
 
-def andyc_finals(model, points, t_end: float, store: Path, threads: int = 1) -> tuple[np.ndarray, float]:
-    """(final states (N, nx), wall seconds) of an inline sweep of the points on `threads` threads."""
+def andyc_finals(model, points, t_end: float, store: Path, threads: int = 1,
+                 per_point: bool = False) -> tuple[np.ndarray, float]:
+    """(final states (N, nx), wall seconds) of an inline sweep of the points on `threads` threads; per_point: each
+    point one andyc.simulate (the batched engine turned off)."""
     import xarray as xr
 
     settings = Settings.of(model, points.names, t_end, dt=DT)
-    start = time.perf_counter()
-    run_sweep(model, points, settings, store, engine="inline", workers=threads, progress=False)
-    wall = time.perf_counter() - start
+    saved = batch.batched
+    if per_point:
+        batch.batched = lambda model, settings: False
+    try:
+        start = time.perf_counter()
+        run_sweep(model, points, settings, store, engine="inline", workers=threads, progress=False)
+        wall = time.perf_counter() - start
+    finally:
+        batch.batched = saved
     return xr.open_zarr(store).final.values, wall
 
 
@@ -97,25 +113,58 @@ def main() -> None:
     one, two = [mujoco.MjData(mj)], [mujoco.MjData(mj) for _ in range(2)]
 
     a, _ = andyc_finals(model, points, 0.2, scratch / "check.zarr", threads=2)
+    alone, _ = andyc_finals(model, points, 0.2, scratch / "alone.zarr", threads=1, per_point=True)
+    looped, _ = python_loop(model, points, 0.2)
     b, _ = mujoco_finals(mj, one, starts, 0.2)
     gap = np.abs(a[:, :2 * n] - b).max()      # (andyc's states: q1 .. qn, then their rates)
+    assert np.array_equal(a, alone) and np.array_equal(a, looped), "the batched engine differs from single runs"
     print(f"planar chain of {n} rods, {points.n} initial states (Latin hypercube), RK4 at dt = {DT:g}: after 0.2 s "
-          f"andyc and MuJoCo agree to {gap:.1e} (largest difference of any angle or speed)")
-    walls = {"andyc 1 thread": [], "mujoco 1 thread": [], "andyc 2 threads": [], "mujoco 2 threads": []}
+          f"the batched engine equals single runs to the bit, and andyc and MuJoCo agree to {gap:.1e} (largest "
+          f"difference of any angle or speed)")
+    variants = {
+        "batched 1 thread": lambda r: andyc_finals(model, points, args.t_end, scratch / f"b1_{r}.zarr", 1)[1],
+        "mujoco 1 thread": lambda r: mujoco_finals(mj, one, starts, args.t_end)[1],
+        "batched 2 threads": lambda r: andyc_finals(model, points, args.t_end, scratch / f"b2_{r}.zarr", 2)[1],
+        "mujoco 2 threads": lambda r: mujoco_finals(mj, two, starts, args.t_end)[1],
+        "per point 1 thread": lambda r: andyc_finals(model, points, args.t_end, scratch / f"p1_{r}.zarr", 1,
+                                                     per_point=True)[1],
+        "python loop": lambda r: python_loop(model, points, args.t_end)[1],
+    }
+    walls = {name: [] for name in variants}
+    single = []
     for r in range(args.rounds):
-        for threads in (1, 2):
-            name = f"{threads} thread{'s' if threads > 1 else ''}"
-            store = scratch / f"r{r}_{threads}.zarr"
-            walls[f"andyc {name}"].append(andyc_finals(model, points, args.t_end, store, threads)[1])
-            walls[f"mujoco {name}"].append(mujoco_finals(mj, one if threads == 1 else two, starts, args.t_end)[1])
+        for name, run in variants.items():
+            walls[name].append(run(r))
+        single.append(one_run(model, points, args.t_end))
     steps = points.n * args.t_end / DT
-    print(f"{points.n} runs of {args.t_end:g} s ({steps:.0f} steps), {args.rounds} rounds alternated:")
+    cores = os.cpu_count() or 1
+    best = 1 / min(single)          # one run's steps per second, at best
+    print(f"{points.n} runs of {args.t_end:g} s ({steps:.0f} steps), {args.rounds} rounds alternated; one run's "
+          f"compiled loop {best / 1e6:.2f} M steps/s at best, x {cores} cores = {cores * best / 1e6:.2f} M:")
     for name, w in walls.items():
-        print(f"  {name:>16}: {min(w):.2f} .. {max(w):.2f} s, {steps / min(w) / 1e6:.2f} M steps/s at best")
+        print(f"  {name:>18}: {min(w):.2f} .. {max(w):.2f} s, {steps / min(w) / 1e6:.2f} M steps/s at best "
+              f"({steps / min(w) / (cores * best):.2f} of cores x one run)")
     for name in ("1 thread", "2 threads"):
-        ratio = [x / y for x, y in zip(walls[f"andyc {name}"], walls[f"mujoco {name}"])]
-        print(f"  andyc / mujoco on {name}, per round: {min(ratio):.2f} .. {max(ratio):.2f} (time ratio; above 1: "
+        ratio = [x / y for x, y in zip(walls[f"batched {name}"], walls[f"mujoco {name}"])]
+        print(f"  batched / mujoco on {name}, per round: {min(ratio):.3f} .. {max(ratio):.3f} (time ratio; above 1: "
               f"andyc slower)")
+    ratio = [x / y for x, y in zip(walls["batched 1 thread"], walls["per point 1 thread"])]
+    print(f"  batched / per point on 1 thread, per round: {min(ratio):.3f} .. {max(ratio):.3f}")
+
+
+def python_loop(model, points, t_end: float) -> tuple[np.ndarray, float]:
+    """(final states, wall seconds) of a loop of andyc.simulate over the points (x0 by name, as `andyc sim --at`)."""
+    start = time.perf_counter()
+    finals = [andyc.simulate(model, t_end, dt=DT, x0=dict(zip(points.names, map(float, v))), progress=False).state[-1]
+              for v in points.values]
+    return np.array(finals), time.perf_counter() - start
+
+
+def one_run(model, points, t_end: float) -> float:
+    """Seconds per step of one run's compiled loop (its own wall time, Run.stats), from the first point."""
+    run = andyc.simulate(model, t_end, dt=DT, x0=dict(zip(points.names, map(float, points.values[0]))),
+                         progress=False)
+    return run.stats["wall_seconds"] / run.stats["steps"]
 
 
 if __name__ == "__main__":

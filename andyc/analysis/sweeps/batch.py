@@ -21,6 +21,7 @@ worker.record, so that its outcome and message are the single run's.
 from __future__ import annotations
 
 import math
+import threading
 import time
 
 import numpy as np
@@ -100,6 +101,7 @@ class Batch:
         self.XE, self.UE = np.zeros_like(self.X), np.zeros_like(self.U)
         self.samples = np.full((n, len(self.marks), model.nx), math.nan)
         self.w = work(model)
+        self.ref = thread_model(model)
         method = settings.method
         self.mode = MODE[method]
         self.options = (int(self.mode), bool(projects(model, method, self.projection)),
@@ -132,7 +134,7 @@ class Batch:
             before_d, before_flow = self.D[todo].copy(), self.F[todo].copy()
             for j in todo:
                 self.U[j] = self.starts[j].source.held(self.F[j])
-            run_points(model.ref, self.w.ref, *self.options, self.function, self.data, todo, self.P, self.U, self.D,
+            run_points(self.ref, self.w.ref, *self.options, self.function, self.data, todo, self.P, self.U, self.D,
                        self.X, self.F, self.E0, self.I, self.T, int(self.steps), float(self.settings.dt), self.marks,
                        self.M, STOP_FLAG, self.status, self.jumped, self.XE, self.UE, self.samples, *trailing)
             if np.any(self.status[todo] == _compiled(model).NOT_RUN):
@@ -167,6 +169,21 @@ class Batch:
         if self.settings.trajectory:
             out["trajectory_time"][row] = np.where(self.reached, self.times, math.nan)
             out["trajectory"][row] = np.where(self.reached[:, None], self.samples[j], math.nan)
+
+
+_THREAD = threading.local()
+
+
+def thread_model(model):
+    """The compiled Model of `model` (its ref) for this thread: a Model of its own, with the same leaves and tables.
+    Each read of a Model's array field in compiled code counts a reference, atomically: threads sharing one Model
+    wait on each other's counts (measured on 2 cores, 6-link chain, 2 threads against 1: 0.95-1.83x shared,
+    1.41-1.88x each its own)."""
+    refs = _THREAD.__dict__.setdefault("refs", {})
+    key = (str(model.path), model.module.BUILD_KEY)
+    if key not in refs:
+        refs[key] = model.numerics.model.new_model(model.module.EQUATIONS, model.module._stubs)
+    return refs[key]
 
 
 def _compiled(model):

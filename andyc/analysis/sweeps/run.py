@@ -38,7 +38,8 @@ WORKER_WAIT = 60.0          # seconds to wait for a scheduler's first worker bef
 MAX_BATCH = 256
 TASKS_PER_WORKER = 8
 ENGINES = ("auto", "inline", "cluster")
-BATCH_SECONDS = 1.0         # inline, a batch of about this long (of one thread's time) between the store's writes
+BATCH_SECONDS = 1.0         # inline, a batch of about this long (of one thread's time)
+WRITE_SECONDS = 1.0         # inline, the store written at most this often (and at once for the first results)
 
 
 class SweepError(RuntimeError):
@@ -160,17 +161,30 @@ def _run(client, model, points, settings, store_path, todo, size, progress, summ
 def _run_inline(model, points, settings, store_path, todo, progress, summary, threads: int = 1,
                 batch=None) -> None:
     """Run the points `todo` in this process on `threads` threads (andyc's compiled loop runs without the
-    GIL, so threads share the cores), in batches of about BATCH_SECONDS written to the store by this thread
-    as they end. A Ctrl-C (or any error) sets worker.STOP, which ends the running points at their next
-    look (about every 0.25 s of compiled steps); their batches are not written, the others are kept."""
+    GIL, so threads share the cores), in batches of about BATCH_SECONDS, their results written to the store by
+    this thread: the first at once, then those ended since at most every WRITE_SECONDS (a write costs this
+    thread tens of milliseconds, taken from the cores the points run on). A Ctrl-C (or any error) sets
+    worker.STOP, which ends the running points at their next look (within a fraction of a second); their
+    batches are not written, the batches that ended are."""
+    import time
     from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
     from andyc.analysis.sweeps import worker
 
     worker.remember(model, settings)    # the model compiled here is the one the points run on
     size, submitted, seconds = batch or 1, 0, 0.0
-    pending = {}
+    pending, ended, written = {}, [], -math.inf
     summary.workers = threads
+
+    def write() -> None:
+        nonlocal written
+        if ended:
+            results = {key: np.concatenate([r[key] for r in ended]) for key in ended[0] if key != "pid"}
+            store.write_batch(store_path, points, settings, results)
+            summary.computed += len(results["index"])
+            ended.clear()
+        written = time.perf_counter()
+
     with Progress(f"{model.name} sweep", len(todo), unit="points", enabled=progress) as bar, \
             ThreadPoolExecutor(threads, thread_name_prefix="andyc-sweep") as pool:
         try:
@@ -182,21 +196,22 @@ def _run_inline(model, points, settings, store_path, todo, progress, summary, th
                 finished, _ = wait(pending, return_when=FIRST_COMPLETED)
                 for future in finished:
                     del pending[future]
-                    results = future.result()
-                    store.write_batch(store_path, points, settings, results)
-                    summary.computed += len(results["index"])
+                    ended.append(future.result())
                     summary.batches += 1
-                    seconds += float(np.nansum(results["wall"]))
-                    bar(summary.computed)
-                if not batch:   # batches of about BATCH_SECONDS: a Ctrl-C loses little, the store is written rarely;
+                    seconds += float(np.nansum(ended[-1]["wall"]))
+                if time.perf_counter() - written >= WRITE_SECONDS or not (pending or submitted < len(todo)):
+                    write()
+                bar(summary.computed + sum(len(r["index"]) for r in ended))
+                if not batch:   # batches of about BATCH_SECONDS: a Ctrl-C loses little;
                     # and, as OpenMP's guided schedule, at most a share of what is left, so that the threads end together
+                    done = summary.computed + sum(len(r["index"]) for r in ended)
                     left = math.ceil((len(todo) - submitted) / (2 * threads))
-                    size = int(min(MAX_BATCH, left, BATCH_SECONDS * summary.computed / max(seconds, 1e-9)))
-                    size = max(1, size)
+                    size = max(1, int(min(MAX_BATCH, left, BATCH_SECONDS * done / max(seconds, 1e-9))))
         except BaseException:
             worker.stop()               # the points running now end at their next look; the rest never start
             for future in pending:
                 future.cancel()
+            write()                     # (the batches that ended are whole: kept)
             raise
         finally:
             pool.shutdown(wait=True)
