@@ -53,7 +53,7 @@ def run_points(model, w, mode, project, constrain, energy_tol, event_tol, inputs
     state X[k] (the state then the work of each slot, andyc.runtime.work) and energy offset E0[k]
     (integrator.Options.e0), with the options of integrator.options (mode, project, constrain, energy_tol,
     event_tol) and advance's variant (full, events, free). X, D, F, I and T are left where the point stopped. When
-    the run stands on grid point i = marks[m] (ascending; m from M[k], left at the next), its state goes to
+    the run reaches grid point i = marks[m] (ascending; m from M[k], left at the next), its state goes to
     samples[k, m].
 
     status[k]: OK when the point reached the end, JUMPED when advance applied a jump (its index in jumped[k], the
@@ -72,10 +72,10 @@ def run_points(model, w, mode, project, constrain, energy_tol, event_tol, inputs
         opts = Options(mode, project, constrain, E0[k], energy_tol, event_tol)
         i, t, st, m, jump = I[k], T[k], OK, M[k], -1
         while True:
-            if t == i * dt:         # on the grid (advance sums 0.0 + i dt), not within a step after a jump
-                while m < nm and marks[m] == i:
-                    samples[k, m, :] = x[:samples.shape[2]]
-                    m += 1
+            # (advance stops at each mark: a point resumed within a step, after a jump, has passed its marks so far)
+            while m < nm and marks[m] == i:
+                samples[k, m, :] = x[:samples.shape[2]]
+                m += 1
             if i >= steps or st != OK or jump >= 0 or stop[0] != 0:
                 break
             i_end = min(steps, i + CHUNK)
