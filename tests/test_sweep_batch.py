@@ -140,3 +140,26 @@ def test_a_stopped_batch_runs_no_point_and_is_not_kept(compiled):
     out = empty_results(pendulum, settings, 1)
     batch.run_batched(out, pendulum, settings, np.array([[1.0]]))        # (resumed: runs again)
     assert out["outcome"][0] == FINISHED_CODE
+
+
+@pytest.mark.parametrize("name, values", [("compass_gait", [[-1.1], [-1.05]]), ("bouncing_ball_contact", [[0.6]])])
+def test_a_batch_keeps_each_jumps_record_and_work_as_the_single_run(compiled, name, values):
+    """Beyond what the store keeps: each point's event log (flows left and entered, states around each jump) and
+    its work slots (the `jumps` slot: the energy each jump changed) after the batch, equal to the single run's."""
+    from andyc.runtime.simulate import start_run
+
+    model = compiled(name)
+    names = ("w_stance0",) if name == "compass_gait" else ("e",)
+    settings = Settings.of(model, names, 1.6, method="projection")
+    values = np.array(values)
+    starts = [start_run(model, settings.t_end, compile=False, **worker.point_arguments(model, settings, v))
+              for v in values]
+    done = batch.Batch(model, settings, starts, 1600)
+    assert done.run().all()
+    for j, point in enumerate(values):
+        run = alone(model, settings, point)
+        assert len(run.events["time"]) > 0
+        table = starts[j].jumps.table()
+        for key in ("time", "jump", "from_flow", "to_flow", "state_before", "state_after", "discrete_after"):
+            assert np.array_equal(table[key], run.events[key]), key
+        assert np.array_equal(done.X[j, model.nx:], run.work[-1])
