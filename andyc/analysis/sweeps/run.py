@@ -203,7 +203,7 @@ def _run_inline(model, points, settings, store_path, todo, progress, summary, th
                     write()
                 bar(summary.computed + sum(len(r["index"]) for r in ended))
                 if not batch:   # batches of about BATCH_SECONDS: a Ctrl-C loses little;
-                    # and, as OpenMP's guided schedule, at most a share of what is left, so that the threads end together
+                    # and, as OpenMP's guided schedule, at most a share of what is left: the threads end together
                     done = summary.computed + sum(len(r["index"]) for r in ended)
                     left = math.ceil((len(todo) - submitted) / (2 * threads))
                     size = max(1, int(min(MAX_BATCH, left, BATCH_SECONDS * done / max(seconds, 1e-9))))
