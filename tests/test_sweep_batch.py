@@ -114,18 +114,76 @@ def test_a_point_the_batch_cannot_finish_gets_the_single_runs_outcome_and_messag
 
 
 def test_sweeps_a_single_run_answers_with_more_than_its_end_run_alone(compiled):
-    """Metrics, a wall-clock limit and a drifting method on constraint rows need the whole run."""
+    """A wall-clock limit, a basin's classification and a drifting method on constraint rows need the single run."""
     pendulum, ball, fourbar = compiled("double_pendulum"), compiled("bouncing_ball"), compiled("fourbar")
     assert batch.batched(pendulum, Settings.of(pendulum, ("m1",), 1.0))
     assert batch.batched(fourbar, Settings.of(fourbar, ("m1",), 1.0, method="baumgarte"))
     assert batch.batched(ball, Settings.of(ball, ("e",), 1.0, method="projection"))
     counted = (("n", "count(bounce)"),)
-    assert not batch.batched(ball, Settings.of(ball, ("e",), 1.0, method="projection", metrics=counted))
+    assert batch.batched(ball, Settings.of(ball, ("e",), 1.0, method="projection", metrics=counted))
     assert not batch.batched(ball, Settings.of(ball, ("e",), 1.0))      # (rk4, and a resting flow's row)
-    assert not batch.batched(pendulum, Settings.of(pendulum, ("m1",), 1.0, metrics=(("e", "max(energy)"),)))
     assert not batch.batched(pendulum, Settings.of(pendulum, ("m1",), 1.0, timeout=5.0))
     assert not batch.batched(pendulum, Settings.of(pendulum, ("m1",), 1.0, method="RK45"))
     assert not batch.batched(fourbar, Settings.of(fourbar, ("m1",), 1.0, method="rk4"))
+
+
+@pytest.mark.parametrize("name, method, t_end, grid, fixed, metrics", [
+    ("double_pendulum", "rk4", 0.7, ["m2=0.5:2:2", "q1=0.1:1.2:2"], (),
+     (("peak", "max(abs(q1))"), ("E", "mean(energy)"), ("tip", "at(0.35, tip.x)"), ("low", "min(tip.y) < -1.5"),
+      ("swing", "max(q2) - min(q2)"), ("end", "q1_dot + t"))),
+    ("cart_pole", "rk4", 0.5, ["th=0.1:0.4:2"], (("F", "2*sin(3*t) + th"),), (("Fmax", "max(F)"), ("W", "energy"))),
+    ("bouncing_ball", "projection", 1.6, ["e=0.8:0.9:2", "h0=0.5:1:2"], (),
+     (("n", "count(bounce)"), ("t1", "time_of(bounce, 1)"), ("t2", "time_of(bounce, 2)"), ("t9", "time_of(bounce, 9)"),
+      ("top", "max(y)"))),
+    ("bouncing_ball_contact", "projection", 1.2, ["e=0.5:0.8:2"], (), (("all", "count()"), ("top", "max(energy)"))),
+], ids=["free-frames", "driven-inputs", "jumps", "contact"])
+def test_a_batchs_metrics_are_the_single_runs_bit_for_bit(compiled, monkeypatch, name, method, t_end, grid, fixed,
+                                                          metrics):
+    """Metrics read the whole run: the batch logs every step of its points and assembles each point's Run by
+    simulate's own code; each metric equals its value on the point's single run, in groups of points too."""
+    from andyc.analysis.sweeps.metrics import compile_metric, evaluate
+
+    model = compiled(name)
+    pts = P.grid(grid)
+    settings = Settings.of(model, pts.names, t_end, method=method, fixed=fixed, metrics=metrics, trajectory=3)
+    worker.remember(model, settings)
+    out, ran_alone = run_counting(monkeypatch, settings, pts.values)
+    assert ran_alone == []
+    check_against_single_runs(model, settings, pts.values, out)
+    parsed = [compile_metric(n, text, model) for n, text in metrics]
+    frames = [f for m in parsed for f in m.frames]
+    for k, point in enumerate(pts.values):
+        parameters, inputs, states = {}, dict(fixed), {}
+        for n, value, (kind, _) in zip(settings.names, point, settings.kinds):
+            {"parameter": parameters, "input": inputs, "state": states}[kind][n] = float(value)
+        run = andyc.simulate(model, t_end, dt=settings.dt, method=method, parameters=parameters, inputs=inputs,
+                             x0=states or None, frames=frames, progress=False)
+        expected = [evaluate(m, run) for m in parsed]
+        assert np.array_equal(out["metrics"][k], expected, equal_nan=True), point
+    if name == "bouncing_ball":     # the impacts' closed form: t1 = sqrt(2 h0 / g), t2 = t1 + 2 e t1
+        e, h0 = pts.values[:, 0], pts.values[:, 1]
+        t1 = np.sqrt(2 * h0 / 9.81)
+        assert np.allclose(out["metrics"][:, 1], t1, rtol=0, atol=1e-9)
+        assert np.allclose(out["metrics"][:, 2], t1 * (1 + 2 * e), rtol=0, atol=1e-9)
+        for k in range(len(e)):     # the k-th flight after the first fall lasts 2 e^k t1
+            times = t1[k] * (1 + 2 * np.cumsum(np.r_[0.0, e[k] ** np.arange(1, 12)]))
+            assert out["metrics"][k, 0] == np.count_nonzero(times <= t_end)
+        assert np.isnan(out["metrics"][:, 3]).all()
+    # groups whose logs fit LOG_BYTES: a row is the time, the state and work, the inputs, the flow and d, 8 bytes each
+    row = 8 * (2 + model.nx + model.nw + len(model.input_names) + model.nd)
+    monkeypatch.setattr(batch, "LOG_BYTES", 3 * row * (round(t_end / settings.dt) + 1) - 1)  # (under three points')
+    sizes = []
+
+    class Counted(batch.Batch):
+        def __init__(self, model, settings, starts, *rest, **options):
+            sizes.append(len(starts))
+            super().__init__(model, settings, starts, *rest, **options)
+
+    monkeypatch.setattr(batch, "Batch", Counted)
+    again, _ = run_counting(monkeypatch, settings, pts.values)
+    assert sizes == [2] * (len(pts.values) // 2) + [1] * (len(pts.values) % 2)
+    assert np.array_equal(again["metrics"], out["metrics"], equal_nan=True)
+    assert np.array_equal(again["final"], out["final"])
 
 
 def test_a_stopped_batch_runs_no_point_and_is_not_kept(compiled):

@@ -14,8 +14,6 @@ Points are started while stop[0] is 0, and a point checks it every CHUNK steps: 
 fraction of a second.
 """
 
-import numpy as np
-
 from .compiler import jit
 from .integrator import Log, Options, advance
 from .status import OK
@@ -46,7 +44,8 @@ except ImportError:         # (without Numba, plain Python: row as it is)
 
 @jit(nogil=True)
 def run_points(model, w, mode, project, constrain, energy_tol, event_tol, inputs, data, todo, P, U, D, X, F, E0, I, T,
-               steps, dt, marks, M, stop, status, jumped, XE, UE, samples, full=True, events=True, free=None):
+               steps, dt, marks, M, stop, status, jumped, XE, UE, samples, LT, LX, LU, LF, LD, R, every, full=True,
+               events=True, free=None):
     """Run each point k of `todo` from step I[k] at time T[k] (0 and 0.0 at its start; I[k] dt <= T[k]) to the grid's
     end, t = steps dt, or to its next jump: parameters P[k], held inputs U[k] (w.u at each call of advance, as the
     single run sets it), input data data[k] (None with inputs None: held inputs), discrete states D[k], flow F[k],
@@ -54,15 +53,15 @@ def run_points(model, w, mode, project, constrain, energy_tol, event_tol, inputs
     (integrator.Options.e0), with the options of integrator.options (mode, project, constrain, energy_tol,
     event_tol) and advance's variant (full, events, free). X, D, F, I and T are left where the point stopped. When
     the run reaches grid point i = marks[m] (ascending; m from M[k], left at the next), its state goes to
-    samples[k, m].
+    samples[k, m]. With every <= steps, each point also logs every `every`-th grid point as a single run does, into
+    the point's rows of LT, LX, LU, LF and LD (integrator.Log's fields: time, state and work, inputs, flow, discrete
+    states) from row R[k] on (left at the next); with every = steps + 1 nothing is logged (those arrays may then
+    hold one row each).
 
     status[k]: OK when the point reached the end, JUMPED when advance applied a jump (its index in jumped[k], the
     state just before it in XE[k], the inputs there in UE[k]; the caller finishes the jump and runs the point on),
     NOT_RUN when stop[0] was set first, else the status it stopped with (integrator statuses)."""
     nm = marks.shape[0]
-    log = Log(np.zeros(1), np.zeros((1, X.shape[1])), np.zeros((1, U.shape[1])), np.zeros(1, np.int64),
-              np.zeros((1, D.shape[1])))
-    never = steps + 1           # advance logs no row: a grid index past the last is never a multiple of it
     for q in range(todo.shape[0]):
         k = todo[q]
         status[k] = NOT_RUN
@@ -70,7 +69,8 @@ def run_points(model, w, mode, project, constrain, energy_tol, event_tol, inputs
             continue
         x, d, p, flow = X[k], D[k], P[k], F[k]
         opts = Options(mode, project, constrain, E0[k], energy_tol, event_tol)
-        i, t, st, m, jump = I[k], T[k], OK, M[k], -1
+        i, t, st, m, jump, r = I[k], T[k], OK, M[k], -1, R[k]
+        log = Log(LT[k], LX[k], LU[k], LF[k], LD[k])
         while True:
             # (advance stops at each mark: a point resumed within a step, after a jump, has passed its marks so far)
             while m < nm and marks[m] == i:
@@ -82,9 +82,9 @@ def run_points(model, w, mode, project, constrain, energy_tol, event_tol, inputs
             if m < nm:
                 i_end = min(i_end, marks[m])
             w.u[:] = U[k]
-            i, _, st, t, flow, jump = advance(model, w, opts, inputs, row(data, k), p, d, x, t, flow, i, i_end, 0.0,
-                                              dt, never, log, 0, full, events, free)
-        F[k], I[k], T[k], M[k] = flow, i, t, m
+            i, r, st, t, flow, jump = advance(model, w, opts, inputs, row(data, k), p, d, x, t, flow, i, i_end, 0.0,
+                                              dt, every, log, r, full, events, free)
+        F[k], I[k], T[k], M[k], R[k] = flow, i, t, m, r
         if st == OK and jump >= 0:
             st = JUMPED
             jumped[k] = jump

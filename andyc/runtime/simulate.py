@@ -57,7 +57,7 @@ from andyc.runtime.methods import ADAPTIVE, FIXED_STEP, METHODS
 from andyc.runtime.options import Events, Init, Projection, TimeStepping
 from andyc.runtime.progress import Progress
 from andyc.runtime.run import Run, unit_quaternions
-from andyc.runtime.status import lost_constraints
+from andyc.runtime.status import FINISHED, lost_constraints
 from andyc.runtime.timestepping import check_model, refuse_friction, run_moreau
 
 
@@ -194,6 +194,16 @@ def start_run(model: CompiledModel, t_end: float, dt: float = 1e-3, method: str 
         _require_free_speed(model, x, u, p, d, flow)
         _check_declared_law(model, x, u, p, d, flow, init)
     return Start(projection, p, source, x, d, flow, jumps, initial, free)
+
+
+def assemble(model: CompiledModel, ready: Start, method: str, dt: float, t_end: float, log, frames=(),
+             stats: dict | None = None) -> Run:
+    """The Run of a fixed-step run that started from `ready` (start_run) and reached t_end having logged `log`
+    (integrator.Log's arrays, the state with its work), as simulate() returns it: the points of the batched sweep
+    engine (andyc.analysis.sweeps.batch), whose loops ran apart from simulate's driver. frames: names to log."""
+    run_of = _Assembly(model, method, dt, 0.0, 0.0, t_end, ready.p, ready.source, _frame_selection(model, list(frames)),
+                       ready.jumps, ready.projection.energy_correction, ready.initial, time.perf_counter(), ready.free)
+    return run_of(log, FINISHED, stats or {})
 
 
 def _check_option(name: str, value, kind: type) -> None:

@@ -5,13 +5,16 @@ step, then the energy, residuals and powers at every logged sample (`_Assembly`)
 that threads scale poorly and a short run costs more around its loop than in it. Here each point's start is still
 set up and checked by simulate's own code (andyc.runtime.simulate.start_run: its parameters, inputs, initial
 state on the constraints), then the batch runs in calls of andyc_numerics' batch.run_points, without the GIL,
-keeping only what the store keeps: the final state, the jumps and the trajectory's samples. A call returns a
+keeping only what the store keeps: the final state, the jumps and the trajectory's samples; with metrics, which
+read the whole run, each point also logs every step, and its Run is assembled from that log by simulate's own
+code (andyc.runtime.simulate.assemble: energy, frames, residuals at every sample), its points then run in groups
+whose logs fit LOG_BYTES. A call returns a
 point at its jumps, which Python finishes as a single run does (andyc.runtime.fixed_step.after_jump: a contact's
 resolution, the user's function, the event log), and the next call takes the points that go on. The steps are
 the single run's integrator.advance on the same grid, so each point's states equal `andyc sim`'s bit for bit.
 
-It takes the sweeps a single run would answer with nothing but those (batched): a fixed-step method, no metric
-(a metric reads the whole run), no per-point wall-clock limit, and no drifting method on constraint rows (rk4 and
+It takes the sweeps whose points a single run would answer with nothing but those (batched): a fixed-step method,
+no per-point wall-clock limit, no basin classification, and no drifting method on constraint rows (rk4 and
 lagrange: the run's status then depends on the residuals at every sample, andyc.runtime.status.lost_constraints).
 Any other sweep, and any point the batch could not take to the end of its time (a start simulate refuses, a run
 that stops, blows up or ends at a jump: Zeno, stop_after, the user's function), runs alone through
@@ -34,14 +37,18 @@ from andyc.runtime.status import DRIFTING_METHODS, FINISHED, FINISHED_CODE
 
 def batched(model, settings) -> bool:
     """Whether the points of a sweep with these Settings run batched (see the module's docstring)."""
-    return (settings.method in FIXED_STEP and not settings.metrics and settings.timeout is None
-            and settings.basin is None and not (model.nc and settings.method in DRIFTING_METHODS))
+    return (settings.method in FIXED_STEP and settings.timeout is None and settings.basin is None
+            and not (model.nc and settings.method in DRIFTING_METHODS))
 
 
-def run_batched(out: dict, model, settings, values) -> None:
+LOG_BYTES = 64e6            # the logs a batch with metrics holds at once (their points run in groups of this)
+
+
+def run_batched(out: dict, model, settings, values, metrics=()) -> None:
     """Run the points `values` (one row each) into the rows of `out` (worker.empty_results): those whose start
     simulate accepts in compiled calls (Batch), the others, and those that did not reach the end there, one by one
-    (worker.record). KeyboardInterrupt when worker.stop() ended the batch (its results are not kept)."""
+    (worker.record); metrics: the settings' parsed metrics (worker.loaded), evaluated on each point's Run.
+    KeyboardInterrupt when worker.stop() ended the batch (its results are not kept)."""
     from andyc.analysis.sweeps.worker import point_arguments, record
     from andyc.runtime.simulate import start_run
 
@@ -56,19 +63,26 @@ def run_batched(out: dict, model, settings, values) -> None:
     whole = abs(steps * settings.dt - settings.t_end) <= 1e-9 * max(1.0, settings.t_end)
     if not whole or len({tuple(sorted(s.source.drives.items())) for s in starts}) > 1:
         rows, starts, alone = [], [], list(range(len(values)))      # (each run alone says why, or differs)
-    if starts:
-        batch = Batch(model, settings, starts, steps)
+    group = max(1, len(starts))
+    if metrics:     # (a metric reads the whole run: each point logs every step, as a single run does)
+        width = 2 + model.nx + model.nw + len(model.input_names) + model.nd
+        group = max(1, int(LOG_BYTES // (8 * width * (steps + 1))))
+    for a in range(0, len(starts), group):
+        batch = Batch(model, settings, starts[a:a + group], steps, log=bool(metrics))
         tic, cpu = time.perf_counter(), time.thread_time()
         finished = batch.run()
-        share_wall, share_cpu = (time.perf_counter() - tic) / len(starts), (time.thread_time() - cpu) / len(starts)
-        for j, row in enumerate(rows):
+        for j, row in enumerate(rows[a:a + group]):
             if finished[j]:
-                batch.record(out, row, j)
-                out["wall"][row], out["cpu"][row] = share_wall, share_cpu
+                batch.record(out, row, j, metrics)
             else:
                 alone.append(row)
+        share_wall = (time.perf_counter() - tic) / len(finished)
+        share_cpu = (time.thread_time() - cpu) / len(finished)
+        for j, row in enumerate(rows[a:a + group]):
+            if finished[j]:
+                out["wall"][row], out["cpu"][row] = share_wall, share_cpu
     for row in sorted(alone):
-        record(out, row, model, [], settings, values[row])
+        record(out, row, model, list(metrics), settings, values[row])
 
 
 class Batch:
@@ -76,7 +90,7 @@ class Batch:
     to their ends: compiled between jumps, each jump finished in Python (fixed_step.after_jump), as run_fixed_step
     finishes it in a single run."""
 
-    def __init__(self, model, settings, starts: list, steps: int):
+    def __init__(self, model, settings, starts: list, steps: int, log: bool = False):
         from andyc.analysis.sweeps.worker import sample_rows, sample_times
         from andyc.runtime.compiled import projects, work
         from andyc.runtime.work import with_work
@@ -100,6 +114,12 @@ class Batch:
         self.status, self.jumped = np.zeros(n, np.int64), np.full(n, -1, np.int64)
         self.XE, self.UE = np.zeros_like(self.X), np.zeros_like(self.U)
         self.samples = np.full((n, len(self.marks), model.nx), math.nan)
+        rows = steps + 1 if log else 1          # (log: every grid point, as a single run with every = 1 logs)
+        self.every = 1 if log else steps + 1    # (steps + 1: no grid point is logged)
+        self.log = (np.zeros((n, rows)), np.zeros((n, rows, self.X.shape[1])),
+                    np.zeros((n, rows, len(model.input_names))), np.zeros((n, rows), np.int64),
+                    np.zeros((n, rows, model.nd)))
+        self.R = np.ones(n, np.int64)
         self.w = work(model)
         self.ref = thread_model(model)
         method = settings.method
@@ -120,8 +140,10 @@ class Batch:
         model = self.model
         finished = np.zeros(len(self.starts), bool)
         todo = []
+        LT, LX, LU, LF, LD = self.log
         for j, s in enumerate(self.starts):         # the jumps at once at the start, the energy offset
             u = inputs_at(model, s.source, 0.0, s.x, s.p, s.d, s.flow)
+            LT[j, 0], LX[j, 0], LU[j, 0], LF[j, 0], LD[j, 0] = 0.0, self.X[j], u, self.F[j], self.D[j]
             flow, message, self.E0[j] = start_flow(model, self.X[j], u, s.source, self.P[j], self.D[j], s.flow,
                                                    s.jumps, self.w, self.mode)
             self.F[j] = flow
@@ -136,7 +158,8 @@ class Batch:
                 self.U[j] = self.starts[j].source.held(self.F[j])
             run_points(self.ref, self.w.ref, *self.options, self.function, self.data, todo, self.P, self.U, self.D,
                        self.X, self.F, self.E0, self.I, self.T, int(self.steps), float(self.settings.dt), self.marks,
-                       self.M, STOP_FLAG, self.status, self.jumped, self.XE, self.UE, self.samples, *trailing)
+                       self.M, STOP_FLAG, self.status, self.jumped, self.XE, self.UE, self.samples, *self.log, self.R,
+                       self.every, *trailing)
             if np.any(self.status[todo] == _compiled(model).NOT_RUN):
                 raise KeyboardInterrupt     # the sweep's end, not the points' (as record() takes an interrupted run)
             finished[todo] = self.status[todo] == OK
@@ -156,9 +179,10 @@ class Batch:
         self.F[j] = flow
         return message is None and status == OK
 
-    def record(self, out: dict, row: int, j: int) -> None:
-        """Point j's results (it finished) into row `row` of out, as worker.record keeps a single run's."""
-        from andyc.analysis.sweeps.worker import record_events
+    def record(self, out: dict, row: int, j: int, metrics=()) -> None:
+        """Point j's results (it finished) into row `row` of out, as worker.record keeps a single run's; metrics
+        (the Batch logged every step) evaluated on its Run."""
+        from andyc.analysis.sweeps.worker import record_events, record_metrics
 
         model = self.model
         out["outcome"][row], out["message"][row] = FINISHED_CODE, FINISHED
@@ -169,6 +193,17 @@ class Batch:
         if self.settings.trajectory:
             out["trajectory_time"][row] = np.where(self.reached, self.times, math.nan)
             out["trajectory"][row] = np.where(self.reached[:, None], self.samples[j], math.nan)
+        if metrics:
+            record_metrics(out, row, metrics, self.run_of(j, tuple(f for m in metrics for f in m.frames)))
+
+    def run_of(self, j: int, frames=()):
+        """Point j's Run (it finished, the Batch logged every step), as andyc.simulate returns it."""
+        from andyc.runtime.simulate import assemble
+
+        n = int(self.R[j])
+        log = tuple(a[j, :n] for a in self.log)
+        return assemble(self.model, self.starts[j], self.settings.method, self.settings.dt, self.settings.t_end, log,
+                        dict.fromkeys(frames))
 
 
 _THREAD = threading.local()

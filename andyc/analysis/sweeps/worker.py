@@ -87,9 +87,11 @@ def loaded(settings: Settings):
         _LOADED[key] = model
     model = _LOADED[key]
     if key + (settings.metrics,) not in _METRICS:
-        from andyc.analysis.sweeps.metrics import compile_metric
+        _METRICS[key + (settings.metrics,)] = []
+        if settings.metrics:        # (the parser, and SymPy under it, imported only for metrics)
+            from andyc.analysis.sweeps.metrics import compile_metric
 
-        _METRICS[key + (settings.metrics,)] = [compile_metric(n, t, model) for n, t in settings.metrics]
+            _METRICS[key + (settings.metrics,)] = [compile_metric(n, t, model) for n, t in settings.metrics]
     return model, _METRICS[key + (settings.metrics,)]
 
 
@@ -116,7 +118,7 @@ def run_batch(settings: Settings, indices: np.ndarray, values: np.ndarray) -> di
     out = empty_results(model, settings, len(indices))
     out["index"] = np.asarray(indices, dtype=np.int64)
     if batched(model, settings):
-        run_batched(out, model, settings, values)
+        run_batched(out, model, settings, values, metrics)
     else:
         for row, point in enumerate(values):
             record(out, row, model, metrics, settings, point)
@@ -192,7 +194,6 @@ def simulate_point(model, settings: Settings, point, frames=()):
 
 def record(out: dict, row: int, model, metrics: list, settings: Settings, point) -> None:
     """Run one point into row `row` of the results; a failure is recorded, never raised."""
-    from andyc.analysis.sweeps.metrics import evaluate
     from andyc.runtime.status import FAILED, INTERRUPTED, outcome
 
     if settings.basin is not None:
@@ -216,16 +217,23 @@ def record(out: dict, row: int, model, metrics: list, settings: Settings, point)
         out["t_final"][row], out["final"][row] = run.time[-1], run.state[-1]
         out["final_discrete"][row], out["final_flow"][row] = run.discrete[-1], run.flow[-1]
     record_events(out, row, model, settings, run.events["time"], run.events["jump"])
-    for j, metric in enumerate(metrics):
-        try:
-            out["metrics"][row, j] = evaluate(metric, run)
-        except (ValueError, ArithmeticError, TypeError):
-            out["metrics"][row, j] = math.nan
+    record_metrics(out, row, metrics, run)
     if settings.trajectory and len(run.time):
         times = sample_times(settings)
         at, reached = sample_rows(run.time, times)
         out["trajectory_time"][row] = np.where(reached, times, math.nan)
         out["trajectory"][row] = np.where(reached[:, None], run.state[at], math.nan)
+
+
+def record_metrics(out: dict, row: int, metrics: list, run) -> None:
+    """The metrics' values on a point's Run into row `row` (NaN where one cannot be evaluated)."""
+    from andyc.analysis.sweeps.metrics import evaluate
+
+    for j, metric in enumerate(metrics):
+        try:
+            out["metrics"][row, j] = evaluate(metric, run)
+        except (ValueError, ArithmeticError, TypeError):
+            out["metrics"][row, j] = math.nan
 
 
 def record_events(out: dict, row: int, model, settings: Settings, times, jumps) -> None:
