@@ -34,6 +34,11 @@ class SimulationError(Exception):
     """A run that cannot start (bad option, inconsistent state)."""
 
 
+class MetricError(ValueError):
+    """A sweep's metric that cannot be parsed (andyc.analysis.sweeps.metrics): the message says which, what and how
+    to fix it. Here, not beside the parser, so that a sweep without metrics never imports it (nor SymPy under it)."""
+
+
 class InitialStateError(SimulationError):
     """A run refused for its model's initial state (off the constraint manifold, dependent rows): a problem
     of the model, located in its file (`andyc sim` exits 1 with it, as with any model problem)."""

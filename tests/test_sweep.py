@@ -22,6 +22,7 @@ from andyc.analysis.sweeps.store import StoreError
 from andyc.analysis.sweeps.worker import Settings
 from andyc.cli import main
 from andyc.runtime.status import OUTCOMES
+from tests.support import MODELS
 
 xr = pytest.importorskip("xarray")
 distributed = pytest.importorskip("dask.distributed")
@@ -292,8 +293,8 @@ def test_a_worker_killed_mid_sweep_loses_no_point(client, pendulum, tmp_path):
 
         original, seen = batch.run_batched, [0]
 
-        def run_batched(out, model, settings, values):
-            original(out, model, settings, values)
+        def run_batched(out, model, settings, values, metrics=()):
+            original(out, model, settings, values, metrics)
             seen[0] += len(values)
             if seen[0] > points:
                 os_._exit(1)
@@ -441,6 +442,24 @@ def test_importing_andyc_and_its_cli_imports_no_dask():
     assert out.strip() == "[]"
 
 
+def test_a_local_sweep_without_metrics_imports_neither_sympy_nor_xarray_nor_dask(pendulum, shipped_build, tmp_path):
+    """What a local sweep's first result waits for (issue 42): the store is made with zarr alone, and the metric
+    parser (SymPy under it) is imported only for metrics; checked by what the command imported, not by time."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from andyc.cli import main; main(sys.argv[1:], standalone_mode=False); "
+            "print(sorted({m.split('.')[0] for m in sys.modules} & {'sympy', 'xarray', 'dask', 'distributed'}))")
+    args = ["sweep", str(MODELS / "double_pendulum.yaml"), "--grid", "q1=0.1:1:3", "--t-end", "0.1", "--build-dir",
+            str(shipped_build), "-o", str(tmp_path / "s.zarr")]
+    out = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, check=True).stdout
+    assert out.splitlines()[-1] == "[]"
+    assert int(xr.open_zarr(tmp_path / "s.zarr").outcome.sum()) == 3      # (three points, finished: code 1)
+    with_metric = subprocess.run([sys.executable, "-c", code, *args[:-1], str(tmp_path / "m.zarr"), "--metric",
+                                  "top=max(q1)"], capture_output=True, text=True, check=True).stdout
+    assert with_metric.splitlines()[-1] == "['sympy']"
+
+
 # ---- the inline engine: no cluster ---------------------------------------------------------------------------
 
 def test_inline_sweep_equals_serial_runs_with_the_runs_options_and_frame_metrics(pendulum, tmp_path):
@@ -515,6 +534,40 @@ def test_the_store_follows_xarrays_and_cfs_conventions(pendulum, tmp_path):
     run_sweep(pendulum, pts, failed, tmp_path / "f.zarr", engine="inline")
     message = str(xr.open_zarr(tmp_path / "f.zarr").message.values[0])
     assert f"unknown parameter '{name}'" in message and len(message) > 400
+
+
+@pytest.mark.parametrize("kind", ["grid", "samples"])
+def test_the_store_is_written_as_xarrays_to_zarr_writes_it(pendulum, compiled, tmp_path, kind):
+    """andyc writes a new store with zarr alone (xarray's import, with dask.array under its array checks, took over
+    a second before a first result could be stored): its metadata (dimensions, CF and xarray's `coordinates`
+    attributes, dtypes, fill values, chunks, filters) and every array equal what xarray's own Dataset.to_zarr
+    writes for the same Dataset."""
+    import json
+
+    import zarr
+
+    from andyc.analysis.sweeps import store
+
+    if kind == "grid":
+        model, pts = pendulum, P.grid(["q1=0.1:1.5:7", "m2=0.5:1:3"])
+        settings = Settings.of(model, pts.names, 1.0, trajectory=4, metrics=(("peak", "max(q1)"),))
+    else:           # (jumps, discrete states, swept names as coordinates along `point`)
+        model, pts = compiled("bouncing_ball_contact"), P.samples(300, ["h0=normal(1,0.1)", "e=uniform(0.5,0.9)"], 3)
+        settings = Settings.of(model, pts.names, 1.0, trajectory=3, method="projection")
+    layout, encoding = store.layout(model, pts, settings), store._encoding(model, pts, settings)
+    store.write_layout(tmp_path / "andyc.zarr", layout, encoding)
+    ds = xr.Dataset({n: v for n, v in layout.variables.items() if n not in layout.coordinates},
+                    coords={n: layout.variables[n] for n in layout.coordinates}, attrs=layout.attrs)
+    ds.to_zarr(tmp_path / "xarray.zarr", mode="w", zarr_format=2, consolidated=True, encoding=encoding)
+    ours, theirs = (json.loads((tmp_path / f"{w}.zarr" / ".zmetadata").read_text())["metadata"]
+                    for w in ("andyc", "xarray"))
+    assert ours == theirs
+    assert ours["outcome/.zattrs"].get("coordinates") == (None if kind == "grid" else "e h0")     # (CF: sorted)
+    a, b = (zarr.open_group(str(tmp_path / f"{w}.zarr"), mode="r") for w in ("andyc", "xarray"))
+    assert sorted(a.array_keys()) == sorted(b.array_keys())
+    for name in a.array_keys():
+        assert a[name].dtype == b[name].dtype
+        assert np.array_equal(a[name][...], b[name][...], equal_nan=a[name].dtype.kind == "f"), name
 
 
 def test_a_metric_map_marks_the_points_whose_run_did_not_finish():

@@ -13,6 +13,7 @@ import click
 
 from andyc.cli.common import Refused, compiled
 from andyc.cli.values import COUNT, POSITIVE, TOLERANCE, Number, parse_sets, stop_counts
+from andyc.errors import MetricError
 from andyc.outputs import check_output
 from andyc.runtime.methods import METHODS
 
@@ -80,7 +81,6 @@ def sweep(file, grids, samples, dists, sampler, seed, points_file, metrics, out,
     A swept name is a parameter, an input or the initial value of a state (a coordinate, a speed). Each
     point records its outcome (finished, stopped, blew up, Zeno, failed), final state, jumps, metrics and,
     with --trajectory, a decimated trajectory; a failed point is recorded and the sweep goes on."""
-    from andyc.analysis.sweeps.metrics import MetricError, metric_items
     from andyc.analysis.sweeps.points import PointsError, sweepable
     from andyc.analysis.sweeps.worker import Settings
 
@@ -94,7 +94,7 @@ def sweep(file, grids, samples, dists, sampler, seed, points_file, metrics, out,
                       "of them")
     try:
         points = _points(grids, samples, dists, seed, points_file, sampler)
-        metric_list = metric_items(metrics)
+        metric_list = _metric_items(metrics)
     except (PointsError, MetricError) as exc:
         raise Refused(str(exc)) from None
     fixed = parse_sets(sets)
@@ -126,6 +126,14 @@ def sweep(file, grids, samples, dists, sampler, seed, points_file, metrics, out,
     _run(model, points, settings, out, scheduler, engine, workers, batch, read)
 
 
+def _metric_items(items) -> list:
+    if not items:
+        return []           # (the metric parser, and SymPy under it, imported only for metrics: a faster start)
+    from andyc.analysis.sweeps.metrics import metric_items
+
+    return metric_items(items)
+
+
 def _points(grids, samples, dists, seed, points_file, sampler="random"):
     from andyc.analysis.sweeps import points as P
 
@@ -145,7 +153,6 @@ def _points(grids, samples, dists, seed, points_file, sampler="random"):
 
 
 def _run(model, points, settings, out, scheduler, engine, workers, batch, read) -> None:
-    from andyc.analysis.sweeps.metrics import MetricError
     from andyc.analysis.sweeps.run import SweepError, run_sweep
     from andyc.analysis.sweeps.store import StoreError
 

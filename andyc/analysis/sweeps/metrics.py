@@ -30,16 +30,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from andyc.analysis.evaluate import numeric
+from andyc.errors import MetricError
 from andyc.spec.expressions import ExpressionError, parse, syntax_tree
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 SERIES_FUNCTIONS = ("max", "min", "mean")
 RUN_FUNCTIONS = SERIES_FUNCTIONS + ("at", "count", "time_of")
 _COMPARE = {ast.Lt: np.less, ast.LtE: np.less_equal, ast.Gt: np.greater, ast.GtE: np.greater_equal}
-
-
-class MetricError(ValueError):
-    """A metric that cannot be parsed: the message says which, what and how to fix it."""
 
 
 @dataclass(frozen=True)

@@ -87,12 +87,13 @@ def run_sweep(model, points: Points, settings: Settings, store_path, *, client=N
     no cluster; "cluster", on Dask: the `client` given (kept open), else one connected to `scheduler`, else
     a LocalCluster of `workers` processes (default: one per core), closed at the end; "auto" (the default):
     on the client or scheduler if one is given, else inline."""
-    from andyc.analysis.sweeps.metrics import compile_metric
-
     check_names(points.names, model)
     store.check_names(points, settings)
-    for name, text in settings.metrics:         # refused here, before any cluster starts
-        compile_metric(name, text, model)
+    if settings.metrics:                        # refused here, before any cluster starts
+        from andyc.analysis.sweeps.metrics import compile_metric
+
+        for name, text in settings.metrics:
+            compile_metric(name, text, model)
     if client is None and scheduler is not None:
         probe_scheduler(scheduler)          # before the store is made: a bad address leaves no folder behind
     created = not os.path.exists(store_path)
@@ -234,7 +235,7 @@ def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> dict:
         finally:
             comm.abort()
 
-    hint = f"check the address (tcp://HOST:8786) and that `dask scheduler` runs there"
+    hint = "check the address (tcp://HOST:8786) and that `dask scheduler` runs there"
     try:
         asyncio.get_running_loop()
         return {}                   # (called from a running event loop: Client's own connect, unprobed)

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -97,8 +98,7 @@ def open_store(path, model, points: Points, settings: Settings, inputs=()) -> np
     if not path.exists():
         check_folder(path.parent, inputs)
         with new_folder_atomic(path) as tmp:
-            _skeleton(model, points, settings).to_zarr(tmp, mode="w", zarr_format=2, consolidated=True,
-                                                       encoding=_encoding(model, points, settings))
+            write_layout(tmp, layout(model, points, settings), _encoding(model, points, settings))
         return np.zeros(points.n, dtype=bool)
     if not path.is_dir():
         raise OutputError(f"{path}: is a file, not a result store; give a new name ending in .zarr")
@@ -172,46 +172,76 @@ def _point_dims(points: Points) -> tuple:
     return points.names if points.kind == "grid" else ("point",)
 
 
-def _skeleton(model, points: Points, settings: Settings):
-    """The store's dataset, every point not run (its arrays filled with NaN, -1 or 0)."""
-    import xarray as xr
+@dataclass
+class Layout:
+    """The store before any point ran, as an xarray Dataset would hold it: `variables` (name -> (dims, values,
+    attrs)), the names among them that are `coordinates`, and the global `attrs`."""
+    variables: dict
+    coordinates: tuple
+    attrs: dict
 
+
+def layout(model, points: Points, settings: Settings) -> Layout:
+    """The store's variables, every point not run (its arrays filled with NaN, -1 or 0), and its coordinates."""
     dims = _point_dims(points)
     empty = empty_results(model, settings, 1)
     extra = {"final": ("state",), "final_discrete": ("discrete",), "jump_count": ("jump",), "event_time": ("event",),
              "event_jump": ("event",), "trajectory": ("time", "state"), "trajectory_time": ("time",)}
-    data = {}
+    described = {n: {"long_name": ln, **({"units": u} if u else {})} for n, (ln, u) in DESCRIPTIONS.items()}
+    metrics = {n: {"expression": text, "long_name": f"metric {n} = {text}"} for n, text in settings.metrics}
+    variables = {}
     for name, one in _variables(settings, empty).items():
         shape = points.shape + one.shape[1:]
-        data[name] = (dims + extra.get(name, ()), np.broadcast_to(one.reshape(one.shape[1:]), shape).copy())
-    data["outcome"] = (dims, np.zeros(points.shape, np.int8),
-                       {"flag_values": list(OUTCOMES), "flag_meanings": " ".join(o.replace(" ", "_")
-                                                                                 for o in OUTCOMES.values())})
-    coords = {k: list(v) for k, v in (("state", model.state_names), ("jump", model.jump_names),
-                                      ("discrete", model.discrete_names)) if len(v)}
-    if settings.trajectory:         # the sampled times as the dimension's coordinate: plots over time
-        coords["time"] = ("time", sample_times(settings),
-                          {"standard_name": "time", "long_name": "time", "units": "s", "axis": "T"})
-    if points.kind == "grid":
-        coords.update({n: axis for n, axis in zip(points.names, points.axes)})
-    else:
-        coords["point"] = np.arange(points.n)
-        coords.update({n: ("point", points.values[:, k]) for k, n in enumerate(points.names)})
-    ds = xr.Dataset(data, coords=coords, attrs=attributes(model, points, settings))
-    for name, (kind, _) in zip(points.names, settings.kinds):
-        ds[name].attrs["long_name"] = f"{KINDS[kind]} {name}"
-    for name, (long_name, units) in DESCRIPTIONS.items():
-        if name in ds:
-            ds[name].attrs.update({"long_name": long_name, **({"units": units} if units else {})})
-    for name, text in settings.metrics:
-        ds[name].attrs.update({"expression": text, "long_name": f"metric {name} = {text}"})
-    ds["message"].attrs["max_characters"] = MESSAGE_CHARS
+        variables[name] = (dims + extra.get(name, ()), np.broadcast_to(one.reshape(one.shape[1:]), shape).copy(),
+                           dict(described.get(name, metrics.get(name, {}))))
+    variables["message"][2]["max_characters"] = MESSAGE_CHARS
+    variables["outcome"] = (dims, np.zeros(points.shape, np.int8), {
+        "flag_values": list(OUTCOMES), "flag_meanings": " ".join(o.replace(" ", "_") for o in OUTCOMES.values()),
+        **described["outcome"]})
     if settings.basin is not None:
         from andyc.analysis.basins import CLASSES
 
-        ds["basin"].attrs.update({"flag_values": list(CLASSES), "flag_meanings": " ".join(
-            c.replace(" ", "_") for c in CLASSES.values())})
-    return ds
+        variables["basin"][2].update({"flag_values": list(CLASSES), "flag_meanings": " ".join(
+            c.replace(" ", "_") for c in CLASSES.values()), **described["basin"]})
+    coords = {k: ((k,), np.array(v), {}) for k, v in (("state", model.state_names), ("jump", model.jump_names),
+                                                     ("discrete", model.discrete_names)) if len(v)}
+    if settings.trajectory:         # the sampled times as the dimension's coordinate: plots over time
+        coords["time"] = (("time",), sample_times(settings),
+                          {"standard_name": "time", "long_name": "time", "units": "s", "axis": "T"})
+    long_names = {name: {"long_name": f"{KINDS[kind]} {name}"} for name, (kind, _) in zip(points.names, settings.kinds)}
+    if points.kind == "grid":
+        coords.update({n: ((n,), np.asarray(axis), long_names[n]) for n, axis in zip(points.names, points.axes)})
+    else:
+        coords["point"] = (("point",), np.arange(points.n), {})
+        coords.update({n: (("point",), points.values[:, k].copy(), long_names[n]) for k, n in enumerate(points.names)})
+    return Layout({**variables, **coords}, tuple(coords), attributes(model, points, settings))
+
+
+def write_layout(path, layout: Layout, encoding: dict) -> None:
+    """Write `layout` into a new Zarr store (format 2) as xarray's Dataset.to_zarr(zarr_format=2, consolidated=True)
+    writes the same Dataset: each array's dimensions in its `_ARRAY_DIMENSIONS` attribute, a data variable's
+    non-dimension coordinates named in its `coordinates` attribute (CF), NaN the fill value of floats, text of
+    variable length as vlen-utf8 and names as fixed-width unicode, the metadata consolidated; encoding: each
+    variable's chunks. Not through xarray: its import, and its checks of every array for a dask array (which
+    import dask.array), take over a second before a first result can be stored; tests/test_sweep.py checks that
+    the two write the same store."""
+    import zarr
+
+    group = zarr.open_group(str(path), mode="w", zarr_format=2, attributes=layout.attrs)
+    auxiliary = [n for n in layout.coordinates if layout.variables[n][0] != (n,)]
+    for name, (dims, values, attrs) in layout.variables.items():
+        attrs = dict(attrs)
+        named = sorted(c for c in auxiliary if name not in layout.coordinates and name not in dims
+                       and set(layout.variables[c][0]) <= set(dims))
+        if named:
+            attrs["coordinates"] = " ".join(named)
+        attrs["_ARRAY_DIMENSIONS"] = list(dims)
+        text = values.dtype == object
+        array = group.create_array(name, shape=values.shape, dtype=str if text else values.dtype,
+                                   chunks=encoding.get(name, {}).get("chunks", "auto"),
+                                   fill_value=math.nan if values.dtype.kind == "f" else None, attributes=attrs)
+        array[...] = values
+    zarr.consolidate_metadata(str(path), zarr_format=2)
 
 
 def _encoding(model, points: Points, settings: Settings) -> dict:
