@@ -206,7 +206,8 @@ def test_progress_reports_after_the_first_second_at_most_once_a_second(monkeypat
     for t in (1.0, 2.0, 3.0, 4.0, 5.0):                 # reads 0.5, 1.2, 1.7, 2.4, 2.5
         bar(t)
     lines = [ln for ln in capsys.readouterr().err.replace("\r", "\n").splitlines() if ln]
-    assert lines == ["model rk4: t = 2 / 10 s (20%), 1 s elapsed", "model rk4: t = 4 / 10 s (40%), 2 s elapsed"]
+    assert lines == ["model rk4: t = 2 / 10 s (20%), 1 s elapsed, about 5 s left",      # (1.2 s for 2: 4.8 s for 8)
+                     "model rk4: t = 4 / 10 s (40%), 2 s elapsed, about 4 s left"]      # (2.4 s for 4: 3.6 s for 6)
 
 
 def test_progress_of_counted_work_shows_its_last_count_once_a_line_is_up(monkeypatch, capsys):
@@ -223,7 +224,8 @@ def test_progress_of_counted_work_shows_its_last_count_once_a_line_is_up(monkeyp
     slow(1, 2)                                          # reads 1.5
     slow(2, 2)                                          # reads 1.8: within the second, but the last
     lines = [ln for ln in capsys.readouterr().err.replace("\r", "\n").splitlines() if ln]
-    assert lines == ["slow: 1 of 2 frames, 2 s elapsed", "slow: 2 of 2 frames, 2 s elapsed"]
+    assert lines == ["slow: 1 of 2 frames, 0.667 frames/s, 2 s elapsed, about 2 s left",   # (1 in 1.5 s)
+                     "slow: 2 of 2 frames, 1.11 frames/s, 2 s elapsed"]                   # (2 in 1.8 s; no time left)
 
 
 def test_generated_code_does_not_depend_on_the_hash_seed(tmp_path):

@@ -14,8 +14,9 @@ import time
 
 
 class Progress:
-    """progress(done) or progress(done, total): `label: t = 2 / 10 s (20%), 1 s elapsed` (unit "s", a run's
-    time) or `label: 3 of 10 frames, 1 s elapsed` (another unit: what is counted).
+    """progress(done) or progress(done, total): `label: t = 2 / 10 s (20%), 1 s elapsed, about 4 s left` (unit
+    "s", a run's time) or `label: 3 of 10 points, 2.5 points/s, 1 s elapsed, about 3 s left` (another unit: what
+    is counted, with its rate); the time left is the rate so far's.
 
     enabled: print at all (default: when stderr is a terminal; True prints one line per report elsewhere).
     Also a context manager, which closes it."""
@@ -34,13 +35,20 @@ class Progress:
             return
         self.last, self.shown = now, True
         terminal = sys.stderr.isatty()          # (elsewhere, when enabled: one line per report)
-        line = f"{self.label}: {self.text(done, total)}, {now - self.start:.0f} s elapsed"
+        line = f"{self.label}: {self.text(done, total, now - self.start)}"
         print("\r" + line if terminal else line, end="" if terminal else "\n", file=sys.stderr, flush=True)
 
-    def text(self, done: float, total: float | None) -> str:
+    def text(self, done: float, total: float | None, elapsed: float) -> str:
+        """What is done, its rate (counted work), the seconds elapsed and, until the end, those left at the
+        rate so far."""
         if self.unit == "s":
-            return f"t = {done:.6g} / {total:g} s ({100 * done / total:.0f}%)"
-        return f"{done} of {total} {self.unit}"
+            out = f"t = {done:.6g} / {total:g} s ({100 * done / total:.0f}%)"
+        else:
+            out = f"{done} of {total} {self.unit}, {done / elapsed:.3g} {self.unit}/s"
+        out += f", {elapsed:.0f} s elapsed"
+        if total is not None and 0 < done < total:
+            out += f", about {elapsed * (total - done) / done:.0f} s left"
+        return out
 
     def close(self) -> None:
         """End the line, if one is up."""
