@@ -18,6 +18,11 @@
    each round; the final states of the stores compared first (equal to the bit).
 5. The first result: how many seconds after `andyc sweep` is launched (1000 points of the double pendulum, inline)
    its store holds a point.
+6. The compass gait's map batched: 32 x 32 points of section 1's grid, 8 s each by projection (the model's own
+   method), with section 1's three metrics, in this process on 2 threads by the batched engine, against the same
+   sweep with each point one andyc.simulate (the batched engine turned off), and against a Python loop of
+   andyc.simulate with the metrics evaluated on each run; the metrics and final states compared first (equal to
+   the bit), then the variants alternated in each round.
 
     python bench/sweep.py [--rounds 3]
 """
@@ -163,6 +168,7 @@ def main() -> None:
               f"{max(overhead) * 1e3:.2f} ms a point over 3 sweeps (target <= 5 ms)")
         engines(scratch, args.rounds)
         first_result(scratch, args.rounds)
+        gait_map(gait, scratch, args.rounds)
     finally:
         logging.getLogger("distributed").setLevel(logging.ERROR)     # (starting a cluster resets it)
         for made, client in clusters.values():
@@ -201,6 +207,65 @@ def engines(scratch: Path, rounds: int) -> None:
     for name in variants:
         print(f"  {name:>20}: wall {min(walls[name]):.2f} .. {max(walls[name]):.2f} s, "
               f"CPU {min(cpus[name]):.2f} .. {max(cpus[name]):.2f} s")
+
+
+def gait_map(gait, scratch: Path, rounds: int) -> None:
+    """Section 6 (see the module's docstring)."""
+    import xarray as xr
+
+    from andyc.analysis.sweeps import batch
+    from andyc.analysis.sweeps.metrics import compile_metric, evaluate
+    from andyc.errors import SimulationError
+
+    grid = P.grid(["slope=0:0.1:32", "w_stance0=-1.8:-0.6:32"])
+    metrics = (("walks", WALKS), ("steps", "count()"), ("hip_low", "min(y)"))
+    settings = Settings.of(gait, grid.names, 8.0, method="projection", metrics=metrics)
+    parsed = [compile_metric(n, text, gait) for n, text in metrics]
+
+    def inline(batched: bool, tag: str) -> tuple:
+        store, saved = scratch / f"gait_{tag}.zarr", batch.batched
+        shutil.rmtree(store, ignore_errors=True)
+        if not batched:
+            batch.batched = lambda model, settings: False
+        try:
+            start = time.perf_counter()
+            run_sweep(gait, grid, settings, store, engine="inline", workers=2, progress=False)
+            wall = time.perf_counter() - start
+        finally:
+            batch.batched = saved
+        ds = xr.open_zarr(store)
+        return wall, np.stack([ds[n].values.ravel() for n, _ in metrics], axis=1), ds.final.values.reshape(grid.n, -1)
+
+    def loop() -> tuple:
+        values, finals = [], []
+        start = time.perf_counter()
+        for point in grid.values:
+            try:
+                run = simulate_point(gait, settings, point)
+            except SimulationError:             # (a start refused: the store's point has NaN)
+                values.append([math.nan] * len(parsed))
+                finals.append(np.full(gait.nx, math.nan))
+                continue
+            values.append([evaluate(m, run) for m in parsed])
+            finals.append(run.state[-1])
+        return time.perf_counter() - start, np.array(values), np.array(finals)
+
+    variants = {"batched, 2 threads": lambda: inline(True, "b"), "per point, 2 threads": lambda: inline(False, "p"),
+                "python loop": loop}
+    answers = {name: run() for name, run in variants.items()}
+    same = all(np.array_equal(a[1], answers["python loop"][1], equal_nan=True)
+               and np.array_equal(a[2], answers["python loop"][2]) for a in answers.values())
+    walls = {name: [answers[name][0]] for name in variants}
+    for _ in range(rounds - 1):
+        for name, run in variants.items():
+            walls[name].append(run()[0])
+    walking = int(np.nansum(answers["python loop"][1][:, 0]))
+    print(f"compass gait map, {grid.n} points of 8 s (projection, 3 metrics; {walking} walk), {rounds} rounds "
+          f"alternated; metrics and final states {'equal to the bit' if same else 'DIFFER'} across variants:")
+    for name, w in walls.items():
+        print(f"  {name:>20}: {min(w):.2f} .. {max(w):.2f} s ({grid.n / min(w):.0f} points/s at best)")
+    ratio = [a / b for a, b in zip(walls["batched, 2 threads"], walls["per point, 2 threads"])]
+    print(f"  batched / per point, per round: {min(ratio):.3f} .. {max(ratio):.3f}")
 
 
 def first_result(scratch: Path, rounds: int) -> None:

@@ -12,8 +12,10 @@ bit). Then, in `--rounds` rounds with the variants alternated, the wall time of 
                         of andyc_numerics/batch.run_points (andyc.analysis.sweeps.batch), final states into a Zarr
                         store
     batched 2 threads   the same on two threads (the compiled calls run without the GIL)
+    batched 2 threads,  the same with a metric, peak = max(abs(q1)): each point then logs every step and its Run
+      a metric          is assembled (energy at every step) for the metric to read, as a single run's is
     per point 1 thread  the same sweep with each point one andyc.simulate (what sweeps did before the batched
-                        engine, and what they still do with a metric)
+                        engine)
     python loop         a plain loop of andyc.simulate over the points, in this process: what a user writes
     mujoco 1 thread     mujoco.rollout.rollout over the batch on one thread (C, no Python per step or point),
                         keeping every step's state as rollout does
@@ -23,7 +25,7 @@ and the steps per second each reaches (N T / dt over the wall time), beside one 
 single andyc.simulate of the first point (its own wall time, best of the rounds), times the cores, the ceiling
 issue 42 measures the batched engine against (target: 0.8 of it).
 
-    python bench/sweep_rollout.py [--links 6] [--points 200] [--t-end 5] [--rounds 3]
+    python bench/sweep_rollout.py [--links 6] [--points 200] [--t-end 5] [--rounds 3] [--skip "mujoco 1 thread,..."]
 """
 
 from __future__ import annotations
@@ -49,15 +51,16 @@ from andyc.analysis.sweeps.worker import Settings  # noqa: E402
 from large_models import planar_chain_mjcf, planar_chain_yaml  # noqa: E402
 
 DT = 1e-3
+PEAK = ("peak", "max(abs(q1))")
 
 
-def andyc_finals(model, points, t_end: float, store: Path, threads: int = 1,
-                 per_point: bool = False) -> tuple[np.ndarray, float]:
+def andyc_finals(model, points, t_end: float, store: Path, threads: int = 1, per_point: bool = False,
+                 metrics=()) -> tuple[np.ndarray, float]:
     """(final states (N, nx), wall seconds) of an inline sweep of the points on `threads` threads; per_point: each
-    point one andyc.simulate (the batched engine turned off)."""
+    point one andyc.simulate (the batched engine turned off); metrics: (name, expression) pairs."""
     import xarray as xr
 
-    settings = Settings.of(model, points.names, t_end, dt=DT)
+    settings = Settings.of(model, points.names, t_end, dt=DT, metrics=tuple(metrics))
     saved = batch.batched
     if per_point:
         batch.batched = lambda model, settings: False
@@ -91,6 +94,7 @@ def main() -> None:
     parser.add_argument("--points", type=int, default=200)
     parser.add_argument("--t-end", type=float, default=5.0)
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--skip", default="", help="variants left out, comma-separated (e.g. 'mujoco 1 thread')")
     args = parser.parse_args()
     import mujoco
 
@@ -112,12 +116,17 @@ def main() -> None:
         mujoco.mj_getState(mj, data, starts[k], spec)
     one, two = [mujoco.MjData(mj)], [mujoco.MjData(mj) for _ in range(2)]
 
+    import xarray as xr
+
     a, _ = andyc_finals(model, points, 0.2, scratch / "check.zarr", threads=2)
     alone, _ = andyc_finals(model, points, 0.2, scratch / "alone.zarr", threads=1, per_point=True)
-    looped, _ = python_loop(model, points, 0.2)
+    measured, _ = andyc_finals(model, points, 0.2, scratch / "metric.zarr", threads=2, metrics=[PEAK])
+    looped, _, peaks = python_loop(model, points, 0.2)
     b, _ = mujoco_finals(mj, one, starts, 0.2)
     gap = np.abs(a[:, :2 * n] - b).max()      # (andyc's states: q1 .. qn, then their rates)
     assert np.array_equal(a, alone) and np.array_equal(a, looped), "the batched engine differs from single runs"
+    assert np.array_equal(measured, a) and np.array_equal(xr.open_zarr(scratch / "metric.zarr").peak.values, peaks), \
+        "the batched engine's metric differs from the single runs'"
     print(f"planar chain of {n} rods, {points.n} initial states (Latin hypercube), RK4 at dt = {DT:g}: after 0.2 s "
           f"the batched engine equals single runs to the bit, and andyc and MuJoCo agree to {gap:.1e} (largest "
           f"difference of any angle or speed)")
@@ -125,11 +134,17 @@ def main() -> None:
         "batched 1 thread": lambda r: andyc_finals(model, points, args.t_end, scratch / f"b1_{r}.zarr", 1)[1],
         "mujoco 1 thread": lambda r: mujoco_finals(mj, one, starts, args.t_end)[1],
         "batched 2 threads": lambda r: andyc_finals(model, points, args.t_end, scratch / f"b2_{r}.zarr", 2)[1],
+        "batched 2 thr, metric": lambda r: andyc_finals(model, points, args.t_end, scratch / f"m2_{r}.zarr", 2,
+                                                        metrics=[PEAK])[1],
         "mujoco 2 threads": lambda r: mujoco_finals(mj, two, starts, args.t_end)[1],
         "per point 1 thread": lambda r: andyc_finals(model, points, args.t_end, scratch / f"p1_{r}.zarr", 1,
                                                      per_point=True)[1],
         "python loop": lambda r: python_loop(model, points, args.t_end)[1],
     }
+    skipped = {name.strip() for name in args.skip.split(",") if name.strip()}
+    if skipped - set(variants):
+        parser.error(f"--skip: no variant {sorted(skipped - set(variants))}; variants: {', '.join(variants)}")
+    variants = {name: run for name, run in variants.items() if name not in skipped}
     walls = {name: [] for name in variants}
     single = []
     for r in range(args.rounds):
@@ -142,22 +157,25 @@ def main() -> None:
     print(f"{points.n} runs of {args.t_end:g} s ({steps:.0f} steps), {args.rounds} rounds alternated; one run's "
           f"compiled loop {best / 1e6:.2f} M steps/s at best, x {cores} cores = {cores * best / 1e6:.2f} M:")
     for name, w in walls.items():
-        print(f"  {name:>18}: {min(w):.2f} .. {max(w):.2f} s, {steps / min(w) / 1e6:.2f} M steps/s at best "
+        print(f"  {name:>21}: {min(w):.2f} .. {max(w):.2f} s, {steps / min(w) / 1e6:.2f} M steps/s at best "
               f"({steps / min(w) / (cores * best):.2f} of cores x one run)")
-    for name in ("1 thread", "2 threads"):
-        ratio = [x / y for x, y in zip(walls[f"batched {name}"], walls[f"mujoco {name}"])]
-        print(f"  batched / mujoco on {name}, per round: {min(ratio):.3f} .. {max(ratio):.3f} (time ratio; above 1: "
-              f"andyc slower)")
-    ratio = [x / y for x, y in zip(walls["batched 1 thread"], walls["per point 1 thread"])]
-    print(f"  batched / per point on 1 thread, per round: {min(ratio):.3f} .. {max(ratio):.3f}")
+    for a, b in (("batched 1 thread", "mujoco 1 thread"), ("batched 2 threads", "mujoco 2 threads"),
+                 ("batched 1 thread", "per point 1 thread")):
+        if a in walls and b in walls:
+            ratio = [x / y for x, y in zip(walls[a], walls[b])]
+            print(f"  {a} / {b}, per round: {min(ratio):.3f} .. {max(ratio):.3f} (time ratio; above 1: {a} slower)")
 
 
-def python_loop(model, points, t_end: float) -> tuple[np.ndarray, float]:
-    """(final states, wall seconds) of a loop of andyc.simulate over the points (x0 by name, as `andyc sim --at`)."""
+def python_loop(model, points, t_end: float) -> tuple[np.ndarray, float, np.ndarray]:
+    """(final states, wall seconds, each run's max |q1|) of a loop of andyc.simulate over the points (x0 by name, as
+    `andyc sim --at`)."""
+    finals, peaks = [], []
     start = time.perf_counter()
-    finals = [andyc.simulate(model, t_end, dt=DT, x0=dict(zip(points.names, map(float, v))), progress=False).state[-1]
-              for v in points.values]
-    return np.array(finals), time.perf_counter() - start
+    for v in points.values:
+        run = andyc.simulate(model, t_end, dt=DT, x0=dict(zip(points.names, map(float, v))), progress=False)
+        finals.append(run.state[-1])
+        peaks.append(np.max(np.abs(run.state[:, 0])))
+    return np.array(finals), time.perf_counter() - start, np.array(peaks)
 
 
 def one_run(model, points, t_end: float) -> float:
