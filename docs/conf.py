@@ -27,6 +27,7 @@ napoleon_google_docstring = False
 autodoc_member_order = "bysource"
 html_theme = "alabaster"
 html_title = "andyc"
+smartquotes = False         # (a command's help text writes options as --name: Sphinx's smart quotes made them en dashes)
 # Every cross-reference must resolve (a broken link fails the build), except these internal classes that the
 # public functions' signatures name but that the reference does not document (yet).
 nitpicky = True

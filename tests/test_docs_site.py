@@ -54,6 +54,7 @@ def test_every_command_and_option_is_in_the_cli_reference(site):
         missing += [f"{name} {opt}" for p in command.params if isinstance(p, click.Option)
                     for opt in p.opts if opt not in text]
     assert main.list_commands(context) and not missing, missing
+    assert not re.findall(r"\u2013[a-z][a-z-]*", text)      # (no option written --name in prose shown as an en dash)
 
 
 def test_every_status_code_and_message_is_in_the_status_table(site):
