@@ -227,6 +227,8 @@ def record(out: dict, row: int, model, metrics: list, settings: Settings, point)
 
 def record_metrics(out: dict, row: int, metrics: list, run) -> None:
     """The metrics' values on a point's Run into row `row` (NaN where one cannot be evaluated)."""
+    if not metrics:
+        return              # (the metrics' module, and SymPy under it, not imported)
     from andyc.analysis.sweeps.metrics import evaluate
 
     for j, metric in enumerate(metrics):
