@@ -42,7 +42,8 @@ def _type(node: dict) -> str:
 
 
 def _properties(node: dict, prefix: str = "") -> list[str]:
-    """A row per property, nested objects' properties below their parent's with a dotted name."""
+    """A row per property, nested objects' properties below their parent's with a dotted name (`a.b`), those of
+    an array's items with `a[].b`, those of each alternative (oneOf, anyOf, allOf) under the same name."""
     rows = []
     required = set(node.get("required", []))
     for name, sub in node.get("properties", {}).items():
@@ -50,8 +51,12 @@ def _properties(node: dict, prefix: str = "") -> list[str]:
         default = f"`{json.dumps(sub['default'])}`" if "default" in sub else ""
         rows.append(f"| `{prefix}{name}` | {_text(_type(sub))} | {'yes' if name in required else ''} | {default} "
                     f"| {enum} | {_text(sub.get('description', ''))} |")
-        if sub.get("type") == "object" and "properties" in sub:
-            rows += _properties(sub, f"{prefix}{name}.")
+        rows += _properties(sub, f"{prefix}{name}.")
+    if isinstance(node.get("items"), dict):
+        rows += _properties(node["items"], f"{prefix[:-1]}[]." if prefix else "[].")
+    for key in ("oneOf", "anyOf", "allOf"):
+        for option in node.get(key, []):
+            rows += _properties(option, prefix)
     return rows
 
 
