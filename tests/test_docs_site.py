@@ -72,6 +72,16 @@ def test_every_command_and_option_is_in_the_cli_reference(site):
     assert not re.findall(r"\u2013[a-z][a-z-]*", text)      # (no option written --name in prose shown as an en dash)
 
 
+def test_every_function_of_a_generated_module_is_in_the_api_reference(site):
+    """The generated module's Python face (andyc_numerics/api.py: Functions), each public method documented."""
+    from andyc.numerics.api import Functions
+
+    page = (site / "api.html").read_text(encoding="utf-8")
+    names = [n for n in vars(Functions) if not n.startswith("_") and callable(getattr(Functions, n))]
+    missing = [n for n in names if f'id="andyc.numerics.api.Functions.{n}"' not in page]
+    assert len(names) >= 15 and not missing, missing
+
+
 def test_every_status_code_and_message_is_in_the_status_table(site):
     from andyc.numerics.status import MESSAGES
     from andyc.runtime.status import OUTCOMES
