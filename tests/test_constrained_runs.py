@@ -97,7 +97,7 @@ def test_ball_normal_force_multiplier(ball_runs):
 
 
 def test_ball_runs_are_logged_side_by_side(ball_runs, tmp_path):
-    """Residuals and multipliers land in the HDF5 layout of docs/design.md, one file per method."""
+    """Residuals and multipliers land in the HDF5 layout of docs/run-file.md, one file per method."""
     model, runs = ball_runs
     for key, run in runs.items():
         back = read_h5(run.save(tmp_path / f"ball_{key}.h5"))

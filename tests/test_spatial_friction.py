@@ -209,6 +209,40 @@ def test_both_friction_forces_and_slips_go_into_the_run_files(block, tmp_path):
     assert first[-5] == SLIP and first[-3:] == [0.0, pytest.approx(-0.5 * G * math.cos(0.3), abs=1e-12), 1.0]
 
 
+def test_every_dataset_attribute_and_column_of_a_run_file_is_in_the_run_file_reference(block, tmp_path):
+    """docs/run-file.md lists what the files hold: each HDF5 dataset (a frame's as <frame>), each root attribute,
+    and each CSV column as one of its patterns with the model's own names for <state>, <contact>, ... (a run with
+    a contact, spatial friction and every frame logged)."""
+    import re
+
+    from tests.support import ROOT
+
+    page = (ROOT / "docs" / "run-file.md").read_text(encoding="utf-8")
+    run = andyc.simulate(block, 0.1, dt=1e-2, frames="all", progress=False)
+    run.save(tmp_path / "block.h5")
+    run.save(tmp_path / "block.csv")
+    paths = []
+    with h5py.File(tmp_path / "block.h5") as f:
+        f.visititems(lambda name, item: paths.append(name) if isinstance(item, h5py.Dataset) else None)
+        attributes = list(f.attrs)
+    assert {"contacts/slip_speed_2", "event_states/state_after"} <= set(paths) and run.frames
+    general = {f"frames/{n}": "frames/<frame>" for n in run.frames}
+    general.update({f"frame_rotations/{n}": "frame_rotations/<frame>" for n in run.frame_rotations})
+    missing = [p for p in (general.get(p, p) for p in paths) if f"`/{p}`" not in page]
+    root = page.split("## HDF5 attributes")[1].split("## CSV")[0]
+    missing += [a for a in attributes if f"`{a}`" not in root]
+    assert not missing, missing
+    names = {"state": run.state_names, "discrete": run.discrete_names, "input": run.input_names,
+             "multiplier": run.multiplier_names, "element": run.work_names, "contact": run.contact_names,
+             "frame": list(run.frames)}
+    patterns = [re.sub(r"<([a-z]+)>", lambda m: "(" + "|".join(map(re.escape, names[m.group(1)])) + ")",
+                       re.escape(column)) for row in page.split("## CSV")[1].splitlines() if row.startswith("| `")
+                for column in re.findall(r"`([^`]+)`", row.split(" | ")[0])]
+    header = next(line for line in (tmp_path / "block.csv").read_text().splitlines() if line.startswith("time,"))
+    undocumented = [c for c in header.split(",") if not any(re.fullmatch(p, c) for p in patterns)]
+    assert len(header.split(",")) > 20 and not undocumented, undocumented
+
+
 # -- mistakes ------------------------------------------------------------------------------------------
 
 # The shipped block without its expectations (which name its jumps, and the mistakes change them).

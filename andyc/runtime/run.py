@@ -1,4 +1,4 @@
-"""A finished (or stopped) run: its arrays, names and summary (its files: runfiles.py; docs/design.md, the run layout)."""
+"""A finished (or stopped) run: its arrays, names and summary (its files: runfiles.py; docs/run-file.md)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""A run's files: HDF5 and CSV written and read back, and a run file checked before use (docs/design.md, the
-run layout)."""
+"""A run's files: HDF5 and CSV written and read back, and a run file checked before use (their layout:
+docs/run-file.md)."""
 
 from __future__ import annotations
 

@@ -88,7 +88,7 @@ class FrameQuantities:
 def build_constraints(written: list, scope: Scope, quantities: FrameQuantities,
                       contacts: list = ()) -> list[Constraint]:
     """The `constraints:` section, then the rows of the `contacts:` section's gaps (andyc.spec.contacts; an entry None
-    is left out), holonomic ones first (docs/design.md, the run layout; a contact's row is holonomic); multiplier names
+    is left out), holonomic ones first (docs/run-file.md; a contact's row is holonomic); multiplier names
     checked."""
     constraints = [_constraint(("constraints", i), c, scope, quantities) for i, c in enumerate(written)]
     constraints += [_constraint(("contacts", i), c, scope, quantities) for i, c in enumerate(contacts) if c]
