@@ -91,8 +91,18 @@ def test_every_status_code_and_message_is_in_the_status_table(site):
 
 
 def test_the_gallery_lists_every_shipped_model_with_its_command(site):
-    text = page_text(site, "generated/gallery.html")
-    missing = [p.name for p in sorted((ROOT / "models").glob("*.yaml")) if f"andyc sim models/{p.name}" not in text]
+    """Each model's run with the method its file names (simulate:), and `andyc test` where it has expectations."""
+    import yaml
+
+    text = " ".join(page_text(site, "generated/gallery.html").split())
+    missing = []
+    for path in sorted((ROOT / "models").glob("*.yaml")):
+        model = yaml.safe_load(path.read_text(encoding="utf-8"))
+        method = (model.get("simulate") or {}).get("method", "rk4")
+        if not re.search(rf"andyc sim models/{re.escape(path.name)} # method {method}\b", text):
+            missing.append(f"sim {path.name} ({method})")
+        if model.get("expect") and f"andyc test models/{path.name}" not in text:
+            missing.append(f"test {path.name}")
     assert not missing, missing
 
 
