@@ -146,10 +146,8 @@ def gallery_page(docs: Path) -> str:
              "its command and its expectations (`expect:`, checked by `andyc test models/`).", ""]
     for path in sorted((ROOT / "models").glob("*.yaml")):
         model = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
-        simulate = model.get("simulate") or {}
-        how = f"   # method {simulate.get('method', 'rk4')}" + (
-            f" (its simulate: {yaml.safe_dump(simulate, default_flow_style=True).strip()})" if simulate else "")
-        commands = [f"andyc sim models/{path.name}{how}"]
+        simulate = {"method": "rk4", **(model.get("simulate") or {})}      # (what its simulate: sets, else rk4)
+        commands = [f"andyc sim models/{path.name}   # " + ", ".join(f"{k} {v}" for k, v in simulate.items())]
         if model.get("expect"):
             commands.append(f"andyc test models/{path.name}   # its expectations, below")
         lines += [f"## {model.get('name', path.stem)}", "", _text(model.get("description", "")), "",
