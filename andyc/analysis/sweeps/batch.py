@@ -14,9 +14,9 @@ resolution, the user's function, the event log), and the next call takes the poi
 the single run's integrator.advance on the same grid, so each point's states equal `andyc sim`'s bit for bit.
 
 It takes the sweeps whose points a single run would answer with nothing but those (batched): a fixed-step method,
-no per-point wall-clock limit, no basin classification, and no drifting method on constraint rows (rk4 and
-lagrange: the run's status then depends on the residuals at every sample, andyc.runtime.status.lost_constraints).
-Any other sweep, and any point the batch could not take to the end of its time (a start simulate refuses, a run
+no per-point wall-clock limit and no basin classification. (A drifting method on constraint rows, rk4 or lagrange,
+is batched too: a single run's status reads the residuals of every sample only when it stopped,
+andyc.runtime.status.lost_constraints, and a point that stops runs alone.) Any other sweep, and any point the batch could not take to the end of its time (a start simulate refuses, a run
 that stops, blows up or ends at a jump: Zeno, stop_after, the user's function), runs alone through
 worker.record, so that its outcome and message are the single run's.
 """
@@ -32,13 +32,12 @@ import numpy as np
 from andyc.numerics.status import OK
 from andyc.runtime.fixed_step import MODE
 from andyc.runtime.methods import FIXED_STEP
-from andyc.runtime.status import DRIFTING_METHODS, FINISHED, FINISHED_CODE
+from andyc.runtime.status import FINISHED, FINISHED_CODE
 
 
 def batched(model, settings) -> bool:
     """Whether the points of a sweep with these Settings run batched (see the module's docstring)."""
-    return (settings.method in FIXED_STEP and settings.timeout is None and settings.basin is None
-            and not (model.nc and settings.method in DRIFTING_METHODS))
+    return settings.method in FIXED_STEP and settings.timeout is None and settings.basin is None
 
 
 LOG_BYTES = 64e6            # the logs a batch with metrics holds at once (their points run in groups of this)
