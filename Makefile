@@ -34,6 +34,7 @@ bench: $(STAMP)
 	$(PY) bench/ci_latency.py
 	$(PY) bench/sweep.py
 	$(PY) bench/sweep_rollout.py
+	$(PY) bench/basin.py
 	$(PY) bench/go1.py
 	$(PY) bench/view_page.py
 

@@ -207,6 +207,8 @@ def engines(scratch: Path, rounds: int) -> None:
     for name in variants:
         print(f"  {name:>20}: wall {min(walls[name]):.2f} .. {max(walls[name]):.2f} s, "
               f"CPU {min(cpus[name]):.2f} .. {max(cpus[name]):.2f} s")
+    if not agree:
+        raise SystemExit("andyc sweep's engines: the final states differ; the figures above compare different answers")
 
 
 def gait_map(gait, scratch: Path, rounds: int) -> None:
@@ -266,6 +268,9 @@ def gait_map(gait, scratch: Path, rounds: int) -> None:
         print(f"  {name:>20}: {min(w):.2f} .. {max(w):.2f} s ({grid.n / min(w):.0f} points/s at best)")
     ratio = [a / b for a, b in zip(walls["batched, 2 threads"], walls["per point, 2 threads"])]
     print(f"  batched / per point, per round: {min(ratio):.3f} .. {max(ratio):.3f}")
+    if not same:
+        raise SystemExit("compass gait map: the variants' metrics or final states differ; the figures above compare "
+                         "different answers")
 
 
 def first_result(scratch: Path, rounds: int) -> None:

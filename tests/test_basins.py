@@ -98,7 +98,7 @@ def test_starting_states_are_on_the_constraint_manifold_with_the_grid_values(gai
 
 
 def test_basin_command_agrees_with_plain_runs(gait, shipped_build, tmp_path):
-    """The command runs the grid on a local cluster (one worker process) into a store xarray reads; each start
+    """The command runs the grid (on one thread, batched) into a store xarray reads; each start
     is then run by hand: one plain rk4 run over STEPS heel strikes (or until it ends) from the start built by
     hand, classified from its samples: falls if the hip ever drops below 0.5 m before the strike the command
     stopped at, cycle if its last strike is within the tolerance of the fixed point (up to the shift downhill)."""
@@ -179,3 +179,74 @@ def test_a_start_that_cannot_meet_the_constraints_is_recorded_failed(gait):
     assert out["outcome"][0] == FAILED and out["basin"][0] == 4
     assert out["message"][0].startswith("cannot put the start on the constraint manifold with y, th1_dot held")
     assert out["outcome"][1] != FAILED and out["basin"][1] in (CYCLE, FALLS)
+
+
+def _by_engine(model, settings, values, monkeypatch):
+    """The rows of worker.empty_results for `values`: by the batched engine (run_basins: each step of every start in
+    one compiled call), with the rows it ran alone (record_point), and one by one (record_point)."""
+    from andyc.analysis import basins
+    from andyc.analysis.basins_batched import run_basins
+    from andyc.analysis.sweeps.worker import empty_results
+
+    alone, single = [], basins.record_point
+
+    def counted(out, row, *args):
+        alone.append(row)
+        single(out, row, *args)
+    batched = empty_results(model, settings, len(values))
+    monkeypatch.setattr(basins, "record_point", counted)
+    run_basins(batched, model, settings, np.asarray(values, float))
+    monkeypatch.undo()
+    one = empty_results(model, settings, len(values))
+    for row, point in enumerate(values):
+        single(one, row, model, settings, np.asarray(point, float))
+    return batched, one, alone
+
+
+def _same(a: dict, b: dict) -> list:
+    """The fields in which two results differ (but the times they took)."""
+    return [k for k in a if k not in ("wall", "cpu") and not (
+        list(a[k]) == list(b[k]) if a[k].dtype == object else np.array_equal(a[k], b[k], equal_nan=True))]
+
+
+def test_the_batched_engine_classifies_as_single_runs_do(gait, monkeypatch):
+    """Every start of a grid that holds both classes, with the fixed point's own start and one 0.02 off it (many
+    steps to the cycle), classified by the batched engine and by single runs: every field equal to the bit (class,
+    steps, distance, end state, crossing times, messages), none of them run alone."""
+    from andyc.analysis.sweeps.points import grid
+    from andyc.analysis.sweeps.worker import Settings
+
+    model, cycle, basin = gait
+    x = dict(zip(model.state_names, cycle.state))
+    values = np.vstack([grid(GRID).values, [[x["th1_dot"], x["th2_dot"]], [x["th1_dot"] + 0.02, x["th2_dot"] - 0.02]]])
+    settings = Settings.of(model, ("th1_dot", "th2_dot"), basin.t_step * basin.steps, basin=basin)
+    batched, one, alone = _by_engine(model, settings, values, monkeypatch)
+    assert _same(batched, one) == [] and alone == []
+    assert {CYCLE, FALLS} <= set(batched["basin"].tolist()) and batched["basin_steps"].max() > 5
+
+
+def test_the_batched_engine_runs_alone_what_it_cannot_start(gait, monkeypatch):
+    """A start off the constraint manifold runs alone, with the single run's record; the other goes on batched."""
+    from andyc.analysis.sweeps.worker import Settings
+    from andyc.runtime.status import FAILED
+
+    model, cycle, basin = gait
+    settings = Settings.of(model, ("y", "th1_dot"), basin.t_step * basin.steps, basin=basin)
+    values = [[1.5, -1.0], [cycle.state[model.state_names.index("y")], -1.0]]
+    batched, one, alone = _by_engine(model, settings, values, monkeypatch)
+    assert alone == [0] and _same(batched, one) == [] and batched["outcome"][0] == FAILED
+
+
+def test_the_batched_engine_finds_the_period_two_gait(compiled, monkeypatch):
+    """Past the period doubling (see above), the batched engine's other orbit is the single runs' to the bit."""
+    from andyc.analysis.sweeps.worker import Settings
+
+    model = compiled(MODEL)
+    cycle = find_cycle(model, "strike", parameters={"slope": 0.08})
+    basin = make_basin(model, cycle, steps=100, tol=TOL, t_step=T_STEP, dt=1e-3, event_tol=1e-14, fall=FALL)
+    x = dict(zip(model.state_names, cycle.state))
+    settings = Settings.of(model, ("th1_dot", "th2_dot"), basin.t_step * basin.steps, basin=basin,
+                           fixed=(("slope", 0.08),))
+    batched, one, alone = _by_engine(model, settings, [[x["th1_dot"] + 0.01, x["th2_dot"]]], monkeypatch)
+    assert _same(batched, one) == [] and alone == [] and batched["basin"][0] == OTHER_ORBIT
+    assert batched["basin_period"][0] == 2

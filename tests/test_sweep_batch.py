@@ -22,7 +22,8 @@ def alone(model, settings: Settings, point):
     for name, value, (kind, _) in zip(settings.names, point, settings.kinds):
         {"parameter": parameters, "input": inputs, "state": states}[kind][name] = float(value)
     return andyc.simulate(model, settings.t_end, dt=settings.dt, method=settings.method, parameters=parameters,
-                          inputs=inputs, x0=states or None, progress=False)
+                          inputs=inputs, x0=states or None, progress=False,
+                          events=andyc.Events(stop_after=dict(settings.stop_after) or None))
 
 
 def run_counting(monkeypatch, settings, values):
@@ -224,3 +225,25 @@ def test_a_batch_keeps_each_jumps_record_and_work_as_the_single_run(compiled, na
         for key in ("time", "jump", "from_flow", "to_flow", "state_before", "state_after", "discrete_after"):
             assert np.array_equal(table[key], run.events[key]), key
         assert np.array_equal(done.X[j, model.nx:], run.work[-1])
+
+
+def test_a_batch_point_stop_after_ended_has_the_single_runs_run(compiled):
+    """A point that stop_after ends between grid points (the compass gait at its second heel strike, strike1) does not
+    finish in the batch; its Run (Batch.run_of, as a basin's step reads it) is the single run's to the bit, the
+    sample at the jump's instant, after it, included."""
+    from andyc.runtime.simulate import start_run
+
+    model = compiled("compass_gait")
+    settings = Settings.of(model, ("w_stance0",), 1.6, method="projection", stop_after=(("strike1", 1),))
+    values = np.array([[-1.1], [-1.05]])
+    starts = [start_run(model, settings.t_end, compile=False, **worker.point_arguments(model, settings, v))
+              for v in values]
+    done = batch.Batch(model, settings, starts, 1600, log=True)
+    assert not done.run().any() and all(s.jumps.finished for s in starts)
+    for j, point in enumerate(values):
+        run, mine = alone(model, settings, point), done.run_of(j)
+        assert run.status == mine.status == FINISHED and run.events["jump"].size == 2
+        assert run.time[-1] == run.events["time"][-1] and run.time[-2] < run.time[-1]     # (the jump's sample)
+        for key in ("time", "state", "work", "input_values", "flow", "discrete", "energy", "multipliers",
+                    "residual_position", "residual_velocity", "power"):
+            assert np.array_equal(getattr(mine, key), getattr(run, key), equal_nan=True), key

@@ -24,7 +24,9 @@ for at most `t_step` seconds), for at most K steps, and is classified:
 A point stops as soon as it is classified. The classes, their codes and the period m of an other orbit are
 what the sweep store records (`basin`, `basin_period`, with `basin_steps` the steps run and
 `basin_distance` the distance of the last y_n from the cycle). The runs are the sweep engine's
-(andyc.analysis.sweeps): each worker runs record_point on its batch. See Schwab & Wisse, "Basin of attraction
+(andyc.analysis.sweeps): each worker steps its batch's starts together (andyc.analysis.basins_batched), each
+step of every start in one compiled call, and classifies each start with Walk as classify does with single
+runs, to the same bit. See Schwab & Wisse, "Basin of attraction
 of the simplest walking model" (ASME DETC 2001), for such maps of a walker.
 """
 
@@ -136,66 +138,96 @@ def _names(model, indices) -> list:
     return [names[i] for i in indices]
 
 
+class Walk:
+    """One start's classification as its steps come in (take): the steps of a single run each (classify) or of
+    the batched engine (andyc.analysis.basins_batched), read alike. `out` is the record: class, period, steps,
+    distance, the crossing times, the last step's status and end (x, d, flow), the total time, the jump counts."""
+
+    def __init__(self, model, basin: Basin, y: np.ndarray, fall):
+        self.model, self.basin, self.fall = model, basin, fall
+        self.orbit = np.asarray(basin.orbit, dtype=float)
+        S = np.asarray(basin.symmetries, dtype=float).reshape(-1, self.orbit.shape[1]).T
+        self.project = np.eye(self.orbit.shape[1]) - S @ S.T
+        self.y, self.history, self.done = y, [y], False
+        self.out = {"class": OTHER, "period": 0, "steps": 0, "distance": math.nan, "times": [], "t": 0.0,
+                    "jump_count": np.zeros(model.nj, np.int32), "status": "", "end": None, "message": ""}
+
+    def distance(self, a, b) -> float:
+        return float(np.max(np.abs(self.project @ (a - b))))
+
+    def take(self, crossed: bool, status: str, t: float, jumps, times, end, run) -> bool:
+        """The next step ended at its time t (from 0), with status, its jumps and their times, its last state
+        end = (x, d, flow) (None when it logged nothing), crossed: right after J's crossing (stop_after); run():
+        its Run, for the fall condition. Whether the point is classified now (done)."""
+        basin, out = self.basin, self.out
+        out["steps"] += 1
+        n = out["steps"]
+        out["status"], out["end"] = status, end
+        jumps = np.asarray(jumps, dtype=np.int64)
+        out["jump_count"] += np.bincount(jumps, minlength=self.model.nj)[:self.model.nj].astype(np.int32)
+        out["times"].extend((out["t"] + np.asarray(times)[jumps == basin.section]).tolist())
+        out["t"] += t
+        if self.fall is not None and _holds(self.fall, run()):
+            return self._classified(FALLS, 0, f"step {n}: the fall condition holds ({basin.fall})")
+        if not crossed:
+            return self._classified(FALLS, 0, f"step {n}: no crossing of '{self.model.jump_names[basin.section]}' "
+                                              f"within {basin.t_step:g} s ({status})")
+        self.y = np.concatenate([end[0], end[1]])
+        self.history.append(self.y)
+        out["distance"] = min(self.distance(self.y, o) for o in self.orbit)
+        if out["distance"] <= basin.tol:
+            return self._classified(CYCLE, len(self.orbit), f"step {n}: within {basin.tol:g} of the cycle")
+        if n >= basin.steps:
+            self._conclude()
+        return self.done
+
+    def _classified(self, kind: int, period: int, message: str) -> bool:
+        self.out["class"], self.out["period"], self.out["message"], self.done = kind, period, message, True
+        return True
+
+    def _conclude(self) -> None:
+        """After K steps: an other orbit, or other."""
+        basin, out, history = self.basin, self.out, self.history
+        for m in range(1, basin.max_period + 1):
+            if m < len(history) and self.distance(history[-1], history[-1 - m]) <= basin.tol:
+                if out["distance"] > OTHER_ORBIT_MARGIN * basin.tol:
+                    self._classified(OTHER_ORBIT, m, f"after {basin.steps} steps: an orbit of period {m}, "
+                                                     f"{out['distance']:.3g} from the cycle")
+                    return
+                break
+        self._classified(OTHER, 0, f"after {basin.steps} steps: {out['distance']:.3g} from the cycle, no orbit of "
+                                   f"period <= {basin.max_period}")
+
+
+def step_options(model, basin: Basin) -> dict:
+    """simulate()'s options of every step (but the start): rk4 from the state as it is, to J's first crossing."""
+    import andyc
+
+    return dict(dt=basin.dt, method="rk4", parameters=dict(basin.parameters), init=andyc.Init("as-is"),
+                events=andyc.Events(tol=basin.event_tol, stop_after={model.jump_names[basin.section]: 1}))
+
+
 def classify(model, basin: Basin, held: list, values) -> dict:
-    """The point's class (see the module docstring) and its record: class, period, steps, distance, the
-    crossing times, the last run's status and state, the total time and jump counts."""
+    """The point's class (see the module docstring) and its record (Walk.out), each step a single run; "run":
+    the last step's Run."""
     import andyc
     from andyc.analysis.sweeps.worker import interrupts
     from andyc.runtime.status import INTERRUPTED
 
     derivatives, fall = _loaded(model, basin)
-    nx = model.nx
-    orbit = np.asarray(basin.orbit, dtype=float)
-    S = np.asarray(basin.symmetries, dtype=float).reshape(-1, orbit.shape[1]).T
-    project = np.eye(orbit.shape[1]) - S @ S.T
-
-    def distance(a, b):
-        return float(np.max(np.abs(project @ (a - b))))
-
-    y = start_state(model, derivatives, basin, held, values)
-    events = andyc.Events(tol=basin.event_tol, stop_after={model.jump_names[basin.section]: 1})
-    params = dict(basin.parameters)
-    flow = int(model.module.JUMP_TARGET[basin.section])
-    out = {"class": OTHER, "period": 0, "steps": 0, "distance": math.nan, "times": [], "t": 0.0,
-           "jump_count": np.zeros(model.nj, np.int32), "status": "", "run": None, "message": ""}
-    history = [y]
-    for n in range(1, basin.steps + 1):
-        run = andyc.simulate(model, basin.t_step, basin.dt, "rk4", parameters=params, x0=y[:nx], d0=y[nx:],
-                             flow0=flow, progress=False, init=andyc.Init("as-is"), events=events,
-                             interrupts=interrupts(None))
+    walk = Walk(model, basin, start_state(model, derivatives, basin, held, values), fall)
+    flow, nx = int(model.module.JUMP_TARGET[basin.section]), model.nx
+    while not walk.done:
+        run = andyc.simulate(model, basin.t_step, x0=walk.y[:nx], d0=walk.y[nx:], flow0=flow, progress=False,
+                             interrupts=interrupts(None), **step_options(model, basin))
         if run.status.startswith(INTERRUPTED):     # the sweep's end, not the point's (record())
             raise KeyboardInterrupt
-        out["run"], out["status"], out["steps"] = run, run.status, n
         jumps = run.events["jump"]
-        out["jump_count"] += np.bincount(jumps, minlength=model.nj)[:model.nj].astype(np.int32)
-        out["times"].extend((out["t"] + run.events["time"][jumps == basin.section]).tolist())
-        out["t"] += float(run.time[-1]) if len(run.time) else 0.0
-        crossed = run.finished and len(jumps) and jumps[-1] == basin.section
-        if fall is not None and _holds(fall, run):
-            out["class"], out["message"] = FALLS, f"step {n}: the fall condition holds ({basin.fall})"
-            return out
-        if not crossed:
-            out["class"] = FALLS
-            out["message"] = (f"step {n}: no crossing of '{model.jump_names[basin.section]}' within "
-                              f"{basin.t_step:g} s ({run.status})")
-            return out
-        y = np.concatenate([run.state[-1], run.discrete[-1]])
-        history.append(y)
-        out["distance"] = min(distance(y, o) for o in orbit)
-        if out["distance"] <= basin.tol:
-            out["class"], out["period"] = CYCLE, len(orbit)
-            out["message"] = f"step {n}: within {basin.tol:g} of the cycle"
-            return out
-    for m in range(1, basin.max_period + 1):
-        if m < len(history) and distance(history[-1], history[-1 - m]) <= basin.tol:
-            if out["distance"] > OTHER_ORBIT_MARGIN * basin.tol:
-                out["class"], out["period"] = OTHER_ORBIT, m
-                out["message"] = f"after {basin.steps} steps: an orbit of period {m}, {out['distance']:.3g} from the cycle"
-                return out
-            break
-    out["message"] = f"after {basin.steps} steps: {out['distance']:.3g} from the cycle, no orbit of period <= " \
-                     f"{basin.max_period}"
-    return out
+        crossed = bool(run.finished and len(jumps) and jumps[-1] == basin.section)
+        end = (run.state[-1], run.discrete[-1], int(run.flow[-1])) if len(run.time) else None
+        walk.take(crossed, run.status, float(run.time[-1]) if len(run.time) else 0.0, jumps, run.events["time"],
+                  end, lambda: run)
+    return {**walk.out, "run": run}
 
 
 def _holds(metric, run) -> bool:
@@ -212,7 +244,7 @@ def record_point(out: dict, row: int, model, settings, point) -> None:
     basin fields, the last step's run into the others; a failure is recorded, never raised."""
     from andyc.analysis.sweeps.worker import MESSAGE_CHARS
     from andyc.errors import SimulationError, printable
-    from andyc.runtime.status import FAILED, outcome
+    from andyc.runtime.status import FAILED
 
     basin = settings.basin
     held = [kind_index for (_, kind_index) in settings.kinds]
@@ -225,19 +257,28 @@ def record_point(out: dict, row: int, model, settings, point) -> None:
         out["wall"][row], out["cpu"][row] = time.perf_counter() - start, time.thread_time() - cpu
         out["basin"][row] = OTHER           # (not 0, "not run": it ran, and could not be classified)
         return
-    run = found["run"]
-    out["outcome"][row] = outcome(run.status)
-    out["message"][row] = printable(found["message"])[:MESSAGE_CHARS]
+    record_walk(out, row, settings, found)
     out["wall"][row], out["cpu"][row] = time.perf_counter() - start, time.thread_time() - cpu
+
+
+def record_walk(out: dict, row: int, settings, found: dict) -> None:
+    """A classified point's record (Walk.out) into row `row` of a sweep's results (worker.empty_results), but its
+    times."""
+    from andyc.analysis.sweeps.worker import MESSAGE_CHARS
+    from andyc.errors import printable
+    from andyc.runtime.status import outcome
+
+    out["outcome"][row] = outcome(found["status"])
+    out["message"][row] = printable(found["message"])[:MESSAGE_CHARS]
     out["basin"][row], out["basin_period"][row] = found["class"], found["period"]
     out["basin_steps"][row], out["basin_distance"][row] = found["steps"], found["distance"]
     out["t_final"][row] = found["t"]
-    if len(run.time):
-        out["final"][row], out["final_discrete"][row], out["final_flow"][row] = (run.state[-1], run.discrete[-1],
-                                                                                run.flow[-1])
+    if found["end"] is not None:
+        out["final"][row], out["final_discrete"][row], out["final_flow"][row] = found["end"]
     out["jump_count"][row] = found["jump_count"]
     times = found["times"][:settings.max_events]
-    out["event_time"][row, :len(times)], out["event_jump"][row, :len(times)] = times, basin.section
+    out["event_time"][row, :len(times)], out["event_jump"][row, :len(times)] = times, settings.basin.section
 
 
-__all__ = ["Basin", "BasinError", "CLASSES", "make_basin", "classify", "start_state", "record_point"]
+__all__ = ["Basin", "BasinError", "CLASSES", "Walk", "make_basin", "classify", "start_state", "step_options",
+           "record_point", "record_walk"]

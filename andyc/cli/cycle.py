@@ -56,9 +56,9 @@ from andyc.outputs import check_folder, check_output, write_text
               help="--basin: a step after which this holds falls, a comparison of the step's run as a sweep's "
                    "--metric, e.g. 'min(y) < 0.5' (a step that does not reach the section falls too).")
 @click.option("--workers", default=None, type=Number(1, 4096, integer=True), metavar="N",
-              help="--basin: processes of the local Dask cluster (default: one per core).")
+              help="--basin: threads of this process the starts run on (default: one per core).")
 @click.option("--batch", default=None, type=Number(1, 1_000_000, integer=True), metavar="N",
-              help="--basin: starts per task (default: about 8 tasks per worker).")
+              help="--basin: starts per batch (default: about a second's worth).")
 @click.option("-o", "--out", default=None, metavar="FILE.json",
               help="Where to write the result (default: runs/<name>_cycle_<JUMP>.json; with --continue "
                    "runs/<name>_continuation_<JUMP>_<NAME>.json, with the branch table FILE.csv and the plot FILE.png "
@@ -78,7 +78,7 @@ def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, 
 
     With --basin NAME=FROM:TO:COUNT twice, classify each start of that grid (the other components at the fixed
     point, put on the constraint manifold) as reaching the cycle, falling, another orbit or other, on the sweep
-    engine's workers, into a Zarr store with its map."""
+    engine (batched, in this process's threads), into a Zarr store with its map."""
     import andyc
     from andyc.analysis.cycles import CycleError, find_cycle
 

@@ -439,14 +439,14 @@ def instant(model, w, mode, inputs, data, t, x, p, d, flow):
     return -1
 
 
-@jit
+@jit(nogil=True)
 def evaluate_energy(model, log, p, out):
     """Energy at the logged samples."""
     for r in range(log.t.shape[0]):
         out[r] = call(model.energy, (log.t[r], log.x[r], log.u[r], p, log.d[r]))
 
 
-@jit
+@jit(nogil=True)
 def evaluate_frames(model, log, p, out):
     """Frame poses at the logged samples, out (N, frames, 12): each frame's origin, then its rotation matrix
     (own axes -> world) row by row (the leaf frame_poses)."""
@@ -454,7 +454,7 @@ def evaluate_frames(model, log, p, out):
         call(model.frame_poses, (log.t[r], log.x[r], log.u[r], p, log.d[r], out[r]))
 
 
-@jit
+@jit(nogil=True)
 def evaluate_rows(model, w, log, p, phi, c, lam, power, mode, full=True, free=None):
     """At the logged samples: the residuals phi (N, NH), c (N, NC) and multipliers lam (N, NC), NaN for the rows
     not active in the sample's flow (where NC > 0); the power of each work slot, power (N, NW), from the

@@ -13,12 +13,13 @@ point at its jumps, which Python finishes as a single run does (andyc.runtime.fi
 resolution, the user's function, the event log), and the next call takes the points that go on. The steps are
 the single run's integrator.advance on the same grid, so each point's states equal `andyc sim`'s bit for bit.
 
-It takes the sweeps whose points a single run would answer with nothing but those (batched): a fixed-step method,
-no per-point wall-clock limit and no basin classification. (A drifting method on constraint rows, rk4 or lagrange,
-is batched too: a single run's status reads the residuals of every sample only when it stopped,
-andyc.runtime.status.lost_constraints, and a point that stops runs alone.) Any other sweep, and any point the batch could not take to the end of its time (a start simulate refuses, a run
-that stops, blows up or ends at a jump: Zeno, stop_after, the user's function), runs alone through
-worker.record, so that its outcome and message are the single run's.
+It takes the sweeps whose points a single run would answer with nothing but those (batched): a fixed-step method
+and no per-point wall-clock limit. (A drifting method on constraint rows, rk4 or lagrange, is batched too: a single
+run's status reads the residuals of every sample only when it stopped, andyc.runtime.status.lost_constraints, and a
+point that stops runs alone. A basin map's starts run on Batches too, a step at a time:
+andyc.analysis.basins_batched.) Any other sweep, and any point the batch could not take to the end of its time (a
+start simulate refuses, a run that stops, blows up or ends at a jump: Zeno, stop_after, the user's function),
+runs alone through worker.record, so that its outcome and message are the single run's.
 """
 
 from __future__ import annotations
@@ -43,6 +44,12 @@ def batched(model, settings) -> bool:
 LOG_BYTES = 64e6            # the logs a batch with metrics holds at once (their points run in groups of this)
 
 
+def log_group(model, steps: int) -> int:
+    """How many points that log every one of `steps` steps (a Batch with log) fit LOG_BYTES."""
+    width = 2 + model.nx + model.nw + len(model.input_names) + model.nd
+    return max(1, int(LOG_BYTES // (8 * width * (steps + 1))))
+
+
 def run_batched(out: dict, model, settings, values, metrics=()) -> None:
     """Run the points `values` (one row each) into the rows of `out` (worker.empty_results): those whose start
     simulate accepts in compiled calls (Batch), the others, and those that did not reach the end there, one by one
@@ -62,10 +69,8 @@ def run_batched(out: dict, model, settings, values, metrics=()) -> None:
     whole = abs(steps * settings.dt - settings.t_end) <= 1e-9 * max(1.0, settings.t_end)
     if not whole or len({tuple(sorted(s.source.drives.items())) for s in starts}) > 1:
         rows, starts, alone = [], [], list(range(len(values)))      # (each run alone says why, or differs)
-    group = max(1, len(starts))
-    if metrics:     # (a metric reads the whole run: each point logs every step, as a single run does)
-        width = 2 + model.nx + model.nw + len(model.input_names) + model.nd
-        group = max(1, int(LOG_BYTES // (8 * width * (steps + 1))))
+    # (a metric reads the whole run: each point logs every step, as a single run does)
+    group = log_group(model, steps) if metrics else max(1, len(starts))
     for a in range(0, len(starts), group):
         batch = Batch(model, settings, starts[a:a + group], steps, log=bool(metrics))
         tic, cpu = time.perf_counter(), time.thread_time()
@@ -196,11 +201,20 @@ class Batch:
             record_metrics(out, row, metrics, self.run_of(j, tuple(f for m in metrics for f in m.frames)))
 
     def run_of(self, j: int, frames=()):
-        """Point j's Run (it finished, the Batch logged every step), as andyc.simulate returns it."""
+        """Point j's Run (it finished, also where stop_after ended it; the Batch logged every step), as
+        andyc.simulate returns it: a run that stop_after ended between grid points logs its end too
+        (run_fixed_step)."""
         from andyc.runtime.simulate import assemble
 
         n = int(self.R[j])
         log = tuple(a[j, :n] for a in self.log)
+        s, t = self.starts[j], float(self.T[j])
+        if s.jumps.finished and log[0][-1] != t:
+            u = np.empty(len(self.model.input_names))
+            x = self.X[j]
+            if s.source.into(self.model, t, x[:self.model.nx], self.P[j], self.D[j], int(self.F[j]), u) != OK:
+                u[:] = math.nan
+            log = tuple(np.concatenate([a, [b]]) for a, b in zip(log, (t, x, u, self.F[j], self.D[j])))
         return assemble(self.model, self.starts[j], self.settings.method, self.settings.dt, self.settings.t_end, log,
                         dict.fromkeys(frames))
 

@@ -117,7 +117,11 @@ def run_batch(settings: Settings, indices: np.ndarray, values: np.ndarray) -> di
     model, metrics = loaded(settings)
     out = empty_results(model, settings, len(indices))
     out["index"] = np.asarray(indices, dtype=np.int64)
-    if batched(model, settings):
+    if settings.basin is not None:
+        from andyc.analysis.basins_batched import run_basins
+
+        run_basins(out, model, settings, values)
+    elif batched(model, settings):
         run_batched(out, model, settings, values, metrics)
     else:
         for row, point in enumerate(values):
