@@ -15,7 +15,7 @@ The classes, steps, distances and final states are compared first (equal to the 
 the variants alternated in each round; wall and CPU seconds (this process), min .. max over the rounds. MuJoCo
 has no model of this walker's heel strike (a reset of the state at a guard), so no rollout stands beside it.
 
-    python bench/basin.py [--side 32] [--rounds 3]
+    python bench/basin.py [--side 32] [--rounds 3] [--skip "python loop,..."]
 """
 
 from __future__ import annotations
@@ -49,6 +49,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--side", type=int, default=32, help="starts along each axis (default 32: 1024 starts)")
     parser.add_argument("--rounds", type=int, default=3, help="rounds, variants alternated (default 3)")
+    parser.add_argument("--skip", default="", help="variants left out, comma-separated (e.g. 'python loop')")
     args = parser.parse_args()
     model, _ = andyc.compile_model(MODEL, BUILD)
     andyc.build_derivatives(MODEL, BUILD)
@@ -94,11 +95,15 @@ def main() -> None:
 
     variants = {"batched, 2 threads": lambda: sweep(True, "b"), "per point, 2 threads": lambda: sweep(False, "p"),
                 "python loop": loop}
+    skipped = {name.strip() for name in args.skip.split(",") if name.strip()}
+    if skipped - set(variants) or "batched, 2 threads" in skipped or len(skipped) > 1:
+        parser.error(f"--skip: one of {', '.join(list(variants)[1:])}")
+    variants = {name: run for name, run in variants.items() if name not in skipped}
     try:
         tiny = P.grid(["th1_dot=-1.2:-1.0:2", "th2_dot=-0.4:-0.2:2"])      # (what the runs compile, loaded first)
         run_sweep(model, tiny, settings, scratch / "warm.zarr", engine="inline", workers=2, progress=False)
         answers = {name: run() for name, run in variants.items()}
-        reference = answers["python loop"][2]
+        reference = answers[list(variants)[-1]][2]
         same = all(np.array_equal(a[2][f].astype(float), reference[f].astype(float), equal_nan=True)
                    for a in answers.values() for f in FIELDS)
         times = {name: [answers[name][:2]] for name in variants}
@@ -117,8 +122,9 @@ def main() -> None:
         walls, cpus = [w for w, _ in pairs], [c for _, c in pairs]
         print(f"  {name:>20}: wall {min(walls):.2f} .. {max(walls):.2f} s, CPU {min(cpus):.2f} .. {max(cpus):.2f} s "
               f"({grid.n / min(walls):.0f} starts/s at best)")
-    ratio = [a[0] / b[0] for a, b in zip(times["per point, 2 threads"], times["batched, 2 threads"])]
-    print(f"  per point / batched, per round: {min(ratio):.2f} .. {max(ratio):.2f}")
+    for name in list(variants)[1:]:
+        ratio = [a[0] / b[0] for a, b in zip(times[name], times["batched, 2 threads"])]
+        print(f"  {name} / batched, per round: {min(ratio):.2f} .. {max(ratio):.2f}")
     if not same:
         raise SystemExit("the variants' maps differ: the figures above compare different answers")
 
