@@ -589,3 +589,27 @@ def test_a_metric_map_marks_the_points_whose_run_did_not_finish():
     crosses = {c.get_label(): c.get_offsets().tolist() for c in ax.collections if isinstance(c, PathCollection)}
     assert crosses == {"stopped": [[1.0, 5.0]], "blew up": [[2.0, 6.0]]}
     assert {t.get_text() for t in ax.get_legend().get_texts()} == {"stopped", "blew up"}
+
+
+@pytest.mark.parametrize("args, missing, what", [
+    (["sweep", MODEL, "--grid", "m1=1:2:2"], "zarr", "andyc sweep"),
+    (["sweep", MODEL, "--grid", "m1=1:2:2", "--engine", "cluster"], "dask[distributed]", "andyc sweep"),
+    (["cycle", str(MODELS / "compass_gait_step.yaml"), "--section", "strike", "--basin", "th1_dot=-1:-0.5:2",
+      "--basin", "th2_dot=-0.5:0:2"], "xarray", "andyc cycle --basin"),
+    (["plot", "."], "xarray", "andyc plot STORE"),
+], ids=["sweep", "cluster", "basin", "plot-store"])
+def test_without_the_sweep_extra_a_command_says_what_to_install(args, missing, what, monkeypatch, tmp_path):
+    """The sweep extra (zarr, xarray, dask.distributed) is not in andyc's core: a plain `pip install andyc` has none
+    of them. A command that needs one refuses with the package and the extra to install, before any work, and
+    never as an internal error."""
+    import importlib.util
+
+    import andyc.analysis.sweeps as sweeps
+
+    absent = {"zarr", "xarray", "distributed"}
+    monkeypatch.setattr(sweeps, "find_spec", lambda name: None if name in absent else importlib.util.find_spec(name))
+    result = CliRunner().invoke(main, [*args, "--build-dir", str(tmp_path / "build")] if args[0] != "plot" else args)
+    assert result.exit_code == 2, result.output
+    assert f"{what} needs" in result.output and missing in result.output
+    assert "pip install 'andyc[sweep]'" in result.output and "internal error" not in result.output
+    assert not (tmp_path / "build").exists()            # (refused before any build)

@@ -86,6 +86,12 @@ def cycle(file, section, period, at, dt, tol, max_iterations, t_max, event_tol, 
     swept = _continue_range(continue_range) if continue_range is not None else None
     if basin and swept is not None:
         raise Refused("--basin and --continue: give one of them")
+    if basin:
+        from andyc.analysis.sweeps import missing_extra
+
+        needs = missing_extra("andyc cycle --basin", "zarr", "xarray")
+        if needs:
+            raise Refused(needs)
     if out is not None and not basin:
         check_output(out, [file], "cycle file")
     check_folder(build_dir, [file], write=False)     # (an up-to-date build is only read)

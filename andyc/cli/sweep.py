@@ -81,9 +81,13 @@ def sweep(file, grids, samples, dists, sampler, seed, points_file, metrics, out,
     A swept name is a parameter, an input or the initial value of a state (a coordinate, a speed). Each
     point records its outcome (finished, stopped, blew up, Zeno, failed), final state, jumps, metrics and,
     with --trajectory, a decimated trajectory; a failed point is recorded and the sweep goes on."""
+    from andyc.analysis.sweeps import missing_extra
     from andyc.analysis.sweeps.points import PointsError, sweepable
     from andyc.analysis.sweeps.worker import Settings
 
+    needs = missing_extra("andyc sweep", "zarr", *(("distributed",) if scheduler or engine == "cluster" else ()))
+    if needs:
+        raise Refused(needs)
     if trajectory == 1:
         raise Refused("--trajectory 1: give 0 (none) or at least 2 samples")
     if scheduler is not None and workers is not None:
@@ -210,6 +214,11 @@ def plot_store(store, out, variable) -> None:
 
 
 def _open(store):
+    from andyc.analysis.sweeps import missing_extra
+
+    needs = missing_extra("andyc plot STORE", "zarr", "xarray")
+    if needs:
+        raise Refused(needs)
     import xarray as xr
 
     try:

@@ -7,5 +7,20 @@
     store.py    the Zarr store xarray opens: the swept names as coordinates, the metrics as variables
     run.py      the driver: batches on threads here or as dask.distributed tasks, written as they end, resumable
 
-Importing this package imports neither Dask nor Zarr (run.py and store.py import them when they work).
+Importing this package imports neither Dask nor Zarr (run.py and store.py import them when they work). They
+are the `sweep` extra (`pip install 'andyc[sweep]'`), not the core: missing_extra says which are missing.
 """
+
+from importlib.util import find_spec
+
+_PACKAGES = {"zarr": "zarr", "xarray": "xarray", "distributed": "dask[distributed]"}
+
+
+def missing_extra(what: str, *modules: str) -> str | None:
+    """The message for `what` (a command) when any of `modules` (zarr, xarray, distributed: the sweep extra's) is
+    not installed, else None. Looked up without importing them (Dask's import alone takes a second)."""
+    missing = [_PACKAGES[m] for m in modules if find_spec(m) is None]
+    if not missing:
+        return None
+    return (f"{what} needs {' and '.join(missing)}, not installed with andyc's core; install the sweep extra: "
+            f"`pip install 'andyc[sweep]'`")
