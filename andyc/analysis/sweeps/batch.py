@@ -44,6 +44,13 @@ def batched(model, settings) -> bool:
 LOG_BYTES = 64e6            # the logs a batch with metrics holds at once (their points run in groups of this)
 
 
+def grid_steps(t_end: float, dt: float) -> int | None:
+    """The fixed steps dt to t_end, None where t_end is not a whole number of them (a single run refuses it:
+    andyc.runtime.fixed_step, whose message the caller's single runs then give)."""
+    steps = int(round(t_end / dt))
+    return steps if abs(steps * dt - t_end) <= 1e-9 * max(1.0, t_end) else None
+
+
 def log_group(model, steps: int) -> int:
     """How many points that log every one of `steps` steps (a Batch with log) fit LOG_BYTES."""
     width = 2 + model.nx + model.nw + len(model.input_names) + model.nd
@@ -65,12 +72,11 @@ def run_batched(out: dict, model, settings, values, metrics=()) -> None:
             rows.append(row)
         except Exception:           # (refused: the single run says why, as its record)
             alone.append(row)
-    steps = int(round(settings.t_end / settings.dt))
-    whole = abs(steps * settings.dt - settings.t_end) <= 1e-9 * max(1.0, settings.t_end)
-    if not whole or len({tuple(sorted(s.source.drives.items())) for s in starts}) > 1:
+    steps = grid_steps(settings.t_end, settings.dt)
+    if steps is None or len({tuple(sorted(s.source.drives.items())) for s in starts}) > 1:
         rows, starts, alone = [], [], list(range(len(values)))      # (each run alone says why, or differs)
     # (a metric reads the whole run: each point logs every step, as a single run does)
-    group = log_group(model, steps) if metrics else max(1, len(starts))
+    group = log_group(model, steps) if metrics and starts else max(1, len(starts))
     for a in range(0, len(starts), group):
         batch = Batch(model, settings, starts[a:a + group], steps, log=bool(metrics))
         tic, cpu = time.perf_counter(), time.thread_time()
