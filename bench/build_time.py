@@ -10,6 +10,8 @@ operations): 1 is linear in the generated code.
 
     python bench/build_time.py                 N = 10, 20, 40
     python bench/build_time.py --sizes 10,20   (N = 40 takes a few minutes of CPU)
+    python bench/build_time.py --model models/g1.yaml --before /tmp/old --rounds 2
+                                               a model file's build, this checkout and another alternated
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -33,9 +36,12 @@ sys.path.insert(0, sys.argv[3])
 from large_models import nfourbar_yaml
 from andyc import pipeline
 
-n, folder = int(sys.argv[1]), Path(sys.argv[2])
-path = folder / f"nfourbar{n}.yaml"
-path.write_text(nfourbar_yaml(n))
+n, folder = sys.argv[1], Path(sys.argv[2])
+if n.isdigit():
+    path = folder / f"nfourbar{n}.yaml"
+    path.write_text(nfourbar_yaml(int(n)))
+else:
+    path = Path(n)
 
 def children():
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -58,9 +64,10 @@ print(json.dumps(out))
 """
 
 
-def measure(n: int, root: Path) -> dict:
+def measure(n, root: Path) -> dict:
+    """The build of N-four-bar `n` (an int) or of the model file `n` by andyc at `root`, in a fresh process."""
     with tempfile.TemporaryDirectory(prefix="andyc-build-time-") as tmp:
-        proc = subprocess.run([sys.executable, "-c", ONE, str(n), tmp, str(root / "bench")], capture_output=True,
+        proc = subprocess.run([sys.executable, "-c", ONE, str(n), tmp, str(ROOT / "bench")], capture_output=True,
                               text=True, env={**os.environ, "PYTHONPATH": str(root)})
     if proc.returncode != 0:
         raise SystemExit(proc.stderr)
@@ -78,7 +85,12 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="10,20,40")
     parser.add_argument("--root", type=Path, default=ROOT, help="the andyc checkout to measure (default: this one)")
+    parser.add_argument("--model", type=Path, help="a model file to build instead of the N-four-bars")
+    parser.add_argument("--before", type=Path, help="with --model: another checkout, built alternately with --root")
+    parser.add_argument("--rounds", type=int, default=1)
     args = parser.parse_args(argv)
+    if args.model is not None:
+        return _model(args)
     rows = {}
     print(f"andyc at {args.root.resolve()}; CPU seconds")
     print(f"{'N':>3} {'operations':>10} {'load':>6} {'derive':>7} {'generate':>8} {'cc':>6} {'cc wall':>7} {'total':>7}")
@@ -92,6 +104,22 @@ def main(argv=None) -> int:
         print("growth exponent against the operations (1: as the generated code): " + ", ".join(
             f"{s} {slope(ops, [r[s] for r in rows.values()]):.2f}" for s in ("derive", "generate", "cc"))
             + f", total {slope(ops, [sum(r[s] for s in STAGES) for r in rows.values()]):.2f}")
+    return 0
+
+
+def _model(args) -> int:
+    """Builds of one model file, by stage, each checkout in turn (--before first) for --rounds."""
+    roots = ([("before", args.before.resolve())] if args.before else []) + [("now", args.root.resolve())]
+    print(f"{args.model}: CPU seconds by stage (cc: the C compiler's processes), cc wall and the whole build's wall")
+    print(f"{'':>7} {'operations':>10} {'load':>6} {'derive':>7} {'generate':>8} {'cc':>6} {'cc wall':>7} "
+          f"{'CPU':>6} {'wall':>6}")
+    for _ in range(args.rounds):
+        for label, root in roots:
+            tic = time.perf_counter()
+            r = measure(args.model.resolve(), root)
+            wall = time.perf_counter() - tic
+            print(f"{label:>7} {r['operations']:>10} {r['load']:6.1f} {r['derive']:7.1f} {r['generate']:8.1f} "
+                  f"{r['cc']:6.1f} {r['cc_wall']:7.1f} {sum(r[s] for s in STAGES):6.1f} {wall:6.1f}", flush=True)
     return 0
 
 

@@ -191,3 +191,51 @@ def test_sines_of_four_or_more_inputs_are_taken_in_one_vector_loop(tmp_path):
     version = subprocess.run([cc, "--version"], capture_output=True, text=True).stdout
     if "Free Software Foundation" in version and sys.platform.startswith("linux") and platform.machine() == "x86_64":
         assert b"_ZGV" in library_path.read_bytes(), "GCC on x86-64 Linux should call libmvec's vector sin"
+
+
+def test_a_large_source_compiles_in_parts_side_by_side_into_one_library(tmp_path, monkeypatch):
+    """andyc.codegen.c_leaves: C of more than PART_BYTES splits into parts (at most MAX_PARTS, the largest leaf
+    first into the smallest part), each compiled on its own (`-c -DANDYC_PART=k`) and linked into one library
+    whose every function computes what its C says; a small source stays one compilation."""
+    import ctypes
+    import os
+    import stat
+
+    from andyc.codegen import c_leaves
+
+    cc = c_leaves.compiler()
+    if cc is None or os.name != "posix":
+        pytest.skip("no C compiler, or no shell to wrap it in")
+    log = tmp_path / "calls.txt"
+    wrapper = tmp_path / "cc-logged"
+    wrapper.write_text(f'#!/bin/sh\necho "$@" >> {log}\nexec {cc} "$@"\n')
+    wrapper.chmod(wrapper.stat().st_mode | stat.S_IEXEC)
+    # five leaves energy_<i>(t) = (i + 1) t, of sizes 5, 1, 1, 1, 1 (padding lines): two parts of equal size
+    functions = [{"name": f"energy_{i}", "args": "t", "c": [f"    /* {'x' * 100} */"] * (5 if i == 0 else 1)
+                  + [f"    return {i + 1}.0 * t;"]} for i in range(5)]
+    monkeypatch.setattr(c_leaves, "signature", lambda name, args: f"double {name}(double t)")
+    monkeypatch.setattr(c_leaves, "PART_BYTES", 500)
+    assert c_leaves.parts_for(functions) == 2
+    text = c_leaves.render("f", functions, 2)
+    guards = [line for line in text.splitlines() if line.startswith("#if !defined(ANDYC_PART)")]
+    assert guards == [f"#if !defined(ANDYC_PART) || ANDYC_PART == {k}" for k in (0, 1, 1, 1, 1)]
+    source = tmp_path / "f.c"
+    source.write_text(text)
+    library = ctypes.CDLL(str(c_leaves.compile_library(source, tmp_path, "f_leaves_0", str(wrapper))))
+    for i in range(5):
+        function = getattr(library, f"energy_{i}")
+        function.restype, function.argtypes = ctypes.c_double, [ctypes.c_double]
+        assert function(1.5) == 1.5 * (i + 1)
+    calls = log.read_text().splitlines()
+    parts = {next(a for a in call.split() if a.startswith("-DANDYC_PART=")) for call in calls if " -c " in call}
+    assert parts == {"-DANDYC_PART=0", "-DANDYC_PART=1"}
+    assert any(" -c " not in call and "part0.o" in call and "part1.o" in call for call in calls)     # the link
+
+    log.unlink()
+    monkeypatch.setattr(c_leaves, "PART_BYTES", 10_000)
+    assert c_leaves.parts_for(functions) == 1
+    source.write_text(c_leaves.render("f", functions, 1))
+    assert "ANDYC_PART" not in source.read_text()
+    c_leaves.compile_library(source, tmp_path, "f_leaves_1", str(wrapper))
+    calls = log.read_text().splitlines()
+    assert calls and not any(" -c " in call or "ANDYC_PART" in call for call in calls)

@@ -88,3 +88,36 @@ def test_check_prints_the_operations_before_and_after_for_a_urdf(tmp_path):
     assert found, result.output
     merged, before, after = map(int, found.groups())
     assert merged < 11 and after < before
+
+
+SPHERE = """
+name: sphere_on_arm
+coordinates:
+  q: {initial: 0.1}
+frames:
+  - {name: link, parent: world, revolute: q, axis: z}
+  - {name: tip, parent: link, translation: [0.5, 0, 0], rotation: {rpy: [0.3, -0.7, 1.1]}}
+bodies:
+  - {name: box, frame: link, mass: 1, inertia: [0.1, 0.2, 0.3, 0, 0, 0]}
+  - {name: ball, frame: tip, mass: 2, inertia: [0.01, 0.01, 0.01, 0, 0, 0]}
+"""
+
+
+def test_a_merged_bodys_numbers_are_the_parallel_axis_theorems_and_its_zeros_stay_zeros(tmp_path):
+    """A ball (isotropic inertia, so R I R^T = I whatever the rotation) fixed 0.5 m along a box's x on a rotated
+    frame: the merged body is m = 3 at c = (1/3, 0, 0), with I = diag(0.1, 0.2, 0.3) + 0.01 E plus the parallel
+    axis terms m_i (|d_i|^2 E - d_i d_i^T) of d_box = (-1/3, 0, 0) and d_ball = (1/6, 0, 0) (Featherstone 2008,
+    2.13), computed by hand: diag(0.11, 0.21 + 1/6, 0.31 + 1/6). Its products of inertia are exactly 0 (not the
+    ~1e-40 that the rotation's sines and cosines leave in the arithmetic), so the generated code has no terms
+    for them."""
+    path = tmp_path / "sphere_on_arm.yaml"
+    path.write_text(SPHERE)
+    merged = merge_rigid_bodies(load(path))
+    body = next(b for b in merged.bodies if b.name == "box+ball")
+    frame = next(f for f in merged.frames if f.name == body.frame)
+    assert float(body.mass) == 3.0
+    assert [float(e) for e in frame.transforms[0].vector] == pytest.approx([1 / 3, 0, 0], abs=1e-16)
+    expected = np.diag([0.11, 0.21 + 1 / 6, 0.31 + 1 / 6])
+    inertia = np.array(body.inertia.tolist(), dtype=float)
+    np.testing.assert_allclose(inertia, expected, rtol=1e-15, atol=0)
+    assert all(float(body.inertia[i, j]) == 0.0 for i in range(3) for j in range(3) if i != j)

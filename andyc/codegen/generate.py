@@ -143,7 +143,8 @@ def render(model: SymbolicModel, key: str, c: bool = False) -> tuple[str, dict, 
     spec = model.spec
     cons = model.constraints
     found = leaves(model)
-    c_source = c_leaves.render(spec.name, found.functions) if c and found.in_c else None
+    c_source = (c_leaves.render(spec.name, found.functions, c_leaves.parts_for(found.functions))
+                if c and found.in_c else None)
     nx_before = len(model.q) + model.dof
     context = {
         "version": andyc.__version__, "build_key": key, "name": spec.name, "module_name": module_name(spec.name, key),

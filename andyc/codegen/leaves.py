@@ -86,6 +86,19 @@ def _c(model, body, returns: str | None, indent: int) -> list[str] | None:
         return None
 
 
+class Deferred:
+    """A leaf's lines of Python, made when first iterated (the template reads them only for the leaves that are
+    not in C)."""
+
+    def __init__(self, make):
+        self._make, self._lines = make, None
+
+    def __iter__(self):
+        if self._lines is None:
+            self._lines = list(self._make())
+        return iter(self._lines)
+
+
 class Leaves:
     """The leaves of one model: `functions` ({decorator, name, args, doc, code} each, for the template) and the
     operation count of each (`operations`)."""
@@ -96,21 +109,23 @@ class Leaves:
 
     def add(self, name, args, outputs, returns=None):
         body = function_body(outputs, self.pool)
-        self._append(name, args, _code(self.model, body, returns, 4), body.operations,
+        self._append(name, args, Deferred(lambda: _code(self.model, body, returns, 4)), body.operations,
                      c=_c(self.model, body, returns, 4))
 
     def add_per_jump(self, name, args, bodies, fallback):
         """A leaf over the jumps: `bodies` holds (outputs, returns) of each jump, in order."""
-        code, c, operations = [], [], 0
+        made, c, operations = [], [], 0
         for k, (outputs, returns) in enumerate(bodies):
             body = function_body(outputs, self.pool)
-            code += [f"    if k == {k}:", *_code(self.model, body, returns or "None", 8)]
+            made.append((k, body, returns))
             branch = _c(self.model, body, returns or ("" if fallback == "None" else None), 8)
             c = None if c is None or branch is None else c + [f"    if (k == {k}) {{", *branch, "    }"]
             operations += body.operations
         end = "    return;" if fallback == "None" else f"    return {fallback};"
-        self._append(name, f"k, {args}", code + [f"    return {fallback}"], operations,
-                     c=None if c is None else c + [end])
+        code = Deferred(lambda: [line for k, body, returns in made
+                                 for line in (f"    if k == {k}:", *_code(self.model, body, returns or "None", 8))]
+                        + [f"    return {fallback}"])
+        self._append(name, f"k, {args}", code, operations, c=None if c is None else c + [end])
 
     def _append(self, name, args, code, operations, decorator=None, c=None):
         """c: the body in C, or None where it has none (then the model's leaves are all Numba's)."""

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
@@ -69,10 +70,21 @@ def to_code(expr) -> str:
 @dataclass
 class FunctionBody:
     inputs: set           # free symbols read (q, v, t, parameters, inputs)
-    lines: list           # [(name, code)] local assignments, in order
-    outputs: list         # [(target, code)]
     operations: int       # sympy count_ops of every line
     exprs: list           # [(name or target, expression)]: the lines, then the outputs, for another printer
+    n_lines: int          # how many of exprs are local assignments
+
+    # Printed in Python when first read: a build whose leaves are in C never reads them (SymPy's printer took a
+    # quarter of a large robot's generation, g1's 10 s).
+    @cached_property
+    def lines(self) -> list:
+        """[(name, code)] local assignments, in order."""
+        return [(name, to_code(e)) for name, e in self.exprs[:self.n_lines]]
+
+    @cached_property
+    def outputs(self) -> list:
+        """[(target, code)]."""
+        return [(target, to_code(e)) for target, e in self.exprs[self.n_lines:]]
 
 
 def function_body(outputs: list[tuple[str, sp.Expr]], pool: dict[sp.Symbol, sp.Expr]) -> FunctionBody:
@@ -112,10 +124,9 @@ def function_body(outputs: list[tuple[str, sp.Expr]], pool: dict[sp.Symbol, sp.E
     inputs = set()
     for e in [defs[s] for s in order] + out_exprs:
         inputs |= {s for s in e.free_symbols if s not in defs}
-    lines = [(str(s), to_code(defs[s])) for s in order]
     ops = sum(sp.count_ops(defs[s]) for s in order) + sum(sp.count_ops(e) for e in out_exprs if e is not sp.S.Zero)
     exprs = [(str(s), defs[s]) for s in order] + [(t, e) for (t, _), e in zip(outputs, out_exprs)]
-    return FunctionBody(inputs, lines, [(t, to_code(e)) for (t, _), e in zip(outputs, out_exprs)], int(ops), exprs)
+    return FunctionBody(inputs, int(ops), exprs, len(order))
 
 
 def _ordered_symbols(expr) -> list:

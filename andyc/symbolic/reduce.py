@@ -42,22 +42,39 @@ def merge_rigid_bodies(spec: Spec) -> Spec:
         if len(members) == 1:
             bodies.append(members[0])
             continue
-        mass = sum((b.mass for b in members), sp.Integer(0))
-        poses = [groups[b.frame][1:] for b in members]
-        com = sum((b.mass * p for b, (_, p) in zip(members, poses)), sp.zeros(3, 1)) / mass
+        # Numbers stay numbers (a URDF's constants), computed at PRECISION digits: exact rpy angles would
+        # otherwise carry their sines and cosines into every entry, whose evaluation then costs seconds each
+        # (g1: 23 s); parameters stay symbolic.
+        members = [(_precise(b.mass), _precise(b.inertia), *map(_precise, groups[b.frame][1:])) for b in members]
+        mass = sum((b.mass for b in by_root[root]), sp.Integer(0))
+        com = sum((m * p for m, _, _, p in members), sp.zeros(3, 1)) / _precise(mass)
         inertia = sp.zeros(3, 3)
-        for b, (R, p) in zip(members, poses):
+        for m, I, R, p in members:
             d = p - com
-            inertia += R * b.inertia * R.T + b.mass * ((d.T * d)[0, 0] * sp.eye(3) - d * d.T)
-        # Numbers stay numbers (a URDF's constants; exact rpy angles would otherwise carry their
-        # sines and cosines into every entry); parameters stay symbolic.
-        com, inertia = com.applyfunc(_number), inertia.applyfunc(_number)
-        name = "+".join(b.name for b in members)
-        frame = Frame(f"{root}__merged", root, (Translate(com),), members[0].where, internal=True)
+            inertia += R * I * R.T + m * ((d.T * d)[0, 0] * sp.eye(3) - d * d.T)
+        com, inertia = _rounded(com), _rounded(inertia)
+        name = "+".join(b.name for b in by_root[root])
+        frame = Frame(f"{root}__merged", root, (Translate(com),), by_root[root][0].where, internal=True)
         frames.append(frame)
-        bodies.append(Body(name, frame.name, mass, inertia, members[0].where))
+        bodies.append(Body(name, frame.name, mass, inertia, by_root[root][0].where))
     return replace(spec, frames=frames, bodies=bodies)
 
 
-def _number(expr):
-    return sp.Float(expr.evalf(17)) if not expr.free_symbols else expr
+PRECISION = 40     # digits of the merged numbers' arithmetic; each is rounded to 17 (a double's) at the end
+ZERO = 1e-30       # ... and set to 0 below ZERO times the largest of its matrix: what cancels exactly in exact
+                   # arithmetic (R I R^T's products of inertia of a body on a rotated axis) leaves ~1e-40 here
+
+
+def _precise(value):
+    """A number, or each number of a matrix, as a Float of PRECISION digits; symbolic entries as they are."""
+    if isinstance(value, sp.MatrixBase):
+        return value.applyfunc(_precise)
+    return value if value.free_symbols else sp.Float(value.evalf(PRECISION), PRECISION)
+
+
+def _rounded(matrix):
+    """Each number of `matrix` to a double's 17 digits, a numeric entry to 0 below ZERO times the largest (see
+    ZERO)."""
+    scale = max((abs(e) for e in matrix if not e.free_symbols), default=0)
+    return matrix.applyfunc(lambda e: e.evalf(17) if e.free_symbols else
+                            sp.Float(0 if abs(e) <= ZERO * scale else e, 17))
