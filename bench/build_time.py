@@ -60,6 +60,7 @@ out["generate"] = time.process_time() - t
 out["cc"] = children() - c
 out["cc_wall"] = result.timings.get("cc", 0.0)
 out["operations"] = sum(result.operations.values())
+out["andyc"] = str(Path(pipeline.__file__).parent)
 print(json.dumps(out))
 """
 
@@ -67,11 +68,14 @@ print(json.dumps(out))
 def measure(n, root: Path) -> dict:
     """The build of N-four-bar `n` (an int) or of the model file `n` by andyc at `root`, in a fresh process."""
     with tempfile.TemporaryDirectory(prefix="andyc-build-time-") as tmp:
-        proc = subprocess.run([sys.executable, "-c", ONE, str(n), tmp, str(ROOT / "bench")], capture_output=True,
-                              text=True, env={**os.environ, "PYTHONPATH": str(root)})
+        proc = subprocess.run([sys.executable, "-c", ONE, str(n), tmp, str(root / "bench")], capture_output=True,
+                              text=True, env={**os.environ, "PYTHONPATH": str(root)}, cwd=tmp)     # (not this folder)
     if proc.returncode != 0:
         raise SystemExit(proc.stderr)
-    return json.loads(proc.stdout.splitlines()[-1])
+    out = json.loads(proc.stdout.splitlines()[-1])
+    if Path(out["andyc"]) != root / "andyc":
+        raise SystemExit(f"measured the andyc at {out['andyc']}, not {root}")
+    return out
 
 
 def slope(xs, ys) -> float:

@@ -26,8 +26,8 @@ numerics = model.numerics
 loaded = {name: module for name, module in sys.modules.items() if name.startswith(numerics.__name__ + ".")}
 compiled = sorted(f"{name.rpartition('.')[2]}.{key}" for name, module in loaded.items()
                   for key, value in vars(module).items() if isinstance(value, Dispatcher) and value.signatures)
-print(json.dumps({"compiled": compiled, "advance": [[str(a) for a in s[-3:]] for s in numerics.integrator.advance.signatures],
-                  "rows": [[str(a) for a in s[-2:]] for s in numerics.integrator.evaluate_rows.signatures],
+print(json.dumps({"compiled": compiled, "advance": [[str(a) for a in s[-4:]] for s in numerics.integrator.advance.signatures],
+                  "rows": [[str(a) for a in s[-4:]] for s in numerics.integrator.evaluate_rows.signatures],
                   "power": dict(zip(run.work_names, run.power[-1].tolist())), "state": run.state[-1].tolist(),
                   "status": run.status}))
 """
@@ -49,8 +49,8 @@ def run_probe(build, model: str, method: str = "rk4") -> dict:
 
 def test_a_run_without_contacts_compiles_neither_the_constrained_solves_nor_the_contact_solver(shipped_build):
     probe = run_probe(shipped_build, "double_pendulum")
-    # the free variant only (full, events, free = None, None, True), not the full one (full omitted: True)
-    assert probe["advance"] == [["none", "none", "bool"]]
+    # the free variant only (full, events, free, quiet = None, None, True, omitted), not the full one (full: True)
+    assert probe["advance"] == [["none", "none", "bool", "omitted(default=None)"]]
     # (a function compiled as another's callee, or loaded with it from the cache, has no signature of its own; the
     # full advance would be one of those callers: hence the check of advance's own signatures above)
     assert not [name for name in probe["compiled"] if name in NEVER or name.split(".")[0] in
@@ -63,8 +63,9 @@ def test_a_free_run_with_work_slots_evaluates_their_powers_on_the_free_right_han
     compiled the constrained right-hand side (the rows' solves) for them alone. The hinge damper's power is
     -c th'^2 at the last sample (c = 0.1 in the model file), from the run's own state."""
     probe = run_probe(shipped_build, "shaken_pendulum")         # (its own method is projection: rk4 asked for)
-    assert probe["advance"] == [["none", "none", "bool"]]
-    assert probe["rows"] == [["none", "bool"]]          # (full, free = None, True: not the full evaluation)
+    assert probe["advance"] == [["none", "none", "bool", "omitted(default=None)"]]
+    # (full, free = None, True: not the full evaluation; slips, quiet as they come)
+    assert probe["rows"] == [["none", "bool", "omitted(default=True)", "omitted(default=None)"]]
     th_dot = probe["state"][1]
     assert abs(th_dot) > 0.01
     assert abs(probe["power"]["hinge"] - -0.1 * th_dot ** 2) <= 1e-12 * th_dot ** 2, probe["power"]
@@ -72,11 +73,14 @@ def test_a_free_run_with_work_slots_evaluates_their_powers_on_the_free_right_han
 
 
 def test_a_constrained_run_without_jumps_compiles_no_event_location_nor_jumps(shipped_build):
-    """The slider-crank (constraint rows, no jumps) with projection: the full loop with events=None, so neither the
-    guards' location, nor the jumps, nor the spatial slip's direction, nor the contact solver are compiled."""
+    """The slider-crank (constraint rows, no jumps) with projection: the full loop with events=None and quiet=True,
+    so neither the guards' location, nor the jumps, nor the spatial slip's direction, nor the contact solver, nor
+    the slipping contacts' solve are compiled; its multipliers and residuals are evaluated likewise."""
     probe = run_probe(shipped_build, "slider_crank", "projection")
-    assert probe["advance"] == [["bool", "none", "omitted(default=None)"]]
-    skipped = ("dynamics.jump", "dynamics.impact", "dynamics.slip_direction", "integrator.locate", "integrator.instant")
+    assert probe["advance"] == [["bool", "none", "none", "bool"]]           # (full, events, free, quiet)
+    assert probe["rows"] == [["bool", "none", "none", "bool"]]              # (full, free, slips, quiet)
+    skipped = ("dynamics.jump", "dynamics.impact", "dynamics.slip_direction", "integrator.locate", "integrator.instant",
+               "slipping.solve_slipping", "slipping.slip_rows")
     assert not [name for name in probe["compiled"] if name in skipped or name.split(".")[0] in
                 ("contact_solver", "timestepping")], probe["compiled"]
 
@@ -101,8 +105,8 @@ def test_which_loop_each_run_takes():
     rows = SimpleNamespace(nc=2, nj=0, contact_names=(), quaternions=())
     jumps = SimpleNamespace(nc=2, nj=1, contact_names=(), quaternions=())
     assert variant(free, "rk4", Projection()) == (None, None, True)
-    assert variant(free, "rk4", Projection(energy_correction=True)) == (True, None)     # projects: not free
-    assert variant(rows, "projection", Projection()) == (True, None)
+    assert variant(free, "rk4", Projection(energy_correction=True)) == (True, None, None, True)    # projects: not free
+    assert variant(rows, "projection", Projection()) == (True, None, None, True)
     assert variant(jumps, "rk4", Projection()) == ()
     assert variant(SimpleNamespace(nc=0, nj=3, contact_names=("foot",), quaternions=()), "rk4", Projection()) == ()
 
@@ -117,7 +121,7 @@ try:
 except SystemExit as exc:
     assert not exc.code, exc.code
 numerics = sys.modules[next(n for n in sys.modules if n.startswith("andyc_numerics_") and n.count(".") == 0)]
-print(json.dumps({"advance": sorted([str(a) for a in s[-3:]] for s in numerics.integrator.advance.signatures)}))
+print(json.dumps({"advance": sorted([str(a) for a in s[-4:-1]] for s in numerics.integrator.advance.signatures)}))
 """
 
 
@@ -150,7 +154,7 @@ except Exception as exc:            # (click's standalone_mode=False: the refusa
     refused = str(exc)
 numerics = sys.modules[next(n for n in sys.modules if n.startswith("andyc_numerics_") and n.count(".") == 0)]
 print(json.dumps({"refused": refused,
-                  "advance": sorted([str(a) for a in s[-3:]] for s in numerics.integrator.advance.signatures)}))
+                  "advance": sorted([str(a) for a in s[-4:-1]] for s in numerics.integrator.advance.signatures)}))
 """
 
 

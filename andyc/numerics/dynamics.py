@@ -22,17 +22,22 @@ from .status import BAUMGARTE, DEPENDENT, HOLD, IDEAL, OK, PAINLEVE, SINGULAR_MA
 
 
 @jit
-def rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode):
+def rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode, slips=True):
     """xdot = f(t, x) in `flow`: dq/dt = v[:NQ], dv/dt, dsigma/dt (in w's M, G and S). Returns a status (OK = 0).
 
     dv/dt = a + M^-1 A^T lam with a = M^-1 G and A the rows active in the flow with the contacts' modes in d
-    (active.select_rows, into w); `mode` says how lam is found (see constraint_force).
+    (active.select_rows, into w); `mode` says how lam is found (see constraint_force, slipping_force). slips:
+    True, or None for a model without jumps (NJ = 0, hence no contacts: no row of it ever slips), which then
+    compiles without the slipping contacts' solve (Numba prunes the branch, as advance's on `events`).
     """
     M, G, S = w.M, w.G, w.S
     if select_rows(model, w, flow, d) > 0:
         status = whitened_equations(model, t, x, u, p, d, M, G, S)
         if status == OK:
-            status = constraint_force(model, w, p, d, mode, M, G, S)
+            if slips is not None and w.nactive[2]:
+                status = slipping_force(model, w, p, d, mode, M, G, S)
+            else:
+                status = constraint_force(model, w, p, d, mode, M, G, S)
             upper(model, M, G)
     else:
         status = free_acceleration(model, t, x, u, p, d, M, G)
@@ -191,27 +196,32 @@ def constraint_force(model, w, p, d, mode, L, g, S):
       IDEAL      lam = (C C^T)^+ y, the least-norm force of any rank (C^T lam = C^+ y)
       LAGRANGE   lam = (C C^T)^-1 y                           (ANDY eq. 12)
       BAUMGARTE  LAGRANGE's lam - (K_s phi + K_d c)           (ANDY eq. 15)
-    Where a contact slips, its normal force carries Coulomb's friction: the forces are B^T lam with
-    B != A (slip_rows: D = B L^-T), lam = (C D^T)^+ y and g <- g + D^T lam (Pfeiffer & Glocker 1996, ch. 5).
     """
     nr = constraint_system(model, w, L, g)
-    if w.nactive[2]:
-        slip_rows(model, w, p, d, L, nr)
-        if not solve_slipping(model, w, nr):
-            return PAINLEVE
-        if mode == BAUMGARTE:
-            baumgarte(model, w, p, nr)
-        for i in range(model.nv):       # g += D^T lam: a slipping contact's normal force carries its friction
-            s = 0.0
-            for r in range(nr):
-                s += S[model.s_w + r, i] * S[model.s_y, r]
-            g[i] += s
-        return OK
     if solve_flow_gram(model, w, nr, mode == IDEAL) < 0:
         return DEPENDENT
     if mode == BAUMGARTE:
         baumgarte(model, w, p, nr)
     add_flow_rows(model, w, nr, 1.0, g)
+    return OK
+
+
+@jit(inline="always")
+def slipping_force(model, w, p, d, mode, L, g, S):
+    """constraint_force where a contact slips (w.nactive[2]): its normal force carries Coulomb's friction, so the
+    forces are B^T lam with B != A (slip_rows: D = B L^-T), lam = (C D^T)^+ y and g <- g + D^T lam (Pfeiffer &
+    Glocker 1996, ch. 5); BAUMGARTE's terms as there."""
+    nr = constraint_system(model, w, L, g)
+    slip_rows(model, w, p, d, L, nr)
+    if not solve_slipping(model, w, nr):
+        return PAINLEVE
+    if mode == BAUMGARTE:
+        baumgarte(model, w, p, nr)
+    for i in range(model.nv):       # g += D^T lam: a slipping contact's normal force carries its friction
+        s = 0.0
+        for r in range(nr):
+            s += S[model.s_w + r, i] * S[model.s_y, r]
+        g[i] += s
     return OK
 
 
@@ -299,17 +309,17 @@ def slip_direction(model, w, t, x, u, p, d, flow, h, mode):
 
 
 @jit
-def multipliers(model, w, t, x, u, p, d, flow, lam):
+def multipliers(model, w, t, x, u, p, d, flow, lam, slips=True):
     """Multipliers lam (NC,) of the ideal constraint force A^T lam in `flow` (ANDY eq. 10, 12); NaN for rows
     not active. lam = (C C^T)^+ y (see constraint_force), the least-norm split when rows are redundant.
-    Returns a status."""
+    Returns a status. slips: as rhs_mode_into's."""
     M, G, S = w.M, w.G, w.S
     select_rows(model, w, flow, d)
     status = whitened_equations(model, t, x, u, p, d, M, G, S)
     if status != OK:
         return status
     nr = constraint_system(model, w, M, G)
-    if w.nactive[2]:
+    if slips is not None and w.nactive[2]:
         slip_rows(model, w, p, d, M, nr)
         solve_slipping(model, w, nr)
     else:

@@ -123,9 +123,12 @@ def stage_powers(model, w, t, x, u, p, d, flow, xdot, mode):
 
 
 @jit
-def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale, full=True, free=None):
+def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale, full=True, free=None, slips=True,
+             quiet=None):
     """out = the RK4 step of size h from (t, x), then projected; x is unchanged. Returns a status. `full`, `free`:
-    as advance's (full None and free True: no rows, no projection; the step compiles without them).
+    as advance's (full None and free True: no rows, no projection; the step compiles without them); slips, quiet:
+    (True, None), or (None, True) for a model without jumps (the step then compiles without the slipping
+    contacts' solve: dynamics.rhs_mode_into's slips; two flags, as full and free).
 
     x is the state (NX) followed by the work of each slot (NW, andyc/symbolic/work.py): their rates are the
     powers (stage_powers), so the work is RK4's own quadrature of the power along the step's stages, and the
@@ -147,8 +150,10 @@ def rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, out, scale, f
         if update_inputs(inputs, t + c * h, xt, p, d, flow, u, data) != OK:
             return INPUT_FAILED
         status = OK
-        if full is not None:
+        if full is not None and slips is not None:
             status = rhs_mode_into(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode)
+        if full is not None and quiet is not None:
+            status = rhs_mode_into(model, w, t + c * h, xt, u, p, d, flow, k[s], opts.mode, None)
         if free is not None:
             status = rhs_free_into(model, w, t + c * h, xt, u, p, d, k[s])
         if status != OK:
@@ -254,7 +259,7 @@ def locate(model, w, opts, inputs, data, jump_index, tol, t, h, x, u, p, d, flow
 
 @jit(nogil=True)
 def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, every, log, row, full=True,
-            events=True, free=None):
+            events=True, free=None, quiet=None):
     """Integrate from time t (on step i: t0 + i dt <= t < t0 + (i + 1) dt) to the grid point i_end,
     stopping early at a jump or a failure. x, d, w.g0 and the log are updated in place; every
     `every`-th grid point is logged at log[row] (log.u: the inputs there, w.u the latest inputs).
@@ -271,8 +276,9 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
     event location and jumps, its branches on `full is not None` pruned at compile time as those on `inputs`. Two
     flags, since Numba prunes `arg is not None` only where arg is None, never on a boolean's value: the full loop's
     `free is not None` branches (the free step) are pruned by its free = None. andyc.runtime.compiled.free_run
-    says when a run takes it. events: True, or None for a model without jumps (NJ = 0, hence no contacts): the guards, their
-    location and the jumps pruned likewise (andyc.runtime.compiled.variant).
+    says when a run takes it. events, quiet: (True, None), or (None, True) for a model without jumps (NJ = 0, hence
+    no contacts): the guards, their location, the jumps and the slipping contacts' solve pruned likewise
+    (andyc.runtime.compiled.variant).
     """
     u, g0, x1, xb, x_event, counts = w.u, w.g0, w.x1, w.xb, w.x_event, w.counts
     direction, priority = model.jump_direction, model.jump_priority
@@ -313,8 +319,11 @@ def advance(model, w, opts, inputs, data, p, d, x, t, flow, i, i_end, t0, dt, ev
                         if model.jump_contact[n] == SLIP_STOP and in_mode(model, n, flow, d):
                             g0[n] = guard_value(model, w, n, t, x, u, p, d, flow)
             status = OK
-            if full is not None:
+            if full is not None and events is not None:
                 status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale)
+            if full is not None and quiet is not None:      # (no jumps, hence no contacts: none slips)
+                status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale, slips=None,
+                                  quiet=True)
             if free is not None:
                 status = rk4_step(model, w, opts, inputs, data, t, h, x, u, p, d, flow, x1, scale, None, True)
             if status != OK:
@@ -455,13 +464,14 @@ def evaluate_frames(model, log, p, out):
 
 
 @jit(nogil=True)
-def evaluate_rows(model, w, log, p, phi, c, lam, power, mode, full=True, free=None):
+def evaluate_rows(model, w, log, p, phi, c, lam, power, mode, full=True, free=None, slips=True, quiet=None):
     """At the logged samples: the residuals phi (N, NH), c (N, NC) and multipliers lam (N, NC), NaN for the rows
     not active in the sample's flow (where NC > 0); the power of each work slot, power (N, NW), from the
     right-hand side in the run's `mode` (a constraint's with its multipliers, soft terms included in the BAUMGARTE
     mode; the drive's with dv/dt), the jumps' 0 (where NW > 0). full, free: as advance's, (None, True) for a run
     of its free variant: the free right-hand side, which is the same there, and Numba compiles neither the
-    constraint rows' nor the constrained solves.
+    constraint rows' nor the constrained solves; slips, quiet: as rk4_step's, (None, True) after a run of a model
+    without jumps.
 
     One function for both (rather than one each): every compiled function links and optimizes again everything it
     calls, here the whole constrained right-hand side, which is most of the compiled loop; once is enough."""
@@ -477,13 +487,20 @@ def evaluate_rows(model, w, log, p, phi, c, lam, power, mode, full=True, free=No
                 c[r, i] = S[model.s_cv, i]
                 if i < model.nh:
                     phi[r, i] = S[model.s_phi, i]
-            if multipliers(model, w, t, x, u, p, d, flow, lam[r]) != OK:
+            status = OK
+            if slips is not None:
+                status = multipliers(model, w, t, x, u, p, d, flow, lam[r])
+            if quiet is not None:
+                status = multipliers(model, w, t, x, u, p, d, flow, lam[r], None)
+            if status != OK:
                 lam[r, :] = math.nan
         if model.nw == 0:
             continue
         status = OK
-        if full is not None:
+        if full is not None and slips is not None:
             status = rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode)
+        if full is not None and quiet is not None:
+            status = rhs_mode_into(model, w, t, x, u, p, d, flow, xdot, mode, None)
         if free is not None:
             status = rhs_free_into(model, w, t, x, u, p, d, xdot)
         if status != OK:

@@ -1,6 +1,6 @@
 """A slipping contact's forces (Pfeiffer & Glocker 1996, ch. 5): in a flow where a contact slips, its normal
 force carries Coulomb's friction, so the forces are B^T lam with B != A and the multipliers solve the
-non-symmetric system (C D^T) lam = y, C = A L^-T, D = B L^-T (dynamics.constraint_force calls these)."""
+non-symmetric system (C D^T) lam = y, C = A L^-T, D = B L^-T (dynamics.slipping_force calls these)."""
 
 import math
 

@@ -273,14 +273,22 @@ FREE_ROWS = (None, True)        # evaluate_rows' (full, free) after a run of the
 
 def variant(model: CompiledModel, method: str, projection) -> tuple:
     """The trailing arguments (full, events, free) of the integrator's advance for a run (see its docstring): ()
-    for the full loop, FREE for the free variant (free_run), (True, None) for a model without jumps, whose loop
+    for the full loop, FREE for the free variant (free_run), (True, None, None, True) for a model without jumps, whose loop
     compiles without guards, event location and jumps. Each is compiled once per andyc and cached."""
     return FREE if free_run(model, method, projection) else full_variant(model)
 
 
 def full_variant(model: CompiledModel) -> tuple:
-    """The trailing arguments of the full loop for `model`: without events where it has no jumps."""
-    return (True, None) if model.nj == 0 else ()
+    """The trailing arguments (full, events, free, quiet) of the full loop for `model`: without events (hence
+    without contacts, and their slips) where it has no jumps."""
+    return (True, None, None, True) if model.nj == 0 else ()
+
+
+def rows_variant(model: CompiledModel, free: bool = False) -> tuple:
+    """The trailing arguments (full, free, slips, quiet) of the integrator's evaluate_rows after a run of `model`:
+    FREE_ROWS after a run of the free variant; without the slipping contacts' solve where it has no jumps (hence
+    no contacts), as its loop (full_variant)."""
+    return FREE_ROWS if free else (True, None, None, True) if model.nj == 0 else ()
 
 
 def compile_integrator(model: CompiledModel, function=None, data=None, method: str | None = None,
@@ -330,7 +338,7 @@ def compile_integrator(model: CompiledModel, function=None, data=None, method: s
         integrator.evaluate_frames(m, log, p, np.zeros((1, len(model.frame_names), 12)))
     rows = (np.zeros((1, model.nh)), np.zeros((1, model.nc)), np.zeros((1, model.nc)), np.zeros((1, model.nw)))
     if (model.nc or model.nw) and not free:
-        integrator.evaluate_rows(m, w.ref, log, p, *rows, IDEAL)
+        integrator.evaluate_rows(m, w.ref, log, p, *rows, IDEAL, *rows_variant(model))
     if model.nw and (free or every) and free_model(model):
         integrator.evaluate_rows(m, w.ref, log, p, *rows, IDEAL, *FREE_ROWS)
     if model.nc or every:

@@ -46,7 +46,7 @@ from andyc.errors import SimulationError
 from andyc.limits import MAX_LOG_BYTES, MAX_STEPS
 from andyc.numerics.status import IDEAL
 from andyc.runtime.adaptive import run_adaptive
-from andyc.runtime.compiled import FREE_ROWS, CompiledModel, compile_integrator, free_run, work
+from andyc.runtime.compiled import CompiledModel, compile_integrator, free_run, rows_variant, work
 from andyc.runtime.contacts import TOUCHING, friction_coefficients, initial_mode, slip_speeds
 from andyc.runtime.events import EventLog
 from andyc.runtime.fixed_step import MODE, run_fixed_step
@@ -324,7 +324,7 @@ class _Assembly:
         power = np.empty((n, model.nw))
         if model.nc or model.nw:
             integrator.evaluate_rows(model.ref, work(model).ref, log, p, phi, c, lam, power,
-                                     MODE.get(self.method, IDEAL), *(FREE_ROWS if self.free else ()))
+                                     MODE.get(self.method, IDEAL), *rows_variant(model, self.free))
         if forces is not None:
             lam[1:] = forces[1:]
         slip, slip_2 = slip_speeds(model, t_log, x_log, u_log, p, d_log) if model.contact_names else (None, None)
