@@ -45,13 +45,13 @@ except ImportError:         # (without Numba, plain Python: row as it is)
 @jit(nogil=True)
 def run_points(model, w, mode, project, constrain, energy_tol, event_tol, inputs, data, todo, P, U, D, X, F, E0, I, T,
                steps, dt, marks, M, stop, status, jumped, XE, UE, samples, LT, LX, LU, LF, LD, R, every, full=True,
-               events=True, free=None):
+               events=True, free=None, quiet=None):
     """Run each point k of `todo` from step I[k] at time T[k] (0 and 0.0 at its start; I[k] dt <= T[k]) to the grid's
     end, t = steps dt, or to its next jump: parameters P[k], held inputs U[k] (w.u at each call of advance, as the
     single run sets it), input data data[k] (None with inputs None: held inputs), discrete states D[k], flow F[k],
     state X[k] (the state then the work of each slot, andyc.runtime.work) and energy offset E0[k]
     (integrator.Options.e0), with the options of integrator.options (mode, project, constrain, energy_tol,
-    event_tol) and advance's variant (full, events, free). X, D, F, I and T are left where the point stopped. When
+    event_tol) and advance's variant (full, events, free, quiet). X, D, F, I and T are left where the point stopped. When
     the run reaches grid point i = marks[m] (ascending; m from M[k], left at the next), its state goes to
     samples[k, m]. With every <= steps, each point also logs every `every`-th grid point as a single run does, into
     the point's rows of LT, LX, LU, LF and LD (integrator.Log's fields: time, state and work, inputs, flow, discrete
@@ -83,7 +83,7 @@ def run_points(model, w, mode, project, constrain, energy_tol, event_tol, inputs
                 i_end = min(i_end, marks[m])
             w.u[:] = U[k]
             i, r, st, t, flow, jump = advance(model, w, opts, inputs, row(data, k), p, d, x, t, flow, i, i_end, 0.0,
-                                              dt, every, log, r, full, events, free)
+                                              dt, every, log, r, full, events, free, quiet)
         F[k], I[k], T[k], M[k], R[k] = flow, i, t, m, r
         if st == OK and jump >= 0:
             st = JUMPED
