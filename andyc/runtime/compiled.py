@@ -269,26 +269,28 @@ def free_run(model: CompiledModel, method: str, projection) -> bool:
 
 FREE = (None, None, True)       # advance's trailing arguments (full, events, free) for its free variant
 FREE_ROWS = (None, True)        # evaluate_rows' (full, free) after a run of the free variant
+QUIET = (True, None, None, True)    # advance's (full, events, free, quiet) for a model without jumps, and
+                                    # evaluate_rows' (full, free, slips, quiet) after its run: no events, no slips
 
 
 def variant(model: CompiledModel, method: str, projection) -> tuple:
-    """The trailing arguments (full, events, free) of the integrator's advance for a run (see its docstring): ()
-    for the full loop, FREE for the free variant (free_run), (True, None, None, True) for a model without jumps, whose loop
-    compiles without guards, event location and jumps. Each is compiled once per andyc and cached."""
+    """The trailing arguments (full, events, free, quiet) of the integrator's advance for a run (see its docstring):
+    () for the full loop, FREE for the free variant (free_run), QUIET for a model without jumps, whose loop compiles
+    without guards, event location, jumps and slips. Each is compiled once per andyc and cached."""
     return FREE if free_run(model, method, projection) else full_variant(model)
 
 
 def full_variant(model: CompiledModel) -> tuple:
     """The trailing arguments (full, events, free, quiet) of the full loop for `model`: without events (hence
     without contacts, and their slips) where it has no jumps."""
-    return (True, None, None, True) if model.nj == 0 else ()
+    return QUIET if model.nj == 0 else ()
 
 
 def rows_variant(model: CompiledModel, free: bool = False) -> tuple:
     """The trailing arguments (full, free, slips, quiet) of the integrator's evaluate_rows after a run of `model`:
     FREE_ROWS after a run of the free variant; without the slipping contacts' solve where it has no jumps (hence
     no contacts), as its loop (full_variant)."""
-    return FREE_ROWS if free else (True, None, None, True) if model.nj == 0 else ()
+    return FREE_ROWS if free else QUIET if model.nj == 0 else ()
 
 
 def compile_integrator(model: CompiledModel, function=None, data=None, method: str | None = None,
