@@ -6,7 +6,7 @@ ANDYC := $(VENV)/bin/andyc
 STAMP := $(VENV)/.andyc-installed
 DEMO := double_pendulum
 
-.PHONY: demo test bench mutation docs clean
+.PHONY: demo test bench mutation mutation-jitted docs clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || python3 -m venv $(VENV)
@@ -46,6 +46,15 @@ mutation: $(STAMP)
 	mkdir -p build
 	$(VENV)/bin/mutmut results --all true > build/mutation-results.txt
 	@echo "surviving and killed mutants: build/mutation-results.txt"
+
+# The jitted numerics, which mutmut leaves out (docs/mutation.md): mutmut's operators, a random SAMPLE of the
+# mutants (0: all), each compiled afresh and tested in a copy of the tree, JOBS at a time; resumable.
+SAMPLE ?= 100
+JOBS ?= 2
+mutation-jitted: $(STAMP)
+	$(PY) -m pip install --quiet --disable-pip-version-check -e '.[test,mutation]'
+	$(PY) bench/mutate_jitted.py --sample $(SAMPLE) --jobs $(JOBS)
+	@echo "report: build/mutation-jitted/report.md"
 
 clean:
 	rm -rf build runs .pytest_cache mutants
