@@ -278,7 +278,7 @@ def test_box_sliding_on_four_redundant_corners():
     assert P[0] > P[3] and P[9] > P[6]          # (the front corners, x = +a, carry more)
 
 
-def diagonal_slope(th, mu):
+def diagonal_slope(th):
     """box_on_four_corners at rest on a slope of th whose fall line runs along the diagonal (1, 1) of its base."""
     gravity = G * np.array([-math.sin(th) / math.sqrt(2), -math.sin(th) / math.sqrt(2), -math.cos(th)])
     return box_on_four_corners(np.zeros(6), gravity)
@@ -293,8 +293,8 @@ def test_box_held_on_a_diagonal_slope_shares_the_friction_as_its_cones_allow():
     cone, the total's, |P_t| / (mu P_n) = m g sin th / (mu m g cos th) = tan th / mu (by hand), and the box is left
     at rest (1e-15)."""
     th, mu = 0.3, math.tan(0.3) + 1e-3
-    W, w0, A, Minv, v_free = diagonal_slope(th, mu)
-    P, state, _, sweeps, verified = solve(W, w0, [cs.SPATIAL] * 4, [mu] * 4, [cs.STICK] * 4)
+    W, w0, A, Minv, v_free = diagonal_slope(th)
+    P, state, _, _, verified = solve(W, w0, [cs.SPATIAL] * 4, [mu] * 4, [cs.STICK] * 4)
     assert verified and list(state) == [cs.STICK] * 4
     check_conditions(W, w0, [cs.SPATIAL] * 4, [mu] * 4, P)
     assert np.max(np.abs(v_free + Minv @ A.T @ P)) <= 1e-15
@@ -312,7 +312,7 @@ def test_box_held_on_a_diagonal_slope_shares_the_friction_as_its_cones_allow():
                    "before, as a run has them after its first step) it is exact")
 def test_box_held_on_a_diagonal_slope_cold():
     th, mu = 0.3, math.tan(0.3) + 1e-3
-    W, w0, A, Minv, v_free = diagonal_slope(th, mu)
+    W, w0, A, Minv, v_free = diagonal_slope(th)
     P, state, _, _, verified = solve(W, w0, [cs.SPATIAL] * 4, [mu] * 4)
     assert verified and np.max(np.abs(v_free + Minv @ A.T @ P)) <= 1e-15
 
